@@ -1,0 +1,191 @@
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "rll/accel/accel.h"
+#include "rll/core/error.h"
+#include "rll/core/params.h"
+#include "rll/core/parallel.h"
+#include "rll/core/sysinfo.h"
+#include "rll/lights/light_sampler.h"
+#include "rll/render/progress.h"
+#include "rll/render/render.h"
+#include "rll/scene/load.h"
+
+namespace rll::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RenderOptions {
+  std::string scene;
+  std::string integrator = "path";
+  std::string sampler = "power";
+  int spp = 16;
+  double time = 0;
+  std::string res;
+  uint64_t seed = 1;
+  int threads = 0;
+  int max_depth = 5;
+  int pass_spp = 1;
+  int frames = 1;
+  std::string output;
+  std::string stats;
+  std::vector<std::string> set;
+  float exposure = 0;
+  bool quiet = false;
+};
+
+void parse_resolution(const std::string& res, LoadOptions& lo) {
+  if (res.empty()) return;
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(res.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X'))
+    fail("--res '{}': expected WIDTHxHEIGHT, e.g. 640x480", res);
+  if (w <= 0 || h <= 0) fail("--res '{}': width and height must be positive", res);
+  lo.width = w;
+  lo.height = h;
+}
+
+std::string default_output(const std::string& scene) {
+  std::string stem = scene.rfind("builtin:", 0) == 0 ? scene.substr(8) : fs::path(scene).stem().string();
+  return "out/" + stem + ".png";
+}
+
+fs::path frame_path(const fs::path& p, int frame, int frames) {
+  if (frames <= 1) return p;
+  fs::path q = p;
+  q.replace_extension(fmt::format(".{:04d}{}", frame, p.extension().string()));
+  return q;
+}
+
+// Checks the output name before any work is done, and creates its folder.
+void prepare_output(const fs::path& p, const char* flag, const std::vector<std::string>& extensions) {
+  std::string ext = p.extension().string();
+  if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end())
+    fail("{} {}: the file must end in {}", flag, p.string(), fmt::join(extensions, " or "));
+  std::error_code ec;
+  if (p.has_parent_path() && !fs::exists(p.parent_path()) && !fs::create_directories(p.parent_path(), ec))
+    fail("{} {}: cannot create folder '{}': {}", flag, p.string(), p.parent_path().string(), ec.message());
+}
+
+void run(const RenderOptions& o) {
+  install_interrupt_handler();
+  ThreadLimit limit(o.threads);
+  LoadOptions lo;
+  parse_resolution(o.res, lo);
+  if (o.spp < 1) fail("--spp must be at least 1");
+  if (o.time < 0) fail("--time must not be negative");
+  if (o.frames < 1) fail("--frames must be at least 1");
+  if (o.pass_spp < 1) fail("--pass-spp must be at least 1");
+  Params params = Params::parse(o.set);
+  fs::path output = o.output.empty() ? fs::path(default_output(o.scene)) : fs::path(o.output);
+  prepare_output(output, "-o", {".exr", ".png"});
+  if (!o.stats.empty()) prepare_output(o.stats, "--stats", {".json"});
+
+  Scene scene = load_scene(o.scene, lo);
+  IntegratorSettings is = make_integrator_settings(o.integrator, o.max_depth, params);
+  Accel accel(scene.mesh);
+  auto sampler = make_light_sampler(o.sampler, scene, params);
+  params.check_all_used();
+  Integrator integrator(scene, accel, *sampler, is);
+
+  RenderSettings rs;
+  rs.spp = o.spp;
+  rs.time_limit = o.time;
+  rs.seed = o.seed;
+  rs.pass_spp = o.pass_spp;
+  const int frames = o.frames;
+  nlohmann::json frame_stats = nlohmann::json::array();
+  RenderProgress total;
+  for (int f = 0; f < frames && !interrupted(); ++f) {
+    if (f > 0 || scene.animate) {
+      if (scene.animate) {
+        scene.animate(scene, f);
+        scene.refresh_lights_from_mesh();
+        accel.update_vertices(scene.mesh);
+        sampler->lights_changed(scene);
+      }
+    }
+    rs.frame = f;
+    Film film(scene.width, scene.height);
+    std::string label = frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
+    ProgressBar bar(label, !o.quiet);
+    RenderProgress p = render(scene, integrator, *sampler, film, rs, interrupt_flag(),
+                              [&](const RenderProgress& pr, const Film&) { bar.update(pr); });
+    bar.finish();
+    fs::path out = frame_path(output, f, frames);
+    write_image(out, film.resolve(), o.exposure);
+    if (p.cancelled) fmt::print(stderr, "rll: interrupted after {} spp; ", p.spp_done);
+    fmt::print(stderr, "wrote {} ({} spp, {})\n", out.string(), p.spp_done, format_duration(p.seconds));
+    if (p.nonfinite) fmt::print(stderr, "rll: warning: {} non-finite samples were dropped\n", p.nonfinite);
+    frame_stats.push_back({{"frame", f}, {"spp", p.spp_done}, {"seconds", p.seconds}, {"output", out.string()}});
+    total.seconds += p.seconds;
+    total.samples += p.samples;
+    total.rays += p.rays;
+    total.spp_done = p.spp_done;
+    total.cancelled = total.cancelled || p.cancelled;
+    total.nonfinite += p.nonfinite;
+  }
+
+  if (!o.stats.empty()) {
+    nlohmann::json j;
+    j["scene"] = o.scene;
+    j["resolution"] = {scene.width, scene.height};
+    j["integrator"] = {{"name", integrator_name(is.type)}, {"max_depth", is.max_depth},
+                       {"strategy", strategy_name(is.strategy)}};
+    j["sampler"] = sampler->describe();
+    j["spp"] = total.spp_done;
+    j["frames"] = frame_stats;
+    j["seconds"] = total.seconds;
+    j["samples"] = total.samples;
+    j["samples_per_second"] = total.seconds > 0 ? total.samples / total.seconds : 0.0;
+    j["rays"] = {{"camera", total.rays.camera}, {"bounce", total.rays.bounce}, {"shadow", total.rays.shadow},
+                 {"total", total.rays.total()}};
+    j["rays_per_second"] = total.seconds > 0 ? total.rays.total() / total.seconds : 0.0;
+    j["lights"] = scene.lights.size();
+    j["triangles"] = scene.mesh.triangle_count();
+    j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
+    j["seed"] = o.seed;
+    j["interrupted"] = total.cancelled;
+    j["nonfinite_samples"] = total.nonfinite;
+    j["memory"] = {{"peak_rss_bytes", peak_rss_bytes()}};
+    write_file_atomic(o.stats, j.dump(2) + "\n");
+  }
+}
+
+}  // namespace
+
+void add_render_command(CLI::App& app) {
+  auto o = std::make_shared<RenderOptions>();
+  auto* cmd = app.add_subcommand("render", "Render a scene to an image");
+  cmd->add_option("scene", o->scene, "Scene: a .json or .obj file, or builtin:NAME (see `rll scenes`)")
+      ->required();
+  cmd->add_option("--integrator", o->integrator, "Light transport: direct (next-event estimation) or path")
+      ->capture_default_str();
+  cmd->add_option("--sampler", o->sampler, "Light sampler: uniform, power, tree, rll, oracle")->capture_default_str();
+  cmd->add_option("--spp", o->spp, "Samples per pixel (an upper limit when --time is given)")->capture_default_str();
+  cmd->add_option("--time", o->time, "Time budget in seconds; stops at whichever of --spp and --time comes first");
+  cmd->add_option("--res", o->res, "Film resolution WIDTHxHEIGHT (default: the scene's)");
+  cmd->add_option("--seed", o->seed, "Random seed; the same seed gives the same image with any --threads")
+      ->capture_default_str();
+  cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
+  cmd->add_option("--max-depth", o->max_depth, "Path length limit (path integrator; 1 = direct light)")
+      ->capture_default_str();
+  cmd->add_option("--pass-spp", o->pass_spp, "Samples per pixel in one pass (learning happens between passes)")
+      ->capture_default_str();
+  cmd->add_option("--frames", o->frames, "Frames to render; animated scenes move between frames, learning persists")
+      ->capture_default_str();
+  cmd->add_option("-o,--output", o->output, "Output image, .exr (linear) or .png (sRGB); default out/<scene>.png");
+  cmd->add_option("--stats", o->stats, "Write render statistics to this JSON file");
+  cmd->add_option("--set", o->set, "Sampler/integrator parameter key=value (repeatable), e.g. rll.alpha=0.1")
+      ->take_all();
+  cmd->add_option("--exposure", o->exposure, "Exposure in stops for .png output")->capture_default_str();
+  cmd->add_flag("--quiet", o->quiet, "No progress bar");
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace rll::cli

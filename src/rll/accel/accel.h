@@ -1,0 +1,37 @@
+// Ray queries against the scene's triangles: the renderer's only view of the ray tracer.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "rll/core/math.h"
+#include "rll/scene/mesh.h"
+
+namespace rll {
+
+struct Hit {
+  float t = kInf;
+  uint32_t tri = ~0u;
+  float u = 0, v = 0;  // barycentrics of vertices 1 and 2: p = (1-u-v) p0 + u p1 + v p2
+};
+
+class Accel {
+ public:
+  explicit Accel(const Mesh& mesh);
+  ~Accel();
+  Accel(const Accel&) = delete;
+  Accel& operator=(const Accel&) = delete;
+
+  // Closest hit in (ray.tmin, ray.tmax); false if none.
+  bool intersect(const Ray& ray, Hit& hit) const;
+  // True if anything lies in (ray.tmin, ray.tmax).
+  bool occluded(const Ray& ray) const;
+  // Re-reads vertex positions (same topology) and refits the hierarchy.
+  void update_vertices(const Mesh& mesh);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace rll

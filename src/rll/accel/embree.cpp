@@ -1,0 +1,127 @@
+// The one source file that talks to Embree 3.
+#include <embree3/rtcore.h>
+
+#include <cstring>
+
+#include "rll/accel/accel.h"
+#include "rll/core/error.h"
+
+namespace rll {
+
+struct Accel::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  RTCGeometry geometry = nullptr;
+  size_t vertex_count = 0;
+};
+
+namespace {
+void check(RTCDevice device, const char* what) {
+  RTCError e = rtcGetDeviceError(device);
+  if (e != RTC_ERROR_NONE) fail("Embree error {} during {}", int(e), what);
+}
+
+void copy_vertices(RTCGeometry geom, const Mesh& mesh) {
+  // Embree's vertex buffer is padded so that the last vertex can be read with 16-byte loads.
+  auto* v = static_cast<float*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_VERTEX, 0));
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    v[3 * i + 0] = mesh.positions[i].x;
+    v[3 * i + 1] = mesh.positions[i].y;
+    v[3 * i + 2] = mesh.positions[i].z;
+  }
+}
+}  // namespace
+
+Accel::Accel(const Mesh& mesh) : m_impl(std::make_unique<Impl>()) {
+  Impl& m = *m_impl;
+  m.device = rtcNewDevice("verbose=0");
+  if (!m.device) fail("cannot create an Embree device (error {})", int(rtcGetDeviceError(nullptr)));
+  m.scene = rtcNewScene(m.device);
+  rtcSetSceneBuildQuality(m.scene, RTC_BUILD_QUALITY_HIGH);
+  // Robust traversal: no rays slip through shared edges of the closed rooms and the sky dome.
+  rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
+  m.vertex_count = mesh.positions.size();
+  if (!mesh.triangles.empty()) {
+    m.geometry = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    // One extra vertex of padding for Embree's wide loads.
+    rtcSetNewGeometryBuffer(m.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                            mesh.positions.size() + 1);
+    copy_vertices(m.geometry, mesh);
+    auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+        m.geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangles.size()));
+    check(m.device, "buffer allocation");
+    std::memcpy(idx, mesh.triangles.data(), mesh.triangles.size() * 3 * sizeof(uint32_t));
+    rtcSetGeometryBuildQuality(m.geometry, RTC_BUILD_QUALITY_HIGH);
+    rtcCommitGeometry(m.geometry);
+    rtcAttachGeometry(m.scene, m.geometry);
+  }
+  rtcCommitScene(m.scene);
+  check(m.device, "scene build");
+}
+
+Accel::~Accel() {
+  if (m_impl->geometry) rtcReleaseGeometry(m_impl->geometry);
+  if (m_impl->scene) rtcReleaseScene(m_impl->scene);
+  if (m_impl->device) rtcReleaseDevice(m_impl->device);
+}
+
+void Accel::update_vertices(const Mesh& mesh) {
+  Impl& m = *m_impl;
+  if (!m.geometry) return;
+  if (mesh.positions.size() != m.vertex_count) fail("Accel::update_vertices: vertex count changed");
+  copy_vertices(m.geometry, mesh);
+  rtcUpdateGeometryBuffer(m.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+  rtcSetGeometryBuildQuality(m.geometry, RTC_BUILD_QUALITY_REFIT);
+  rtcCommitGeometry(m.geometry);
+  rtcCommitScene(m.scene);
+  check(m.device, "refit");
+}
+
+bool Accel::intersect(const Ray& ray, Hit& hit) const {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh;
+  rh.ray.org_x = ray.o.x;
+  rh.ray.org_y = ray.o.y;
+  rh.ray.org_z = ray.o.z;
+  rh.ray.dir_x = ray.d.x;
+  rh.ray.dir_y = ray.d.y;
+  rh.ray.dir_z = ray.d.z;
+  rh.ray.tnear = ray.tmin;
+  rh.ray.tfar = ray.tmax;
+  rh.ray.time = 0;
+  rh.ray.mask = ~0u;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(m_impl->scene, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  hit.t = rh.ray.tfar;
+  hit.tri = rh.hit.primID;
+  hit.u = rh.hit.u;
+  hit.v = rh.hit.v;
+  return true;
+}
+
+bool Accel::occluded(const Ray& ray) const {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRay r;
+  r.org_x = ray.o.x;
+  r.org_y = ray.o.y;
+  r.org_z = ray.o.z;
+  r.dir_x = ray.d.x;
+  r.dir_y = ray.d.y;
+  r.dir_z = ray.d.z;
+  r.tnear = ray.tmin;
+  r.tfar = ray.tmax;
+  r.time = 0;
+  r.mask = ~0u;
+  r.id = 0;
+  r.flags = 0;
+  rtcOccluded1(m_impl->scene, &ctx, &r);
+  return r.tfar < 0;  // Embree sets tfar to -inf on a hit
+}
+
+}  // namespace rll

@@ -1,0 +1,44 @@
+// HDR RGB images and their files: OpenEXR (linear) and PNG (tone-mapped sRGB), written atomically.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "rll/core/math.h"
+
+namespace rll {
+
+class Image {
+ public:
+  Image() = default;
+  Image(int width, int height, Rgb fill = Rgb(0)) : m_w(width), m_h(height), m_px(size_t(width) * height, fill) {}
+  int width() const { return m_w; }
+  int height() const { return m_h; }
+  size_t pixel_count() const { return m_px.size(); }
+  Rgb& at(int x, int y) { return m_px[size_t(y) * m_w + x]; }
+  const Rgb& at(int x, int y) const { return m_px[size_t(y) * m_w + x]; }
+  Rgb& operator[](size_t i) { return m_px[i]; }
+  const Rgb& operator[](size_t i) const { return m_px[i]; }
+  const std::vector<Rgb>& pixels() const { return m_px; }
+  std::vector<Rgb>& pixels() { return m_px; }
+
+ private:
+  int m_w = 0, m_h = 0;
+  std::vector<Rgb> m_px;
+};
+
+// Linear value to 8-bit sRGB after exposure (stops) and clamping.
+uint8_t to_srgb8(float linear, float exposure_scale = 1.0f);
+
+// Writes by extension: .exr (32-bit float, ZIP), .png (sRGB 8-bit, clamped after exposure).
+// The file is written to a temporary name beside the target, then renamed over it.
+void write_image(const std::filesystem::path& path, const Image& image, float exposure_stops = 0);
+// Reads .exr, or any format stb_image reads (.png, .jpg, .hdr, ...); 8-bit files are decoded
+// from sRGB to linear when `srgb` is true.
+Image read_image(const std::filesystem::path& path, bool srgb = true);
+
+// Writes bytes to `path` atomically (temporary file in the same folder, then rename).
+void write_file_atomic(const std::filesystem::path& path, const std::string& bytes);
+
+}  // namespace rll

@@ -1,0 +1,37 @@
+#include "rll/core/parallel.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+
+namespace rll {
+
+struct ThreadLimit::Impl {
+  std::unique_ptr<tbb::global_control> control;
+};
+
+ThreadLimit::ThreadLimit(int threads) : m_impl(std::make_unique<Impl>()) {
+  if (threads > 0)
+    m_impl->control = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, size_t(threads));
+}
+ThreadLimit::~ThreadLimit() = default;
+
+int hardware_threads() { return tbb::info::default_concurrency(); }
+
+void parallel_for(size_t n, size_t grain, const std::function<void(size_t, size_t)>& body) {
+  if (n == 0) return;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, std::max<size_t>(1, grain)),
+                    [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
+}
+
+void parallel_for_each(size_t n, const std::function<void(size_t)>& body) {
+  if (n == 0) return;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1),
+                    [&](const tbb::blocked_range<size_t>& r) {
+                      for (size_t i = r.begin(); i != r.end(); ++i) body(i);
+                    });
+}
+
+}  // namespace rll

@@ -1,0 +1,31 @@
+// The renderer's parallel loops; TBB lives behind these and nowhere else.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+
+namespace rll {
+
+// Limits the worker threads for as long as the returned object lives; 0 means all cores.
+class ThreadLimit {
+ public:
+  explicit ThreadLimit(int threads);
+  ~ThreadLimit();
+  ThreadLimit(const ThreadLimit&) = delete;
+  ThreadLimit& operator=(const ThreadLimit&) = delete;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+};
+
+int hardware_threads();
+
+// Calls body(begin, end) over chunks of [0, n); grain is the smallest chunk.
+void parallel_for(size_t n, size_t grain, const std::function<void(size_t, size_t)>& body);
+
+// Calls body(i) for every i in [0, n), one item per task (for coarse items such as image tiles).
+void parallel_for_each(size_t n, const std::function<void(size_t)>& body);
+
+}  // namespace rll

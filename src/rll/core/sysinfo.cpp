@@ -1,0 +1,16 @@
+#include "rll/core/sysinfo.h"
+
+#include <fstream>
+#include <string>
+
+namespace rll {
+
+size_t peak_rss_bytes() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmHWM:", 0) == 0) return size_t(std::stoull(line.substr(6))) * 1024;
+  return 0;
+}
+
+}  // namespace rll

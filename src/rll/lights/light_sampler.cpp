@@ -1,0 +1,24 @@
+#include "rll/lights/light_sampler.h"
+
+#include "rll/core/error.h"
+#include "rll/core/params.h"
+#include "rll/lights/simple_samplers.h"
+
+namespace rll {
+
+const std::vector<std::string>& light_sampler_names() {
+  static const std::vector<std::string> names = {"uniform", "power"};
+  return names;
+}
+
+std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const Scene& scene,
+                                                 const Params& params) {
+  (void)params;
+  if (name == "uniform") return std::make_unique<UniformLightSampler>(scene);
+  if (name == "power") return std::make_unique<PowerLightSampler>(scene);
+  std::string list;
+  for (const auto& n : light_sampler_names()) list += (list.empty() ? "" : ", ") + n;
+  fail("unknown light sampler '{}' (valid: {})", name, list);
+}
+
+}  // namespace rll

@@ -1,0 +1,76 @@
+// The light-sampler contract shared by every sampler (uniform, power, tree, rll, oracle):
+// sample(ctx, u) -> {light, pmf} and pmf(ctx, light) for any light, which must agree exactly.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "rll/core/math.h"
+
+namespace rll {
+
+struct Scene;
+class Params;
+class LightTree;
+
+inline constexpr uint32_t kNoCell = ~0u;
+
+// What a light sampler knows of a shading point.
+struct LightContext {
+  Vec3 p;
+  Vec3 n;   // geometric normal on the side the path arrived from (zero: no surface)
+  Vec3 ns;  // shading normal, same side as n
+  float footprint = 0;     // ray footprint radius at this vertex, world units
+  uint32_t cell = kNoCell;  // per-point sampler state (an RLL cell), set by prepare()
+};
+
+struct SampledLight {
+  uint32_t light = 0;
+  float pmf = 0;  // 0: nothing was sampled
+};
+
+class LightSampler {
+ public:
+  virtual ~LightSampler() = default;
+  virtual std::string name() const = 0;
+
+  // Called once per shading point before sample/pmf; a learning sampler finds its cell here.
+  // u is a fresh uniform number for any stochastic choice it makes.
+  virtual void prepare(LightContext& ctx, float u) const {
+    (void)ctx;
+    (void)u;
+  }
+  virtual SampledLight sample(const LightContext& ctx, float u) const = 0;
+  // Probability that sample(ctx, .) returns `light`.
+  virtual float pmf(const LightContext& ctx, uint32_t light) const = 0;
+
+  // Learning samplers only. One call per next-event sample, zeros included: `estimate` is the
+  // luminance of f * Le * G * V / pdf(y | light), the sample's contribution before dividing by
+  // the light's pmf; safe to call from many threads at once.
+  virtual bool learns() const { return false; }
+  virtual void record(const LightContext& ctx, const SampledLight& s, float estimate) {
+    (void)ctx;
+    (void)s;
+    (void)estimate;
+  }
+  // Between passes: adapt to what was recorded (no sample/record calls run concurrently).
+  virtual void end_pass() {}
+  // Lights moved or changed power (animation): refit whatever depends on them.
+  virtual void lights_changed(const Scene& scene) { (void)scene; }
+
+  // Name, parameters and statistics for --stats and reports.
+  virtual nlohmann::json describe() const { return {{"name", name()}}; }
+};
+
+// The sampler names `make_light_sampler` knows, in the order they are listed to users.
+const std::vector<std::string>& light_sampler_names();
+
+// Builds a sampler by name with its parameters from `params` (keys "<name>.<param>");
+// throws rll::Error listing valid names on an unknown name.
+std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const Scene& scene,
+                                                 const Params& params);
+
+}  // namespace rll

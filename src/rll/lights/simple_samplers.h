@@ -1,0 +1,37 @@
+// The visibility-blind baselines without a hierarchy: uniform and power-proportional.
+#pragma once
+
+#include "rll/core/sampling.h"
+#include "rll/lights/light_sampler.h"
+
+namespace rll {
+
+// P(l) = 1/N.
+class UniformLightSampler final : public LightSampler {
+ public:
+  explicit UniformLightSampler(const Scene& scene);
+  std::string name() const override { return "uniform"; }
+  SampledLight sample(const LightContext& ctx, float u) const override;
+  float pmf(const LightContext& ctx, uint32_t light) const override;
+
+ private:
+  uint32_t m_count;
+};
+
+// P(l) proportional to emitted power (area x radiance): the paper's "energy-based" baseline.
+class PowerLightSampler final : public LightSampler {
+ public:
+  explicit PowerLightSampler(const Scene& scene);
+  std::string name() const override { return "power"; }
+  SampledLight sample(const LightContext& ctx, float u) const override;
+  float pmf(const LightContext& ctx, uint32_t light) const override;
+  void lights_changed(const Scene& scene) override;
+
+ private:
+  DiscreteDistribution m_distribution;
+};
+
+// Power of every light of the scene (zero-power scenes fall back to equal weights).
+std::vector<float> light_powers(const Scene& scene);
+
+}  // namespace rll

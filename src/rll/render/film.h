@@ -1,0 +1,37 @@
+// HDR accumulation of pixel samples (sum and count per pixel).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "rll/core/image.h"
+
+namespace rll {
+
+class Film {
+ public:
+  Film(int width, int height)
+      : m_w(width), m_h(height), m_sum(size_t(width) * height * 3, 0.0), m_count(size_t(width) * height, 0) {}
+  int width() const { return m_w; }
+  int height() const { return m_h; }
+  // Not thread-safe per pixel: each pixel is owned by one tile at a time.
+  void add(int x, int y, const Rgb& v) {
+    size_t i = size_t(y) * m_w + x;
+    m_sum[3 * i] += v.x;
+    m_sum[3 * i + 1] += v.y;
+    m_sum[3 * i + 2] += v.z;
+    ++m_count[i];
+  }
+  uint32_t count(int x, int y) const { return m_count[size_t(y) * m_w + x]; }
+  uint32_t min_count() const;
+  // Mean of the samples per pixel (black where no sample landed yet).
+  Image resolve() const;
+  void clear();
+
+ private:
+  int m_w, m_h;
+  std::vector<double> m_sum;  // double: references accumulate many thousand samples
+  std::vector<uint32_t> m_count;
+};
+
+}  // namespace rll

@@ -1,0 +1,167 @@
+#include "rll/render/integrator.h"
+
+#include "rll/core/error.h"
+#include "rll/core/params.h"
+#include "rll/core/sampling.h"
+#include "rll/scene/bsdf.h"
+#include "rll/scene/interaction.h"
+
+namespace rll {
+
+const char* integrator_name(IntegratorType t) { return t == IntegratorType::Direct ? "direct" : "path"; }
+
+const char* strategy_name(LightStrategy s) {
+  switch (s) {
+    case LightStrategy::Mis: return "mis";
+    case LightStrategy::Nee: return "nee";
+    case LightStrategy::Bsdf: return "bsdf";
+  }
+  return "?";
+}
+
+IntegratorSettings make_integrator_settings(const std::string& name, int max_depth, const Params& params) {
+  IntegratorSettings s;
+  if (name == "direct") s.type = IntegratorType::Direct;
+  else if (name == "path") s.type = IntegratorType::Path;
+  else fail("unknown integrator '{}' (valid: direct, path)", name);
+  if (max_depth < 1) fail("--max-depth must be at least 1 (got {})", max_depth);
+  s.max_depth = max_depth;
+  if (s.type == IntegratorType::Path) {
+    std::string st = params.get_choice("path.strategy", "mis", {"mis", "nee", "bsdf"});
+    s.strategy = st == "mis" ? LightStrategy::Mis : st == "nee" ? LightStrategy::Nee : LightStrategy::Bsdf;
+    s.rr_depth = int(params.get_int("path.rr_depth", 3));
+    if (s.rr_depth < 1) fail("--set path.rr_depth must be at least 1");
+  } else {
+    s.strategy = LightStrategy::Nee;
+  }
+  return s;
+}
+
+// A shading point along a path.
+struct Integrator::Vertex {
+  LightContext ctx;
+  Vec3 wo;
+  const Bsdf* bsdf;
+};
+
+Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sampler,
+                       IntegratorSettings settings)
+    : m_scene(scene), m_accel(accel), m_sampler(sampler), m_settings(settings), m_learns(sampler.learns()) {}
+
+namespace {
+// Ray leaving p in direction d, offset to the side of the geometric normal that d points to.
+Ray spawn_ray(const Vec3& p, const Vec3& ng, const Vec3& d, float tmax = kInf) {
+  Ray r;
+  float eps = ray_epsilon(p);
+  r.o = p + face_forward(ng, d) * eps;
+  r.d = d;
+  r.tmin = 0;
+  r.tmax = tmax;
+  return r;
+}
+}  // namespace
+
+Rgb Integrator::sample_light(const Vertex& v, SampleStream& stream, RayCounters& counters, bool mis) const {
+  // Draw the random numbers unconditionally so that every sample uses the same dimensions.
+  float u_light = stream.next();
+  Vec2 u_pos = stream.next2();
+  SampledLight sl = m_sampler.sample(v.ctx, u_light);
+  if (sl.pmf <= 0) return Rgb(0);
+  const Light& light = m_scene.lights[sl.light];
+  LightLiSample ls = sample_li(light, v.ctx.p, u_pos);
+  Rgb contribution(0);
+  if (ls.pdf > 0) {
+    Rgb f = v.bsdf->eval(v.wo, ls.wi) * absdot(ls.wi, v.bsdf->shading_normal());
+    if (!is_black(f)) {
+      Ray shadow = spawn_ray(v.ctx.p, v.bsdf->geometric_normal(), ls.wi);
+      if (std::isfinite(ls.dist))
+        shadow.tmax = ls.dist * (1 - 1e-4f) - ray_epsilon(ls.point);
+      else  // a directional light: test the scene's bounding sphere only, never the sky dome
+        shadow.tmax = length(v.ctx.p - m_scene.bounds.center()) + 1.01f * m_scene.radius;
+      ++counters.shadow;
+      if (!m_accel.occluded(shadow)) contribution = f * ls.L / ls.pdf;
+    }
+  }
+  if (m_learns) m_sampler.record(v.ctx, sl, luminance(contribution));
+  if (is_black(contribution)) return contribution;
+  float w = 1;
+  if (mis && !light.is_delta()) {
+    float bsdf_pdf = v.bsdf->pdf(v.wo, ls.wi);
+    w = power_heuristic(sl.pmf * ls.pdf, bsdf_pdf);
+  }
+  return contribution * (w / sl.pmf);
+}
+
+Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters) const {
+  const bool direct = m_settings.type == IntegratorType::Direct;
+  const LightStrategy strategy = m_settings.strategy;
+  const int max_depth = direct ? 1 : m_settings.max_depth;
+  const float pixel_angle = m_scene.camera.pixel_angle();
+
+  Rgb L(0), beta(1);
+  Ray ray = camera_ray;
+  // Footprint: R_k = R_{k-1} + t / sqrt(p_prev |cos|), with the camera's p_prev = 1/pixel_angle^2.
+  float footprint = 0, prev_dir_pdf = 1 / (pixel_angle * pixel_angle);
+  LightContext prev_ctx;
+  float prev_bsdf_pdf = 0;
+  ++counters.camera;
+  for (int depth = 0;; ++depth) {
+    Hit hit;
+    if (!m_accel.intersect(ray, hit)) break;
+    SurfaceHit sh = make_surface_hit(m_scene, hit);
+    Vec3 wo = -ray.d;
+
+    if (sh.light >= 0) {
+      Rgb Le = emitted_radiance(m_scene.lights[sh.light], wo);
+      if (!is_black(Le)) {
+        if (depth == 0 || strategy == LightStrategy::Bsdf) {
+          L += beta * Le;
+        } else if (strategy == LightStrategy::Mis) {
+          float light_pdf = m_sampler.pmf(prev_ctx, uint32_t(sh.light)) *
+                            pdf_li(m_scene.lights[sh.light], prev_ctx.p, sh.p);
+          L += beta * Le * power_heuristic(prev_bsdf_pdf, light_pdf);
+        }
+      }
+    }
+    if (depth >= max_depth) break;
+
+    const Material& mat = m_scene.materials[sh.material];
+    Bsdf bsdf(mat, albedo_at(m_scene, sh), sh.ns, sh.ng, wo);
+    if (bsdf.is_black()) break;
+
+    float cos_in = std::max(1e-2f, absdot(wo, sh.ng));
+    footprint += hit.t / std::sqrt(prev_dir_pdf * cos_in);
+    Vertex v;
+    v.ctx.p = sh.p;
+    v.ctx.n = bsdf.geometric_normal();
+    v.ctx.ns = bsdf.shading_normal();
+    v.ctx.footprint = footprint;
+    v.wo = wo;
+    v.bsdf = &bsdf;
+    m_sampler.prepare(v.ctx, stream.next());
+
+    if (strategy != LightStrategy::Bsdf)
+      L += beta * sample_light(v, stream, counters, !direct && strategy == LightStrategy::Mis);
+    if (direct) break;
+
+    float u_lobe = stream.next();
+    Vec2 u_dir = stream.next2();
+    BsdfSample bs;
+    if (!bsdf.sample(wo, u_lobe, u_dir, bs)) break;
+    beta *= bs.f * (absdot(bs.wi, bsdf.shading_normal()) / bs.pdf);
+    if (is_black(beta) || !is_finite(beta)) break;
+    prev_ctx = v.ctx;
+    prev_bsdf_pdf = bs.pdf;
+    prev_dir_pdf = bs.pdf;
+    if (depth + 1 >= m_settings.rr_depth) {
+      float q = std::max(0.05f, 1 - max_component(beta));
+      if (stream.next() < q) break;
+      beta /= 1 - q;
+    }
+    ray = spawn_ray(sh.p, sh.ng, bs.wi);
+    ++counters.bounce;
+  }
+  return L;
+}
+
+}  // namespace rll

@@ -1,0 +1,65 @@
+// Light transport: `direct` (next-event estimation) and `path` (NEE + BSDF sampling with MIS,
+// Russian roulette). Both ask the light sampler for every light choice and feed it rewards.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "rll/accel/accel.h"
+#include "rll/core/rng.h"
+#include "rll/lights/light_sampler.h"
+#include "rll/scene/scene.h"
+
+namespace rll {
+
+class Params;
+
+enum class IntegratorType { Direct, Path };
+// Which estimators of direct light the path integrator combines (tests compare them).
+enum class LightStrategy { Mis, Nee, Bsdf };
+
+struct IntegratorSettings {
+  IntegratorType type = IntegratorType::Path;
+  int max_depth = 5;        // path: bounces; 1 = direct light only
+  LightStrategy strategy = LightStrategy::Mis;
+  int rr_depth = 3;         // Russian roulette from this bounce on
+};
+
+// Parses --integrator and the integrator's `--set` keys (path.strategy, path.rr_depth).
+IntegratorSettings make_integrator_settings(const std::string& name, int max_depth, const Params& params);
+const char* integrator_name(IntegratorType t);
+const char* strategy_name(LightStrategy s);
+
+// Rays traced by one worker; summed after each tile.
+struct RayCounters {
+  uint64_t camera = 0, bounce = 0, shadow = 0;
+  uint64_t total() const { return camera + bounce + shadow; }
+  RayCounters& operator+=(const RayCounters& o) {
+    camera += o.camera;
+    bounce += o.bounce;
+    shadow += o.shadow;
+    return *this;
+  }
+};
+
+class Integrator {
+ public:
+  Integrator(const Scene& scene, const Accel& accel, LightSampler& sampler, IntegratorSettings settings);
+  // Radiance along a camera ray; `stream` supplies the per-sample random numbers.
+  Rgb li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters) const;
+  const IntegratorSettings& settings() const { return m_settings; }
+
+ private:
+  struct Vertex;
+  // One next-event sample at a vertex: returns its contribution (MIS-weighted for `path`),
+  // already divided by the light pmf, before the path throughput.
+  Rgb sample_light(const Vertex& v, SampleStream& stream, RayCounters& counters, bool mis) const;
+
+  const Scene& m_scene;
+  const Accel& m_accel;
+  LightSampler& m_sampler;
+  IntegratorSettings m_settings;
+  bool m_learns;
+};
+
+}  // namespace rll

@@ -1,0 +1,85 @@
+#include "rll/render/render.h"
+
+#include <chrono>
+#include <mutex>
+
+#include "rll/core/error.h"
+#include "rll/core/parallel.h"
+#include "rll/core/rng.h"
+
+namespace rll {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+}  // namespace
+
+RenderProgress render(const Scene& scene, const Integrator& integrator, LightSampler& sampler, Film& film,
+                      const RenderSettings& settings, const std::atomic<bool>* cancel,
+                      const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
+  if (settings.spp < 1) fail("--spp must be at least 1 (got {})", settings.spp);
+  if (settings.pass_spp < 1) fail("pass size must be at least 1 sample per pixel");
+  if (film.width() != scene.width || film.height() != scene.height) fail("film size does not match the scene");
+  const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
+  const int tiles_x = (w + ts - 1) / ts, tiles_y = (h + ts - 1) / ts;
+  const uint64_t frame_seed = mix64(settings.seed + 0x51ed270b27f3e5a1ull * uint64_t(settings.frame));
+
+  RenderProgress progress;
+  progress.spp_target = settings.spp;
+  progress.time_limit = settings.time_limit;
+  progress.spp_done = int(film.min_count());
+  const auto t0 = Clock::now();
+  std::atomic<bool> stop{false};
+  std::mutex merge_mutex;
+
+  while (progress.spp_done < settings.spp && !stop.load()) {
+    const int first = progress.spp_done;
+    const int count = std::min(settings.pass_spp, settings.spp - first);
+    parallel_for_each(size_t(tiles_x) * tiles_y, [&](size_t tile) {
+      if (stop.load(std::memory_order_relaxed)) return;
+      if ((cancel && cancel->load(std::memory_order_relaxed)) ||
+          (settings.time_limit > 0 && seconds_since(t0) >= settings.time_limit)) {
+        stop.store(true);
+        return;
+      }
+      RayCounters rays;
+      uint64_t nonfinite = 0;
+      const int x0 = int(tile % tiles_x) * ts, y0 = int(tile / tiles_x) * ts;
+      for (int y = y0; y < std::min(h, y0 + ts); ++y)
+        for (int x = x0; x < std::min(w, x0 + ts); ++x)
+          for (int s = first; s < first + count; ++s) {
+            SampleStream stream(frame_seed, uint64_t(y) * w + x, uint64_t(s));
+            Vec2 jitter = stream.next2();
+            Ray ray = scene.camera.generate_ray(x + jitter.x, y + jitter.y);
+            Rgb L = integrator.li(ray, stream, rays);
+            if (!is_finite(L)) {
+              ++nonfinite;
+              L = Rgb(0);
+            }
+            film.add(x, y, L);
+          }
+      std::lock_guard lock(merge_mutex);
+      progress.rays += rays;
+      progress.nonfinite += nonfinite;
+    });
+    // A stopped pass leaves some pixels with fewer samples; the film's counts keep it unbiased.
+    progress.passes += 1;
+    progress.spp_done = int(film.min_count());
+    progress.samples = progress.rays.camera;
+    progress.seconds = seconds_since(t0);
+    sampler.end_pass();
+    if (stop.load()) {
+      progress.cancelled = cancel && cancel->load();
+      progress.out_of_time = !progress.cancelled;
+    }
+    if (after_pass) after_pass(progress, film);
+  }
+  progress.seconds = seconds_since(t0);
+  progress.out_of_time = progress.out_of_time ||
+                         (settings.time_limit > 0 && progress.spp_done < settings.spp && !progress.cancelled);
+  return progress;
+}
+
+}  // namespace rll

@@ -1,0 +1,265 @@
+#include "rll/scene/builtin.h"
+
+#include <functional>
+
+#include "rll/core/error.h"
+#include "rll/core/rng.h"
+#include "rll/scene/builder.h"
+
+namespace rll {
+
+namespace {
+
+Material make_conductor(const std::string& name, Rgb eta, Rgb k, float roughness) {
+  Material m;
+  m.name = name;
+  m.type = MaterialType::Conductor;
+  m.eta = eta;
+  m.k = k;
+  m.roughness = roughness;
+  return m;
+}
+
+Material make_plastic(const std::string& name, Rgb albedo, float roughness) {
+  Material m;
+  m.name = name;
+  m.type = MaterialType::Plastic;
+  m.albedo = albedo;
+  m.roughness = roughness;
+  return m;
+}
+
+const Rgb kAluminiumEta{1.66f, 0.88f, 0.52f}, kAluminiumK{9.22f, 6.27f, 4.84f};
+const Rgb kWhite{0.73f}, kRed{0.63f, 0.065f, 0.05f}, kGreen{0.14f, 0.45f, 0.091f};
+
+// A Cornell box with its opening towards +z: lo/hi are its outer bounds. The lamp is a
+// 2-triangle quad under the ceiling facing down, so it lights the inside of its own box.
+void cornell_box(SceneBuilder& b, const Vec3& lo, const Vec3& hi, uint32_t white, uint32_t red,
+                 uint32_t green, uint32_t lamp, float lamp_fraction) {
+  // Walls face inwards; the +z side is open.
+  b.box(lo, hi, white, true, (1u << 0) | (1u << 1) | (1u << 5));
+  b.box(lo, hi, red, true, ~(1u << 0) & 63u);
+  b.box(lo, hi, green, true, ~(1u << 1) & 63u);
+  Vec3 d = hi - lo;
+  float lw = d.x * lamp_fraction, ld = d.z * lamp_fraction;
+  Vec3 p(lo.x + 0.5f * (d.x - lw), hi.y - 1e-3f * d.y, lo.z + 0.5f * (d.z - ld));
+  b.quad(p, Vec3(lw, 0, 0), Vec3(0, 0, ld), lamp);  // x cross z = -y: faces down
+}
+
+Scene cornell_box_scene() {
+  Scene s;
+  s.width = s.height = 256;
+  SceneBuilder b(s);
+  uint32_t white = b.diffuse(kWhite, "white"), red = b.diffuse(kRed, "red"), green = b.diffuse(kGreen, "green");
+  uint32_t lamp = b.emitter(Rgb(17, 12, 4), false, "lamp");
+  uint32_t metal = b.material(make_conductor("aluminium", kAluminiumEta, kAluminiumK, 0.25f));
+  cornell_box(b, Vec3(0, 0, 0), Vec3(1, 1, 1), white, red, green, lamp, 0.25f);
+  b.box(Vec3(0.13f, 0, 0.37f), Vec3(0.43f, 0.3f, 0.67f), white);
+  b.box(Vec3(0.55f, 0, 0.12f), Vec3(0.85f, 0.6f, 0.42f), metal);
+  s.camera.position = Vec3(0.5f, 0.5f, 2.35f);
+  s.camera.target = Vec3(0.5f, 0.5f, 0);
+  s.camera.fov = 38;
+  s.has_camera = true;
+  return s;
+}
+
+Scene cornell_boxes_room_scene() {
+  Scene s;
+  s.width = 400;
+  s.height = 300;
+  SceneBuilder b(s);
+  const float W = 14, H = 6, D = 12;
+  uint32_t wall = b.diffuse(Rgb(0.7f, 0.68f, 0.62f), "wall");
+  uint32_t floor = b.diffuse(Rgb(0.45f, 0.42f, 0.4f), "floor");
+  uint32_t white = b.diffuse(kWhite, "white"), red = b.diffuse(kRed, "red"), green = b.diffuse(kGreen, "green");
+  uint32_t lamp = b.emitter(Rgb(12, 10, 7), false, "lamp");
+  uint32_t plastic = b.material(make_plastic("blue-plastic", Rgb(0.1f, 0.2f, 0.5f), 0.15f));
+  uint32_t metal = b.material(make_conductor("aluminium", kAluminiumEta, kAluminiumK, 0.2f));
+
+  // The room: floor, back and front walls closed; ceiling skylights and side windows open.
+  b.quad(Vec3(0, 0, 0), Vec3(0, 0, D), Vec3(W, 0, 0), floor);  // z cross x = +y
+  b.quad(Vec3(0, 0, 0), Vec3(W, 0, 0), Vec3(0, H, 0), wall);   // back wall, faces +z
+  b.quad(Vec3(0, 0, D), Vec3(0, H, 0), Vec3(W, 0, 0), wall);   // front wall, faces -z
+  std::vector<SceneBuilder::Hole> skylights;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 2; ++j) {
+      float z0 = 3.0f + j * 4.0f, x0 = 2.5f + i * 3.75f;
+      skylights.push_back({z0, x0, z0 + 1.4f, x0 + 1.5f});  // (u = z, v = x) in the y plane
+    }
+  b.wall_with_holes(1, H, 0, 0, D, W, skylights, false, wall);
+  std::vector<SceneBuilder::Hole> windows;  // (u = y, v = z) in the x planes
+  for (int k = 0; k < 3; ++k) windows.push_back({2.6f, 2.5f + k * 3.0f, 4.6f, 3.7f + k * 3.0f});
+  b.wall_with_holes(0, 0, 0, 0, H, D, windows, true, wall);
+  b.wall_with_holes(0, W, 0, 0, H, D, windows, false, wall);
+
+  // 42 Cornell boxes stacked 7 x 6 against the back wall, opening towards the camera.
+  const int cols = 7, rows = 6;
+  const float bw = 1.4f, bh = 0.78f, bd = 1.0f, pitch_x = 1.8f, pitch_y = 0.9f;
+  const float x_margin = 0.5f * (W - cols * pitch_x) + 0.5f * (pitch_x - bw);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      Vec3 lo(x_margin + c * pitch_x, 0.15f + r * pitch_y, 0.05f);
+      cornell_box(b, lo, lo + Vec3(bw, bh, bd), white, red, green, lamp, 0.3f);
+    }
+  b.sphere(Vec3(4.5f, 0.9f, 6.5f), 0.9f, 3, plastic);
+  b.box(Vec3(8.8f, 0, 5.5f), Vec3(10.3f, 1.2f, 7.0f), metal);
+
+  SkyDome sky;
+  sky.triangles = 2048;
+  sky.radiance = Rgb(0.55f, 0.7f, 1.0f) * 1.6f;
+  s.sky = sky;
+  s.camera.position = Vec3(W * 0.5f, 3.0f, D - 0.5f);
+  s.camera.target = Vec3(W * 0.5f, 2.7f, 0);
+  s.camera.fov = 52;
+  s.has_camera = true;
+  return s;
+}
+
+Scene arch_interior_scene() {
+  Scene s;
+  s.width = 400;
+  s.height = 300;
+  SceneBuilder b(s);
+  const float W = 16, H = 4, D = 10;
+  uint32_t wall = b.diffuse(Rgb(0.75f, 0.72f, 0.68f), "plaster");
+  uint32_t floor = b.diffuse(Rgb(0.35f, 0.25f, 0.18f), "wood");
+  uint32_t stone = b.diffuse(Rgb(0.55f, 0.55f, 0.52f), "stone");
+  uint32_t plastic = b.material(make_plastic("red-plastic", Rgb(0.5f, 0.08f, 0.06f), 0.2f));
+  uint32_t metal = b.material(make_conductor("aluminium", kAluminiumEta, kAluminiumK, 0.3f));
+
+  b.quad(Vec3(0, 0, 0), Vec3(0, 0, D), Vec3(W, 0, 0), floor);  // floor, faces +y
+  b.quad(Vec3(0, H, 0), Vec3(W, 0, 0), Vec3(0, 0, D), wall);   // ceiling, faces -y
+  b.quad(Vec3(W, 0, 0), Vec3(0, 0, D), Vec3(0, H, 0), wall);   // right wall (x=W), faces -x
+  b.quad(Vec3(0, 0, D), Vec3(0, H, 0), Vec3(W, 0, 0), wall);   // front wall, faces -z
+  // Many small windows: a 12 x 2 grid in the left wall (x = 0), a 10 x 2 grid in the back wall.
+  std::vector<SceneBuilder::Hole> left, back;
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 2; ++j) {
+      float z0 = 0.45f + i * 0.8f, y0 = 1.5f + j * 1.2f;
+      left.push_back({y0, z0, y0 + 0.7f, z0 + 0.35f});  // (u = y, v = z)
+    }
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 2; ++j) {
+      float x0 = 0.9f + i * 1.5f, y0 = 1.5f + j * 1.2f;
+      back.push_back({x0, y0, x0 + 0.45f, y0 + 0.7f});  // (u = x, v = y)
+    }
+  b.wall_with_holes(0, 0, 0, 0, H, D, left, true, wall);
+  b.wall_with_holes(2, 0, 0, 0, W, H, back, true, wall);
+  // Columns and furniture.
+  for (int i = 0; i < 4; ++i) b.box(Vec3(2.5f + i * 3.5f, 0, 3.0f), Vec3(2.9f + i * 3.5f, H, 3.4f), stone);
+  b.box(Vec3(5.0f, 0, 5.5f), Vec3(8.0f, 0.8f, 7.0f), stone);
+  b.sphere(Vec3(10.5f, 0.7f, 6.0f), 0.7f, 3, plastic);
+  b.box(Vec3(12.0f, 0, 4.5f), Vec3(13.0f, 1.6f, 5.5f), metal);
+
+  SkyDome sky;
+  sky.triangles = 2048;
+  sky.radiance = Rgb(0.5f, 0.65f, 1.0f) * 1.5f;
+  s.sky = sky;
+  s.lights.push_back(make_directional_light(Vec3(-1.0f, 0.9f, -0.45f), Rgb(9, 8, 6.5f)));
+  s.camera.position = Vec3(W - 1.0f, 2.0f, D - 0.6f);
+  s.camera.target = Vec3(5.0f, 1.4f, 1.0f);
+  s.camera.fov = 60;
+  s.has_camera = true;
+  return s;
+}
+
+Scene many_lights_open_scene() {
+  Scene s;
+  s.width = 400;
+  s.height = 300;
+  SceneBuilder b(s);
+  uint32_t floor = b.diffuse(Rgb(0.6f), "floor");
+  b.quad(Vec3(-25, 0, -25), Vec3(0, 0, 50), Vec3(50, 0, 0), floor);
+  // 128 x 80 = 10,240 small emitters on a jittered grid, facing roughly down, of varied colour
+  // and radiance. Nothing occludes them from the floor.
+  Pcg32 rng(7);
+  const int nx = 128, nz = 80;
+  std::vector<uint32_t> mats;
+  for (int k = 0; k < 16; ++k) {
+    Rgb c(0.3f + 0.7f * rng.next_float(), 0.3f + 0.7f * rng.next_float(), 0.3f + 0.7f * rng.next_float());
+    mats.push_back(b.emitter(c * (4.0f + 36.0f * rng.next_float() * rng.next_float()), false));
+  }
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < nz; ++j) {
+      Vec3 c(-16 + 32.0f * (i + rng.next_float()) / nx, 0.4f + 3.0f * rng.next_float(),
+             -10 + 20.0f * (j + rng.next_float()) / nz);
+      // A random downward-facing orientation within 60 degrees of straight down.
+      Vec3 nrm = normalize(Vec3(rng.next_float() - 0.5f, -1.0f, rng.next_float() - 0.5f) );
+      Frame f(nrm);
+      float r = 0.06f + 0.06f * rng.next_float();
+      Vec3 a = c + f.s * r, bb = c + (f.s * -0.5f + f.t * 0.866f) * r, cc = c + (f.s * -0.5f - f.t * 0.866f) * r;
+      // Wind so the face normal is nrm.
+      if (dot(cross(bb - a, cc - a), nrm) < 0) std::swap(bb, cc);
+      b.triangle(a, bb, cc, mats[rng.next_bounded(uint32_t(mats.size()))]);
+    }
+  s.camera.position = Vec3(0, 9, 20);
+  s.camera.target = Vec3(0, 0, 0);
+  s.camera.fov = 55;
+  s.has_camera = true;
+  return s;
+}
+
+Scene furnace_scene() {
+  Scene s;
+  s.width = s.height = 32;
+  SceneBuilder b(s);
+  Material m;
+  m.name = "furnace";
+  m.albedo = Rgb(kFurnaceAlbedo);
+  m.emission = Rgb(kFurnaceEmission);
+  b.sphere(Vec3(0), 1.0f, 2, b.material(m), true);
+  s.camera.position = Vec3(0, 0, 0);
+  s.camera.target = Vec3(0, 0, 1);
+  s.camera.fov = 60;
+  s.has_camera = true;
+  return s;
+}
+
+struct Entry {
+  BuiltinSceneInfo info;
+  std::function<Scene()> make;
+};
+
+const std::vector<Entry>& entries() {
+  static const std::vector<Entry> e = {
+      {{"cornell-box", "the classic Cornell box with one area light (2 triangles) and a metal block"},
+       cornell_box_scene},
+      {{"cornell-boxes-room",
+        "the paper's Fig. 1/3: 42 Cornell boxes, each lit by its own 2-triangle lamp, in a room lit "
+        "by a 2048-triangle sky dome through skylights and windows"},
+       cornell_boxes_room_scene},
+      {{"arch-interior",
+        "the paper's Fig. 4: a room lit only by a 2048-triangle sky dome and a sun through 44 small windows"},
+       arch_interior_scene},
+      {{"many-lights-open", "10,240 small emissive triangles over an open floor, nothing occluded"},
+       many_lights_open_scene},
+      {{"furnace", "inside an emissive diffuse sphere (Le = 1, albedo 0.5): radiance sum of 0.5^k"},
+       furnace_scene},
+  };
+  return e;
+}
+
+}  // namespace
+
+const std::vector<BuiltinSceneInfo>& builtin_scenes() {
+  static const std::vector<BuiltinSceneInfo> infos = [] {
+    std::vector<BuiltinSceneInfo> v;
+    for (const auto& e : entries()) v.push_back(e.info);
+    return v;
+  }();
+  return infos;
+}
+
+Scene make_builtin_scene(const std::string& name) {
+  for (const auto& e : entries())
+    if (e.info.name == name) {
+      Scene s = e.make();
+      s.source = "builtin:" + name;
+      return s;
+    }
+  std::string list;
+  for (const auto& e : entries()) list += (list.empty() ? "" : ", ") + e.info.name;
+  fail("unknown built-in scene '{}' (available: {})", name, list);
+}
+
+}  // namespace rll

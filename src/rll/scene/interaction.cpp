@@ -1,0 +1,55 @@
+#include "rll/scene/interaction.h"
+
+namespace rll {
+
+SurfaceHit make_surface_hit(const Scene& scene, const Hit& hit) {
+  const Mesh& m = scene.mesh;
+  const auto& t = m.triangles[hit.tri];
+  float b0 = 1 - hit.u - hit.v;
+  SurfaceHit s;
+  s.tri = hit.tri;
+  s.p = m.positions[t[0]] * b0 + m.positions[t[1]] * hit.u + m.positions[t[2]] * hit.v;
+  Vec3 c = m.face_cross(hit.tri);
+  float len = length(c);
+  s.ng = len > 0 ? c / len : Vec3(0, 0, 1);
+  s.ns = s.ng;
+  if (!m.normals.empty()) {
+    Vec3 n = m.normals[t[0]] * b0 + m.normals[t[1]] * hit.u + m.normals[t[2]] * hit.v;
+    float nl = length(n);
+    if (nl > 1e-6f && std::isfinite(nl)) s.ns = dot(n, s.ng) < 0 ? -n / nl : n / nl;
+  }
+  if (!m.uvs.empty()) {
+    const Vec2 &a = m.uvs[t[0]], &b = m.uvs[t[1]], &d = m.uvs[t[2]];
+    s.uv = {a.x * b0 + b.x * hit.u + d.x * hit.v, a.y * b0 + b.y * hit.u + d.y * hit.v};
+  } else {
+    s.uv = {hit.u, hit.v};
+  }
+  s.material = m.material[hit.tri];
+  s.light = m.light[hit.tri];
+  return s;
+}
+
+Rgb sample_texture(const Image& tex, Vec2 uv) {
+  if (tex.width() == 0) return Rgb(1);
+  float x = (uv.x - std::floor(uv.x)) * tex.width() - 0.5f;
+  float y = (1 - (uv.y - std::floor(uv.y))) * tex.height() - 0.5f;
+  int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+  float fx = x - x0, fy = y - y0;
+  auto texel = [&](int i, int j) {
+    i %= tex.width();
+    j %= tex.height();
+    if (i < 0) i += tex.width();
+    if (j < 0) j += tex.height();
+    return tex.at(i, j);
+  };
+  return (texel(x0, y0) * (1 - fx) + texel(x0 + 1, y0) * fx) * (1 - fy) +
+         (texel(x0, y0 + 1) * (1 - fx) + texel(x0 + 1, y0 + 1) * fx) * fy;
+}
+
+Rgb albedo_at(const Scene& scene, const SurfaceHit& hit) {
+  const Material& m = scene.materials[hit.material];
+  if (m.albedo_texture < 0) return m.albedo;
+  return m.albedo * sample_texture(scene.textures[m.albedo_texture], hit.uv);
+}
+
+}  // namespace rll

@@ -1,0 +1,28 @@
+// The local geometry at a ray hit: position, normals, uv, material and light of the triangle.
+#pragma once
+
+#include "rll/accel/accel.h"
+#include "rll/core/image.h"
+#include "rll/scene/scene.h"
+
+namespace rll {
+
+struct SurfaceHit {
+  Vec3 p;
+  Vec3 ng;  // unit geometric normal, as wound (not flipped)
+  Vec3 ns;  // unit shading normal, on the same side as ng
+  Vec2 uv;
+  uint32_t tri = 0;
+  uint32_t material = 0;
+  int32_t light = -1;
+};
+
+SurfaceHit make_surface_hit(const Scene& scene, const Hit& hit);
+
+// Bilinear lookup with repeat wrapping, v pointing up the image.
+Rgb sample_texture(const Image& texture, Vec2 uv);
+
+// Material albedo at a hit (texture applied).
+Rgb albedo_at(const Scene& scene, const SurfaceHit& hit);
+
+}  // namespace rll

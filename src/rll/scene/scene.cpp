@@ -1,0 +1,212 @@
+#include "rll/scene/scene.h"
+
+#include <numeric>
+
+#include "rll/core/error.h"
+
+namespace rll {
+
+const char* material_type_name(MaterialType t) {
+  switch (t) {
+    case MaterialType::Diffuse: return "diffuse";
+    case MaterialType::Conductor: return "conductor";
+    case MaterialType::Plastic: return "plastic";
+  }
+  return "?";
+}
+
+void Mesh::append(const Mesh& o, uint32_t material_offset) {
+  uint32_t base = uint32_t(positions.size());
+  bool had_normals = !normals.empty() || positions.empty();
+  bool had_uvs = !uvs.empty() || positions.empty();
+  // Keep the per-vertex arrays either empty or full: pad with "none" where one side lacks them.
+  if (!o.normals.empty() && normals.empty() && !positions.empty()) normals.assign(positions.size(), Vec3(0));
+  if (!o.uvs.empty() && uvs.empty() && !positions.empty()) uvs.assign(positions.size(), Vec2{});
+  positions.insert(positions.end(), o.positions.begin(), o.positions.end());
+  if (!o.normals.empty()) normals.insert(normals.end(), o.normals.begin(), o.normals.end());
+  else if (!normals.empty() || !had_normals) normals.resize(positions.size(), Vec3(0));
+  if (!o.uvs.empty()) uvs.insert(uvs.end(), o.uvs.begin(), o.uvs.end());
+  else if (!uvs.empty() || !had_uvs) uvs.resize(positions.size(), Vec2{});
+  for (const auto& t : o.triangles) triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  for (uint32_t m : o.material) material.push_back(m + material_offset);
+  light.insert(light.end(), o.light.begin(), o.light.end());
+  light.resize(triangles.size(), -1);
+}
+
+void add_sky_dome(Scene& scene, const SkyDome& sky, const Vec3& center, float radius) {
+  if (!(sky.radius_scale > 2)) fail("{}: sky radius scale must be greater than 2", scene.source);
+  if (sky.triangles < 4) fail("{}: sky.triangles must be at least 4 (got {})", scene.source, sky.triangles);
+  // Rings of vertices at polar angles theta_i = i * (pi/2) / R around the zenith; ring i has
+  // s_i vertices, and the strip between rings i and i+1 holds s_i + s_{i+1} triangles, the
+  // polar fan s_1. Total = 2 * sum(s_i) - s_R, so any count >= 4 is reachable with s_i
+  // roughly proportional to sin(theta_i), giving triangles of similar solid angle.
+  const int n = sky.triangles;
+  int rings = std::max(1, int(std::round(std::sqrt(n / kPi))));
+  std::vector<int> s(rings + 1, 0);
+  auto total = [&] {
+    int t = 0;
+    for (int i = 1; i <= rings; ++i) t += 2 * s[i];
+    return t - s[rings];
+  };
+  double wsum = 0;
+  for (int i = 1; i <= rings; ++i) wsum += std::sin((i - 0.5) * (kPi / 2) / rings);
+  for (int i = 1; i <= rings; ++i) {
+    double w = std::sin((i - 0.5) * (kPi / 2) / rings) / wsum;
+    s[i] = std::max(3, int(std::round(w * n / 2.0)));
+  }
+  // Adjust: a vertex on the outermost ring changes the total by 1, on an inner ring by 2.
+  for (int guard = 0; total() != n && guard < 1000000; ++guard) {
+    int diff = n - total();
+    int i = rings;
+    if (std::abs(diff) >= 2 && rings > 1) {
+      i = 1;  // the inner ring whose change keeps the rings closest to proportional
+      for (int k = 2; k < rings; ++k)
+        if (diff > 0 ? s[k] < s[i] * 0.999 : s[k] > s[i]) i = k;
+    }
+    if (diff > 0) s[i] += 1;
+    else if (s[i] > 3) s[i] -= 1;
+    else break;
+  }
+  if (total() != n) fail("{}: cannot triangulate a sky dome with {} triangles", scene.source, n);
+
+  Frame frame(normalize(sky.up));
+  Mesh dome;
+  dome.positions.push_back(center + frame.n * radius);  // zenith
+  std::vector<uint32_t> ring_start(rings + 1, 0);
+  for (int i = 1; i <= rings; ++i) {
+    ring_start[i] = uint32_t(dome.positions.size());
+    float theta = i * (kPi / 2) / rings;
+    float offset = (i % 2) * 0.5f;  // stagger rings for better-shaped triangles
+    for (int j = 0; j < s[i]; ++j) {
+      float phi = 2 * kPi * (j + offset) / s[i];
+      Vec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+      dome.positions.push_back(center + frame.to_world(d) * radius);
+    }
+  }
+  // Triangles wound so that their normal points inwards (towards the centre).
+  auto add = [&](uint32_t a, uint32_t b, uint32_t c) {
+    Vec3 nrm = cross(dome.positions[b] - dome.positions[a], dome.positions[c] - dome.positions[a]);
+    Vec3 mid = (dome.positions[a] + dome.positions[b] + dome.positions[c]) / 3.0f;
+    if (dot(nrm, center - mid) < 0) std::swap(b, c);
+    dome.triangles.push_back({a, b, c});
+  };
+  for (int j = 0; j < s[1]; ++j) add(0, ring_start[1] + j, ring_start[1] + (j + 1) % s[1]);
+  for (int i = 1; i < rings; ++i) {
+    // Merge-walk two rings by angle: each step advances one of them, emitting one triangle.
+    int a = 0, b = 0, na = s[i], nb = s[i + 1];
+    float oa = (i % 2) * 0.5f, ob = ((i + 1) % 2) * 0.5f;
+    while (a < na || b < nb) {
+      float next_a = (a + 1 + oa) / na, next_b = (b + 1 + ob) / nb;
+      uint32_t va = ring_start[i] + a % na, vb = ring_start[i + 1] + b % nb;
+      if (b >= nb || (a < na && next_a < next_b)) {
+        add(va, ring_start[i] + (a + 1) % na, vb);
+        ++a;
+      } else {
+        add(va, ring_start[i + 1] + (b + 1) % nb, vb);
+        ++b;
+      }
+    }
+  }
+  Material m;
+  m.name = "sky";
+  m.albedo = Rgb(0);
+  m.emission = sky.radiance;
+  uint32_t mat = uint32_t(scene.materials.size());
+  scene.materials.push_back(m);
+  dome.material.assign(dome.triangles.size(), 0);
+  dome.light.assign(dome.triangles.size(), -1);
+  scene.sky_first_triangle = scene.mesh.triangle_count();
+  scene.sky_triangle_count = dome.triangles.size();
+  scene.mesh.append(dome, mat);
+}
+
+void Scene::finalize() {
+  if (width <= 0 || height <= 0)
+    fail("{}: film resolution must be positive (got {}x{})", source, width, height);
+  if (size_t(width) * size_t(height) > (size_t(1) << 28))
+    fail("{}: film resolution {}x{} is too large", source, width, height);
+  const size_t nv = mesh.positions.size();
+  for (size_t i = 0; i < nv; ++i)
+    if (!is_finite(mesh.positions[i]))
+      fail("{}: vertex {} has a non-finite coordinate ({}, {}, {})", source, i, mesh.positions[i].x,
+           mesh.positions[i].y, mesh.positions[i].z);
+  if (!mesh.normals.empty() && mesh.normals.size() != nv) fail("{}: normal count != vertex count", source);
+  if (!mesh.uvs.empty() && mesh.uvs.size() != nv) fail("{}: uv count != vertex count", source);
+  for (auto& nrm : mesh.normals)
+    if (!is_finite(nrm)) nrm = Vec3(0);  // an unusable shading normal falls back to geometry
+  if (mesh.material.size() != mesh.triangles.size())
+    fail("{}: {} triangles but {} material ids", source, mesh.triangles.size(), mesh.material.size());
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (uint32_t v : mesh.triangles[t])
+      if (v >= nv) fail("{}: triangle {} uses vertex {} but there are only {}", source, t, v, nv);
+    if (mesh.material[t] >= materials.size())
+      fail("{}: triangle {} uses material {} but there are only {}", source, t, mesh.material[t], materials.size());
+  }
+  for (const auto& m : materials)
+    if (m.albedo_texture >= int(textures.size()))
+      fail("{}: material '{}' uses a texture that was not loaded", source, m.name);
+  for (const auto& l : lights)
+    if (!is_finite(l.p0) || !is_finite(l.radiance) || min_component(l.radiance) < 0)
+      fail("{}: a light has a non-finite or negative parameter", source);
+
+  bounds = Bounds3{};
+  for (const auto& p : mesh.positions) bounds.expand(p);
+  for (const auto& l : lights)
+    if (l.type == LightType::Point) bounds.expand(l.p0);
+  if (bounds.empty()) bounds.expand(Vec3(0));
+  radius = std::max(1e-3f, 0.5f * length(bounds.diagonal()));
+
+  if (sky) add_sky_dome(*this, *sky, bounds.center(), radius * sky->radius_scale);
+
+  mesh.light.assign(mesh.triangles.size(), -1);
+  // Drop triangle lights from an earlier finalize() (finalize is idempotent).
+  std::erase_if(lights, [](const Light& l) { return l.type == LightType::Triangle; });
+  for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Material& m = materials[mesh.material[t]];
+    if (!m.is_emissive()) continue;
+    if (mesh.area(t) <= 0) continue;  // degenerate: emits nothing, cannot be sampled
+    mesh.light[t] = int32_t(lights.size());
+    lights.push_back(make_triangle_light(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2),
+                                         m.emission, m.two_sided_emission, t));
+  }
+  if (lights.empty())
+    fail("{}: the scene has no lights (no emissive material, light source or sky)", source);
+
+  if (!has_camera) {
+    Vec3 c = bounds.center();
+    camera.target = c;
+    camera.up = Vec3(0, 1, 0);
+    camera.fov = 45;
+    float dist = radius / std::tan(radians(camera.fov) * 0.5f) * 1.1f;
+    camera.position = c + Vec3(0, 0, 1) * dist;
+    has_camera = true;
+  }
+  if (!is_finite(camera.position) || !is_finite(camera.target) || length_sq(camera.target - camera.position) <= 0)
+    fail("{}: camera position and target must be finite and distinct", source);
+  if (length_sq(cross(camera.target - camera.position, camera.up)) <= 0)
+    fail("{}: camera 'up' must not be parallel to the viewing direction", source);
+  if (!(camera.fov > 0 && camera.fov < 180)) fail("{}: camera fov must be in (0, 180) degrees", source);
+  camera.setup(width, height);
+}
+
+void Scene::reorder_lights(const std::vector<uint32_t>& order) {
+  std::vector<Light> reordered(order.size());
+  for (size_t i = 0; i < order.size(); ++i) reordered[i] = lights[order[i]];
+  lights = std::move(reordered);
+  for (auto& l : mesh.light) l = -1;
+  for (size_t i = 0; i < lights.size(); ++i)
+    if (lights[i].type == LightType::Triangle) mesh.light[lights[i].triangle] = int32_t(i);
+}
+
+void Scene::refresh_lights_from_mesh() {
+  for (auto& l : lights) {
+    if (l.type != LightType::Triangle) continue;
+    l.p0 = mesh.vertex(l.triangle, 0);
+    l.p1 = mesh.vertex(l.triangle, 1);
+    l.p2 = mesh.vertex(l.triangle, 2);
+    l.radiance = materials[mesh.material[l.triangle]].emission;
+    refresh_triangle_light(l);
+  }
+}
+
+}  // namespace rll

@@ -1,0 +1,134 @@
+#include "support/test_support.h"
+
+#include <fmt/format.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <stdexcept>
+
+#include "rll/accel/accel.h"
+#include "rll/core/params.h"
+#include "rll/core/parallel.h"
+#include "rll/lights/light_sampler.h"
+#include "rll/render/render.h"
+
+namespace rll::test {
+namespace fs = std::filesystem;
+
+TempDir::TempDir() {
+  std::string templ = (fs::temp_directory_path() / "rll-test-XXXXXX").string();
+  if (!::mkdtemp(templ.data())) throw std::runtime_error("mkdtemp failed");
+  m_path = templ;
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  fs::remove_all(m_path, ec);
+}
+
+fs::path TempDir::write(const std::string& name, const std::string& text) const {
+  fs::path p = m_path / name;
+  if (p.has_parent_path()) fs::create_directories(p.parent_path());
+  std::ofstream f(p, std::ios::binary);
+  f << text;
+  return p;
+}
+
+namespace {
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) {
+    if (c == '\'') q += "'\\''";
+    else q += c;
+  }
+  return q + "'";
+}
+}  // namespace
+
+CommandResult run_rll(const std::vector<std::string>& args) {
+  std::string cmd = shell_quote(RLL_BINARY);
+  for (const auto& a : args) cmd += " " + shell_quote(a);
+  cmd += " 2>&1";
+  CommandResult r;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
+  int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
+
+Image render_scene(const Scene& scene, const RenderRequest& req) {
+  ThreadLimit limit(req.threads);
+  Params params = Params::parse(req.set);
+  Accel accel(scene.mesh);
+  auto sampler = make_light_sampler(req.sampler, scene, params);
+  params.check_all_used();
+  Integrator integrator(scene, accel, *sampler, req.integrator);
+  Film film(scene.width, scene.height);
+  RenderSettings rs;
+  rs.spp = req.spp;
+  rs.seed = req.seed;
+  render(scene, integrator, *sampler, film, rs);
+  return film.resolve();
+}
+
+double image_mean(const Image& image) {
+  double s = 0;
+  for (const auto& p : image.pixels()) s += double(p.x) + p.y + p.z;
+  return s / (3.0 * image.pixel_count());
+}
+
+namespace {
+Estimate blocks_of(const std::vector<double>& values, int blocks) {
+  const size_t n = values.size();
+  blocks = int(std::min<size_t>(size_t(blocks), n));
+  std::vector<double> means(size_t(blocks), 0.0);
+  std::vector<size_t> counts(size_t(blocks), 0);
+  for (size_t i = 0; i < n; ++i) {
+    size_t b = i * size_t(blocks) / n;
+    means[b] += values[i];
+    ++counts[b];
+  }
+  double mean = 0;
+  for (int b = 0; b < blocks; ++b) mean += (means[b] /= double(counts[b]));
+  mean /= blocks;
+  double var = 0;
+  for (double m : means) var += (m - mean) * (m - mean);
+  var /= std::max(1, blocks - 1);
+  return {mean, std::sqrt(var / blocks)};
+}
+}  // namespace
+
+Estimate block_estimate(const Image& image, int blocks) {
+  std::vector<double> v(image.pixel_count());
+  for (size_t i = 0; i < v.size(); ++i) v[i] = (double(image[i].x) + image[i].y + image[i].z) / 3.0;
+  return blocks_of(v, blocks);
+}
+
+Estimate difference_estimate(const Image& a, const Image& b) {
+  std::vector<double> v(a.pixel_count());
+  for (size_t i = 0; i < v.size(); ++i)
+    v[i] = (double(a[i].x) + a[i].y + a[i].z - b[i].x - b[i].y - b[i].z) / 3.0;
+  // Per-pixel differences are independent: the standard error is the sample sd / sqrt(n).
+  double mean = 0;
+  for (double x : v) mean += x;
+  mean /= double(v.size());
+  double var = 0;
+  for (double x : v) var += (x - mean) * (x - mean);
+  var /= double(v.size() - 1);
+  return {mean, std::sqrt(var / double(v.size()))};
+}
+
+bool agree(const Estimate& a, const Estimate& b, double z, double abs_tol) {
+  double se = std::sqrt(a.stderr_ * a.stderr_ + b.stderr_ * b.stderr_);
+  return std::abs(a.mean - b.mean) <= z * se + abs_tol;
+}
+
+}  // namespace rll::test

@@ -1,0 +1,64 @@
+// Shared helpers for rll's tests: temporary folders, running the program, small renders and
+// the statistics the tests assert with.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "rll/core/image.h"
+#include "rll/render/integrator.h"
+#include "rll/scene/scene.h"
+
+namespace rll::test {
+
+// A fresh folder under the system temp dir, removed with everything in it on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  const std::filesystem::path& path() const { return m_path; }
+  std::filesystem::path operator/(const std::string& name) const { return m_path / name; }
+  // Writes a text file in the folder and returns its path.
+  std::filesystem::path write(const std::string& name, const std::string& text) const;
+
+ private:
+  std::filesystem::path m_path;
+};
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+// Runs the rll program with the given arguments (shell-quoted here).
+CommandResult run_rll(const std::vector<std::string>& args);
+
+struct RenderRequest {
+  std::string sampler = "power";
+  IntegratorSettings integrator;
+  int spp = 4;
+  uint64_t seed = 1;
+  int threads = 0;
+  std::vector<std::string> set;  // key=value parameters
+};
+// Renders an already finalized scene and returns the per-pixel mean image.
+Image render_scene(const Scene& scene, const RenderRequest& request);
+
+// Mean over all pixels and channels.
+double image_mean(const Image& image);
+
+// Mean and standard error of a per-pixel statistic: the image split into `blocks` groups of
+// pixels whose means are treated as independent samples (pixels are rendered independently).
+struct Estimate {
+  double mean = 0, stderr_ = 0;
+};
+Estimate block_estimate(const Image& image, int blocks = 64);
+
+// True if |a - b| is within `z` combined standard errors (plus `abs_tol`).
+bool agree(const Estimate& a, const Estimate& b, double z = 4.0, double abs_tol = 0.0);
+
+// Per-pixel difference test between two independent renders of the same scene: the mean of
+// (a - b) over pixels, with its standard error, must be consistent with zero.
+Estimate difference_estimate(const Image& a, const Image& b);
+
+}  // namespace rll::test
