@@ -4,6 +4,8 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
 
 namespace rll {
 
@@ -32,6 +34,14 @@ void parallel_for_each(size_t n, const std::function<void(size_t)>& body) {
                     [&](const tbb::blocked_range<size_t>& r) {
                       for (size_t i = r.begin(); i != r.end(); ++i) body(i);
                     });
+}
+
+void parallel_invoke(const std::function<void()>& a, const std::function<void()>& b) {
+  tbb::parallel_invoke(a, b);
+}
+
+void parallel_sort(std::vector<std::pair<uint64_t, uint32_t>>& items) {
+  tbb::parallel_sort(items.begin(), items.end());
 }
 
 }  // namespace rll

@@ -4,6 +4,8 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <utility>
+#include <vector>
 
 namespace rll {
 
@@ -27,5 +29,11 @@ void parallel_for(size_t n, size_t grain, const std::function<void(size_t, size_
 
 // Calls body(i) for every i in [0, n), one item per task (for coarse items such as image tiles).
 void parallel_for_each(size_t n, const std::function<void(size_t)>& body);
+
+// Runs a and b, possibly at the same time.
+void parallel_invoke(const std::function<void()>& a, const std::function<void()>& b);
+
+// Sorts 64-bit keys with a 32-bit payload by key (ties keep no particular order).
+void parallel_sort(std::vector<std::pair<uint64_t, uint32_t>>& items);
 
 }  // namespace rll

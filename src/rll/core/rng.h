@@ -38,6 +38,10 @@ class Pcg32 {
     return (xorshifted >> rot) | (xorshifted << ((~rot + 1u) & 31));
   }
   float next_float() { return u32_to_unit_float(next_u32()); }
+  double next_double() {
+    uint64_t hi = next_u32(), lo = next_u32();
+    return double(((hi << 32) | lo) >> 11) * 0x1p-53;
+  }
   // Uniform integer in [0, bound).
   uint32_t next_bounded(uint32_t bound) {
     return uint32_t((uint64_t(next_u32()) * bound) >> 32);
@@ -56,6 +60,10 @@ class SampleStream {
                     mix64(sample_index * 0xd1342543de82ef95ull + 1))),
         m_dim(0) {}
   float next() { return u32_to_unit_float(uint32_t(mix64(m_key + 0x9e3779b97f4a7c15ull * ++m_dim) >> 32)); }
+  // 53 random bits, for choices among millions of items (a float has only 24).
+  double next_double() {
+    return double(mix64(m_key + 0x9e3779b97f4a7c15ull * ++m_dim) >> 11) * 0x1p-53;
+  }
   Vec2 next2() {
     float a = next();
     return {a, next()};

@@ -20,17 +20,16 @@ DiscreteDistribution::DiscreteDistribution(std::span<const float> weights)
   m_cdf.back() = 1.0;
 }
 
-size_t DiscreteDistribution::sample(float u, float* u_remapped) const {
+size_t DiscreteDistribution::sample(double u, double* u_remapped) const {
   // First index whose cdf exceeds u; entries with zero pmf are never returned because their cdf
   // equals their predecessor's.
-  auto it = std::upper_bound(m_cdf.begin(), m_cdf.end(), double(u));
+  auto it = std::upper_bound(m_cdf.begin(), m_cdf.end(), u);
   size_t i = std::min<size_t>(it - m_cdf.begin(), m_cdf.size() - 1);
   while (m_pmf[i] == 0 && i > 0) --i;  // guard against u rounding onto a zero-width tail
   if (u_remapped) {
     double lo = i == 0 ? 0.0 : m_cdf[i - 1];
     double width = m_cdf[i] - lo;
-    *u_remapped = width > 0 ? float(std::min(0.99999994, (double(u) - lo) / width)) : 0.0f;
-    if (*u_remapped < 0) *u_remapped = 0;
+    *u_remapped = width > 0 ? std::clamp((u - lo) / width, 0.0, 0x1.fffffffffffffp-1) : 0.0;
   }
   return i;
 }

@@ -66,7 +66,7 @@ class DiscreteDistribution {
   double total() const { return m_total; }
   float pmf(size_t i) const { return m_pmf[i]; }
   // Returns the index and rescales u to a fresh uniform value in [0,1) for reuse.
-  size_t sample(float u, float* u_remapped = nullptr) const;
+  size_t sample(double u, double* u_remapped = nullptr) const;
 
  private:
   std::vector<float> m_pmf;

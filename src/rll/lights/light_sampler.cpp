@@ -3,11 +3,12 @@
 #include "rll/core/error.h"
 #include "rll/core/params.h"
 #include "rll/lights/simple_samplers.h"
+#include "rll/lights/tree_sampler.h"
 
 namespace rll {
 
 const std::vector<std::string>& light_sampler_names() {
-  static const std::vector<std::string> names = {"uniform", "power"};
+  static const std::vector<std::string> names = {"uniform", "power", "tree"};
   return names;
 }
 
@@ -16,6 +17,7 @@ std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const 
   (void)params;
   if (name == "uniform") return std::make_unique<UniformLightSampler>(scene);
   if (name == "power") return std::make_unique<PowerLightSampler>(scene);
+  if (name == "tree") return std::make_unique<TreeLightSampler>(scene);
   std::string list;
   for (const auto& n : light_sampler_names()) list += (list.empty() ? "" : ", ") + n;
   fail("unknown light sampler '{}' (valid: {})", name, list);

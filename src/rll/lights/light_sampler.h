@@ -43,7 +43,8 @@ class LightSampler {
     (void)ctx;
     (void)u;
   }
-  virtual SampledLight sample(const LightContext& ctx, float u) const = 0;
+  // u is uniform in [0,1) with 53 bits: descents over millions of lights need them.
+  virtual SampledLight sample(const LightContext& ctx, double u) const = 0;
   // Probability that sample(ctx, .) returns `light`.
   virtual float pmf(const LightContext& ctx, uint32_t light) const = 0;
 

@@ -14,7 +14,7 @@ std::vector<float> light_powers(const Scene& scene) {
 
 UniformLightSampler::UniformLightSampler(const Scene& scene) : m_count(uint32_t(scene.lights.size())) {}
 
-SampledLight UniformLightSampler::sample(const LightContext&, float u) const {
+SampledLight UniformLightSampler::sample(const LightContext&, double u) const {
   if (m_count == 0) return {};
   uint32_t i = std::min(m_count - 1, uint32_t(u * m_count));
   return {i, 1.0f / m_count};
@@ -31,7 +31,7 @@ void PowerLightSampler::lights_changed(const Scene& scene) {
   m_distribution = DiscreteDistribution(w);
 }
 
-SampledLight PowerLightSampler::sample(const LightContext&, float u) const {
+SampledLight PowerLightSampler::sample(const LightContext&, double u) const {
   if (m_distribution.empty()) return {};
   size_t i = m_distribution.sample(u);
   return {uint32_t(i), m_distribution.pmf(i)};

@@ -11,7 +11,7 @@ class UniformLightSampler final : public LightSampler {
  public:
   explicit UniformLightSampler(const Scene& scene);
   std::string name() const override { return "uniform"; }
-  SampledLight sample(const LightContext& ctx, float u) const override;
+  SampledLight sample(const LightContext& ctx, double u) const override;
   float pmf(const LightContext& ctx, uint32_t light) const override;
 
  private:
@@ -23,7 +23,7 @@ class PowerLightSampler final : public LightSampler {
  public:
   explicit PowerLightSampler(const Scene& scene);
   std::string name() const override { return "power"; }
-  SampledLight sample(const LightContext& ctx, float u) const override;
+  SampledLight sample(const LightContext& ctx, double u) const override;
   float pmf(const LightContext& ctx, uint32_t light) const override;
   void lights_changed(const Scene& scene) override;
 

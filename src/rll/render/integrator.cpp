@@ -59,11 +59,27 @@ Ray spawn_ray(const Vec3& p, const Vec3& ng, const Vec3& d, float tmax = kInf) {
   r.tmax = tmax;
   return r;
 }
+
+// Shadow ray from surface point p (geometric normal ng) to point y on a light with normal ny
+// (zero for a point light): both ends are pushed off their surfaces and the ray is aimed from
+// one offset end to the other, so that it never hits the light itself, even at grazing angles.
+Ray spawn_ray_to(const Vec3& p, const Vec3& ng, const Vec3& y, const Vec3& ny) {
+  Vec3 d0 = y - p;
+  Ray r;
+  r.o = p + face_forward(ng, d0) * ray_epsilon(p);
+  Vec3 target = length_sq(ny) > 0 ? y + face_forward(ny, -d0) * ray_epsilon(y) : y;
+  Vec3 d = target - r.o;
+  float len = length(d);
+  r.d = d / len;
+  r.tmin = 0;
+  r.tmax = len * (1 - 1e-4f);
+  return r;
+}
 }  // namespace
 
 Rgb Integrator::sample_light(const Vertex& v, SampleStream& stream, RayCounters& counters, bool mis) const {
   // Draw the random numbers unconditionally so that every sample uses the same dimensions.
-  float u_light = stream.next();
+  double u_light = stream.next_double();
   Vec2 u_pos = stream.next2();
   SampledLight sl = m_sampler.sample(v.ctx, u_light);
   if (sl.pmf <= 0) return Rgb(0);
@@ -73,11 +89,14 @@ Rgb Integrator::sample_light(const Vertex& v, SampleStream& stream, RayCounters&
   if (ls.pdf > 0) {
     Rgb f = v.bsdf->eval(v.wo, ls.wi) * absdot(ls.wi, v.bsdf->shading_normal());
     if (!is_black(f)) {
-      Ray shadow = spawn_ray(v.ctx.p, v.bsdf->geometric_normal(), ls.wi);
-      if (std::isfinite(ls.dist))
-        shadow.tmax = ls.dist * (1 - 1e-4f) - ray_epsilon(ls.point);
-      else  // a directional light: test the scene's bounding sphere only, never the sky dome
-        shadow.tmax = length(v.ctx.p - m_scene.bounds.center()) + 1.01f * m_scene.radius;
+      Ray shadow;
+      if (std::isfinite(ls.dist)) {
+        Vec3 ny = light.type == LightType::Triangle ? light.n : Vec3(0);
+        shadow = spawn_ray_to(v.ctx.p, v.bsdf->geometric_normal(), ls.point, ny);
+      } else {  // a directional light: test the scene's bounding sphere only, never the sky dome
+        shadow = spawn_ray(v.ctx.p, v.bsdf->geometric_normal(), ls.wi,
+                           length(v.ctx.p - m_scene.bounds.center()) + 1.01f * m_scene.radius);
+      }
       ++counters.shadow;
       if (!m_accel.occluded(shadow)) contribution = f * ls.L / ls.pdf;
     }

@@ -3,6 +3,7 @@
 #include <numeric>
 
 #include "rll/core/error.h"
+#include "rll/lights/light_tree.h"
 
 namespace rll {
 
@@ -156,7 +157,7 @@ void Scene::finalize() {
   if (bounds.empty()) bounds.expand(Vec3(0));
   radius = std::max(1e-3f, 0.5f * length(bounds.diagonal()));
 
-  if (sky) add_sky_dome(*this, *sky, bounds.center(), radius * sky->radius_scale);
+  if (sky && sky_triangle_count == 0) add_sky_dome(*this, *sky, bounds.center(), radius * sky->radius_scale);
 
   mesh.light.assign(mesh.triangles.size(), -1);
   // Drop triangle lights from an earlier finalize() (finalize is idempotent).
@@ -187,6 +188,7 @@ void Scene::finalize() {
     fail("{}: camera 'up' must not be parallel to the viewing direction", source);
   if (!(camera.fov > 0 && camera.fov < 180)) fail("{}: camera fov must be in (0, 180) degrees", source);
   camera.setup(width, height);
+  build_light_tree(*this);
 }
 
 void Scene::reorder_lights(const std::vector<uint32_t>& order) {
@@ -207,6 +209,7 @@ void Scene::refresh_lights_from_mesh() {
     l.radiance = materials[mesh.material[l.triangle]].emission;
     refresh_triangle_light(l);
   }
+  if (light_tree) light_tree->refit(lights);
 }
 
 }  // namespace rll

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -13,6 +14,8 @@
 #include "rll/scene/mesh.h"
 
 namespace rll {
+
+class LightTree;
 
 // A sky as a dome of emissive triangles over the upper hemisphere around `up`.
 struct SkyDome {
@@ -40,6 +43,8 @@ struct Scene {
   Bounds3 bounds;      // all geometry except the sky dome
   float radius = 1;    // radius of the bounding sphere of `bounds`
   size_t sky_first_triangle = 0, sky_triangle_count = 0;
+  // The reference light tree over `lights`, which finalize() reorders into tree order.
+  std::shared_ptr<LightTree> light_tree;
 
   // Animated scenes move lights between frames: called with the frame index, it updates the
   // mesh and the lights in place (triangle lights keep their ids).
@@ -47,15 +52,16 @@ struct Scene {
   int frame_count = 1;
 
   // Validates the scene (finite vertices, valid indices, at least one light, film size), adds
-  // the sky dome, creates one light per emissive triangle and fits a camera if none was given.
-  // Throws rll::Error naming `source`.
+  // the sky dome, creates one light per emissive triangle, fits a camera if none was given and
+  // builds the light tree (reordering the lights). Throws rll::Error naming `source`.
   void finalize();
 
   // Light id of a mesh triangle, or -1.
   int32_t light_of_triangle(uint32_t tri) const { return mesh.light[tri]; }
   // Reorders lights: new_lights[i] = lights[order[i]]; triangle->light ids follow.
   void reorder_lights(const std::vector<uint32_t>& order);
-  // Re-reads triangle light geometry from the mesh (after animate()).
+  // Re-reads triangle light geometry and emission from the mesh and materials (after
+  // animate()) and refits the light tree.
   void refresh_lights_from_mesh();
 };
 

@@ -1,0 +1,84 @@
+#include "rll/lights/tree_sampler.h"
+
+#include "rll/core/error.h"
+#include "rll/scene/scene.h"
+
+namespace rll {
+
+namespace {
+constexpr int kMaxDepth = 256;
+
+// Probability of the first child of an inner node, in proportion to importance. Where both
+// children have zero importance (the parent's looser bounds admitted a subtree whose own bounds
+// exclude the point, so none of its lights can contribute) the choice falls back to power,
+// then to light count, so that the pmfs over all lights always sum to one.
+inline float first_child_probability(const LightTree& tree, const LightTreeNode& node, const Vec3& p,
+                                     const Vec3& n) {
+  float i0 = tree.importance(node.child, p, n);
+  float i1 = tree.importance(node.child + 1, p, n);
+  if (i0 + i1 > 0) return i0 / (i0 + i1);
+  const LightTreeNode &a = tree.node(node.child), &b = tree.node(node.child + 1);
+  float w0 = a.bounds.power, w1 = b.bounds.power;
+  if (!(w0 + w1 > 0)) {
+    w0 = float(a.light_count());
+    w1 = float(b.light_count());
+  }
+  return w0 / (w0 + w1);
+}
+}  // namespace
+
+SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, const Vec3& n, double u) {
+  uint32_t index = from;
+  float pmf = 1;
+  for (;;) {
+    const LightTreeNode& node = tree.node(index);
+    if (node.is_leaf()) return {node.begin, pmf};
+    float p0 = first_child_probability(tree, node, p, n);
+    if (u < p0) {
+      u = std::min(u / p0, 0x1.fffffffffffffp-1);
+      pmf *= p0;
+      index = node.child;
+    } else {
+      u = std::min((u - p0) / (1 - p0), 0x1.fffffffffffffp-1);
+      pmf *= 1 - p0;
+      index = node.child + 1;
+    }
+  }
+}
+
+float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, const Vec3& p, const Vec3& n) {
+  if (light >= tree.light_count()) return 0;
+  const LightTreeNode& top = tree.node(from);
+  if (light < top.begin || light >= top.end) return 0;
+  uint32_t path[kMaxDepth];
+  int k = 0;
+  for (uint32_t i = tree.leaf_of(light); i != from; i = tree.node(i).parent) path[k++] = i;
+  float pmf = 1;
+  uint32_t parent = from;
+  while (k-- > 0) {
+    const LightTreeNode& node = tree.node(parent);
+    float p0 = first_child_probability(tree, node, p, n);
+    pmf *= path[k] == node.child ? p0 : 1 - p0;
+    if (pmf == 0) return 0;
+    parent = path[k];
+  }
+  return pmf;
+}
+
+TreeLightSampler::TreeLightSampler(const Scene& scene) : m_tree(*scene.light_tree) {
+  if (m_tree.depth() >= kMaxDepth) fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
+}
+
+SampledLight TreeLightSampler::sample(const LightContext& ctx, double u) const {
+  return tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u);
+}
+
+float TreeLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
+  return tree_descend_pmf(m_tree, LightTree::kRoot, light, ctx.p, ctx.n);
+}
+
+nlohmann::json TreeLightSampler::describe() const {
+  return {{"name", name()}, {"nodes", m_tree.node_count()}, {"depth", m_tree.depth()}, {"bytes", m_tree.bytes()}};
+}
+
+}  // namespace rll

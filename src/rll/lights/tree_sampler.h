@@ -1,0 +1,31 @@
+// The visibility-blind light-tree sampler (Conty & Kulla 2018, as pbrt-v4's BVH light sampler):
+// one stochastic descent of the reference tree, each child chosen in proportion to its
+// importance at the shading point.
+#pragma once
+
+#include "rll/lights/light_sampler.h"
+#include "rll/lights/light_tree.h"
+
+namespace rll {
+
+// Descends the subtree under `from`, returning a light under it and the probability of that
+// choice given that the descent starts at `from`. A child with zero importance is never chosen
+// over a sibling with positive importance; the pmfs of the lights under `from` sum to one.
+SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, const Vec3& n, double u);
+// The probability that tree_descend(tree, from, p, n, .) returns `light`: the same products in
+// the same order, so the two agree exactly. 0 if `light` is not under `from`.
+float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, const Vec3& p, const Vec3& n);
+
+class TreeLightSampler final : public LightSampler {
+ public:
+  explicit TreeLightSampler(const Scene& scene);
+  std::string name() const override { return "tree"; }
+  SampledLight sample(const LightContext& ctx, double u) const override;
+  float pmf(const LightContext& ctx, uint32_t light) const override;
+  nlohmann::json describe() const override;
+
+ private:
+  const LightTree& m_tree;
+};
+
+}  // namespace rll
