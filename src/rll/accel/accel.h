@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "rll/core/math.h"
 #include "rll/scene/mesh.h"
@@ -13,6 +14,11 @@ struct Hit {
   float t = kInf;
   uint32_t tri = ~0u;
   float u = 0, v = 0;  // barycentrics of vertices 1 and 2: p = (1-u-v) p0 + u p1 + v p2
+};
+
+// Rays recorded by an Accel for replay (benchmarks): not thread-safe, record with one thread.
+struct RayLog {
+  std::vector<Ray> closest, shadow;
 };
 
 class Accel {
@@ -28,10 +34,13 @@ class Accel {
   bool occluded(const Ray& ray) const;
   // Re-reads vertex positions (same topology) and refits the hierarchy.
   void update_vertices(const Mesh& mesh);
+  // Records every ray traced while set (nullptr stops); for the ray-rate benchmark.
+  void set_log(RayLog* log) { m_log = log; }
 
  private:
   struct Impl;
   std::unique_ptr<Impl> m_impl;
+  RayLog* m_log = nullptr;
 };
 
 }  // namespace rll

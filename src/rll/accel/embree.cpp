@@ -78,6 +78,7 @@ void Accel::update_vertices(const Mesh& mesh) {
 }
 
 bool Accel::intersect(const Ray& ray, Hit& hit) const {
+  if (m_log) [[unlikely]] m_log->closest.push_back(ray);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -105,6 +106,7 @@ bool Accel::intersect(const Ray& ray, Hit& hit) const {
 }
 
 bool Accel::occluded(const Ray& ray) const {
+  if (m_log) [[unlikely]] m_log->shadow.push_back(ray);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay r;

@@ -9,6 +9,7 @@ namespace rll {
 class SceneBuilder {
  public:
   explicit SceneBuilder(Scene& scene) : m_scene(scene) {}
+  Scene& scene() { return m_scene; }
   uint32_t material(const Material& m);
   uint32_t diffuse(const Rgb& albedo, const std::string& name = "");
   uint32_t emitter(const Rgb& radiance, bool two_sided = false, const std::string& name = "");

@@ -163,6 +163,36 @@ Scene arch_interior_scene() {
   return s;
 }
 
+// Small emissive triangles on a jittered nx x nz grid over [x0,x1] x [z0,z1] at heights
+// [y0, y0 + dy], each facing down within 30 degrees, with colours and radiances drawn from
+// `palette` materials.
+void emitter_field(SceneBuilder& b, Pcg32& rng, int nx, int nz, float x0, float x1, float z0, float z1,
+                   float y0, float dy, float size, const std::vector<uint32_t>& palette) {
+  Mesh& mesh = b.scene().mesh;
+  mesh.positions.reserve(mesh.positions.size() + size_t(nx) * nz * 3);
+  mesh.triangles.reserve(mesh.triangles.size() + size_t(nx) * nz);
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < nz; ++j) {
+      Vec3 c(x0 + (x1 - x0) * (i + rng.next_float()) / nx, y0 + dy * rng.next_float(),
+             z0 + (z1 - z0) * (j + rng.next_float()) / nz);
+      Vec3 nrm = normalize(Vec3(rng.next_float() - 0.5f, -1.0f, rng.next_float() - 0.5f));
+      Frame f(nrm);
+      float r = size * (1 + rng.next_float());
+      Vec3 a = c + f.s * r, bb = c + (f.s * -0.5f + f.t * 0.866f) * r, cc = c + (f.s * -0.5f - f.t * 0.866f) * r;
+      if (dot(cross(bb - a, cc - a), nrm) < 0) std::swap(bb, cc);  // front face along nrm
+      b.triangle(a, bb, cc, palette[rng.next_bounded(uint32_t(palette.size()))]);
+    }
+}
+
+std::vector<uint32_t> emitter_palette(SceneBuilder& b, Pcg32& rng, int count) {
+  std::vector<uint32_t> mats;
+  for (int k = 0; k < count; ++k) {
+    Rgb c(0.3f + 0.7f * rng.next_float(), 0.3f + 0.7f * rng.next_float(), 0.3f + 0.7f * rng.next_float());
+    mats.push_back(b.emitter(c * (4.0f + 36.0f * rng.next_float() * rng.next_float()), false));
+  }
+  return mats;
+}
+
 Scene many_lights_open_scene() {
   Scene s;
   s.width = 400;
@@ -170,31 +200,37 @@ Scene many_lights_open_scene() {
   SceneBuilder b(s);
   uint32_t floor = b.diffuse(Rgb(0.6f), "floor");
   b.quad(Vec3(-25, 0, -25), Vec3(0, 0, 50), Vec3(50, 0, 0), floor);
-  // 128 x 80 = 10,240 small emitters on a jittered grid, facing roughly down, of varied colour
-  // and radiance. Nothing occludes them from the floor.
+  // 128 x 80 = 10,240 small emitters of varied colour and radiance; nothing but the emitters
+  // themselves stands between them and the floor.
   Pcg32 rng(7);
-  const int nx = 128, nz = 80;
-  std::vector<uint32_t> mats;
-  for (int k = 0; k < 16; ++k) {
-    Rgb c(0.3f + 0.7f * rng.next_float(), 0.3f + 0.7f * rng.next_float(), 0.3f + 0.7f * rng.next_float());
-    mats.push_back(b.emitter(c * (4.0f + 36.0f * rng.next_float() * rng.next_float()), false));
-  }
-  for (int i = 0; i < nx; ++i)
-    for (int j = 0; j < nz; ++j) {
-      Vec3 c(-16 + 32.0f * (i + rng.next_float()) / nx, 0.4f + 3.0f * rng.next_float(),
-             -10 + 20.0f * (j + rng.next_float()) / nz);
-      // A random downward-facing orientation within 60 degrees of straight down.
-      Vec3 nrm = normalize(Vec3(rng.next_float() - 0.5f, -1.0f, rng.next_float() - 0.5f) );
-      Frame f(nrm);
-      float r = 0.06f + 0.06f * rng.next_float();
-      Vec3 a = c + f.s * r, bb = c + (f.s * -0.5f + f.t * 0.866f) * r, cc = c + (f.s * -0.5f - f.t * 0.866f) * r;
-      // Wind so the face normal is nrm.
-      if (dot(cross(bb - a, cc - a), nrm) < 0) std::swap(bb, cc);
-      b.triangle(a, bb, cc, mats[rng.next_bounded(uint32_t(mats.size()))]);
-    }
+  auto palette = emitter_palette(b, rng, 16);
+  emitter_field(b, rng, 128, 80, -16, 16, -10, 10, 0.4f, 3.0f, 0.06f, palette);
   s.camera.position = Vec3(0, 9, 20);
   s.camera.target = Vec3(0, 0, 0);
   s.camera.fov = 55;
+  s.has_camera = true;
+  return s;
+}
+
+Scene many_lights_1m_scene() {
+  Scene s;
+  s.width = 200;
+  s.height = 150;
+  SceneBuilder b(s);
+  uint32_t floor = b.diffuse(Rgb(0.6f), "floor");
+  uint32_t grey = b.diffuse(Rgb(0.5f), "grey");
+  b.quad(Vec3(-120, 0, -120), Vec3(0, 0, 240), Vec3(240, 0, 0), floor);
+  // 1000 x 1000 tiny emitters over 200 x 200 units, and a few blocks casting shadows.
+  Pcg32 rng(11);
+  auto palette = emitter_palette(b, rng, 32);
+  emitter_field(b, rng, 1000, 1000, -100, 100, -100, 100, 1.0f, 4.0f, 0.02f, palette);
+  for (int k = 0; k < 12; ++k) {
+    Vec3 lo(-60 + 10.0f * k, 0, -10.0f + 4.0f * float(k % 3));
+    b.box(lo, lo + Vec3(3, 0.8f, 3), grey);
+  }
+  s.camera.position = Vec3(0, 25, 70);
+  s.camera.target = Vec3(0, 0, 0);
+  s.camera.fov = 50;
   s.has_camera = true;
   return s;
 }
@@ -233,6 +269,8 @@ const std::vector<Entry>& entries() {
        arch_interior_scene},
       {{"many-lights-open", "10,240 small emissive triangles over an open floor, nothing occluded"},
        many_lights_open_scene},
+      {{"many-lights-1m", "stress test: 1,000,000 tiny emissive triangles over a floor with a few blocks"},
+       many_lights_1m_scene},
       {{"furnace", "inside an emissive diffuse sphere (Le = 1, albedo 0.5): radiance sum of 0.5^k"},
        furnace_scene},
   };

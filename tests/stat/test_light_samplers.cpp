@@ -1,0 +1,165 @@
+// The four checks every light sampler passes, on several built-in scenes and several hundred
+// shading contexts each: sample's pmf equals pmf(); pmfs sum to one; sampled counts fit N*pmf
+// (chi-square, pooled small bins, Sidak-corrected); each light that can contribute has pmf > 0;
+// and with stratified u each light is drawn N*pmf times to within one draw.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include "rll/accel/accel.h"
+#include "rll/core/params.h"
+#include "rll/core/rng.h"
+#include "rll/scene/builtin.h"
+#include "support/sampler_contexts.h"
+#include "support/statistics.h"
+
+using namespace rll;
+using namespace rll::test;
+
+namespace {
+
+struct SamplerCase {
+  std::string label;
+  std::string sampler;
+  std::vector<std::string> set;
+};
+
+const std::vector<SamplerCase>& sampler_cases() {
+  static const std::vector<SamplerCase> cases = {
+      {"uniform", "uniform", {}},
+      {"power", "power", {}},
+      {"tree", "tree", {}},
+  };
+  return cases;
+}
+
+const std::vector<std::string> kScenes = {"cornell-box", "cornell-boxes-room", "arch-interior", "many-lights-open",
+                                          "furnace"};
+constexpr int kContexts = 200;
+constexpr int kChiContexts = 6;
+constexpr int kChiSamples = 20000;
+// Every chi-square test of this file, for the Sidak correction.
+const int kChiTests = int(kScenes.size()) * 16 * kChiContexts;
+
+struct Fixture {
+  Scene scene;
+  std::unique_ptr<Accel> accel;
+  std::unique_ptr<LightSampler> sampler;
+  std::vector<LightContext> contexts;
+};
+
+Fixture make_fixture(const SamplerCase& c, const std::string& scene_name) {
+  Fixture f;
+  f.scene = make_builtin_scene(scene_name);
+  f.scene.width = 48;
+  f.scene.height = 36;
+  f.scene.finalize();
+  f.accel = std::make_unique<Accel>(f.scene.mesh);
+  Params params = Params::parse(c.set);
+  f.sampler = make_light_sampler(c.sampler, f.scene, params);
+  params.check_all_used();
+  train_sampler(f.scene, *f.accel, *f.sampler, 8);
+  f.contexts = make_contexts(f.scene, *f.accel, kContexts, 1234);
+  for (size_t i = 0; i < f.contexts.size(); ++i) f.sampler->prepare(f.contexts[i], float(i % 97) / 97.0f);
+  return f;
+}
+
+class LightSamplerStat : public ::testing::TestWithParam<std::tuple<size_t, std::string>> {
+ protected:
+  static std::map<std::pair<size_t, std::string>, Fixture>& cache() {
+    static std::map<std::pair<size_t, std::string>, Fixture> c;
+    return c;
+  }
+  Fixture& fixture() {
+    auto key = std::make_pair(std::get<0>(GetParam()), std::get<1>(GetParam()));
+    auto it = cache().find(key);
+    if (it == cache().end())
+      it = cache().emplace(key, make_fixture(sampler_cases()[key.first], key.second)).first;
+    return it->second;
+  }
+};
+
+TEST_P(LightSamplerStat, SampledPmfEqualsPmf) {
+  Fixture& f = fixture();
+  Pcg32 rng(99);
+  for (const auto& ctx : f.contexts)
+    for (int k = 0; k < 64; ++k) {
+      SampledLight s = f.sampler->sample(ctx, rng.next_double());
+      ASSERT_GT(s.pmf, 0) << "sample returned no light";
+      ASSERT_EQ(s.pmf, f.sampler->pmf(ctx, s.light)) << "light " << s.light;
+    }
+}
+
+TEST_P(LightSamplerStat, PmfsSumToOne) {
+  Fixture& f = fixture();
+  const uint32_t n = uint32_t(f.scene.lights.size());
+  for (size_t i = 0; i < f.contexts.size(); ++i) {
+    double sum = 0;
+    for (uint32_t l = 0; l < n; ++l) sum += f.sampler->pmf(f.contexts[i], l);
+    ASSERT_NEAR(sum, 1.0, 1e-4) << "context " << i;
+  }
+}
+
+TEST_P(LightSamplerStat, ContributingLightsHavePositivePmf) {
+  Fixture& f = fixture();
+  const uint32_t n = uint32_t(f.scene.lights.size());
+  // Checking every light at every context is slow for 10k lights: a strided subset of both.
+  const uint32_t stride = n > 3000 ? 7 : 1;
+  for (size_t i = 0; i < f.contexts.size(); i += 2)
+    for (uint32_t l = uint32_t(i % stride); l < n; l += stride) {
+      if (!light_can_contribute(f.scene.lights[l], f.contexts[i].p, f.contexts[i].n)) continue;
+      ASSERT_GT(f.sampler->pmf(f.contexts[i], l), 0) << "context " << i << " light " << l;
+    }
+}
+
+TEST_P(LightSamplerStat, ChiSquareOfSampledCounts) {
+  Fixture& f = fixture();
+  const size_t n = f.scene.lights.size();
+  const double alpha = sidak_alpha(0.01, kChiTests);
+  Pcg32 rng(4242);
+  for (int c = 0; c < kChiContexts; ++c) {
+    const LightContext& ctx = f.contexts[size_t(c) * f.contexts.size() / kChiContexts];
+    std::vector<double> observed(n, 0), expected(n, 0);
+    for (int k = 0; k < kChiSamples; ++k) observed[f.sampler->sample(ctx, rng.next_double()).light] += 1;
+    for (uint32_t l = 0; l < n; ++l) expected[l] = double(kChiSamples) * f.sampler->pmf(ctx, l);
+    ChiSquareResult r = chi_square(observed, expected);
+    EXPECT_FALSE(r.sample_in_zero_bin) << "context " << c << ": a light with pmf 0 was sampled";
+    EXPECT_GT(r.p_value, alpha) << "context " << c << ": chi2 " << r.chi2 << " dof " << r.dof;
+  }
+}
+
+TEST_P(LightSamplerStat, StratifiedCountsMatchPmf) {
+  // With u stratified over [0,1), each light's share of draws divided by its pmf is one to
+  // within one draw: sum over draws of [light]/(pmf*N) ~ 1 (pbrt's sampler test).
+  Fixture& f = fixture();
+  const size_t n = f.scene.lights.size();
+  const int N = 200000;
+  for (int c = 0; c < 3; ++c) {
+    const LightContext& ctx = f.contexts[size_t(c) * 37 % f.contexts.size()];
+    std::vector<double> count(n, 0);
+    for (int k = 0; k < N; ++k) count[f.sampler->sample(ctx, (k + 0.5) / N).light] += 1;
+    for (uint32_t l = 0; l < n; ++l) {
+      double p = f.sampler->pmf(ctx, l);
+      if (p == 0) {
+        ASSERT_EQ(count[l], 0) << "light " << l << " drawn with pmf 0";
+        continue;
+      }
+      double expected = p * N;
+      ASSERT_NEAR(count[l] / expected, 1.0, 1.0 / expected + 1e-3) << "context " << c << " light " << l;
+    }
+  }
+}
+
+std::string case_name(const ::testing::TestParamInfo<std::tuple<size_t, std::string>>& info) {
+  std::string s = sampler_cases()[std::get<0>(info.param)].label + "_" + std::get<1>(info.param);
+  for (auto& ch : s)
+    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  return s;
+}
+
+INSTANTIATE_TEST_SUITE_P(AllSamplers, LightSamplerStat,
+                         ::testing::Combine(::testing::Range<size_t>(0, sampler_cases().size()),
+                                            ::testing::ValuesIn(kScenes)),
+                         case_name);
+
+}  // namespace

@@ -1,0 +1,78 @@
+#include "support/sampler_contexts.h"
+
+#include "rll/core/rng.h"
+#include "rll/core/sampling.h"
+#include "rll/render/render.h"
+#include "rll/scene/interaction.h"
+
+namespace rll::test {
+
+std::vector<LightContext> make_contexts(const Scene& scene, const Accel& accel, int count, uint64_t seed) {
+  Pcg32 rng(seed);
+  std::vector<LightContext> out;
+  const Mesh& mesh = scene.mesh;
+  std::vector<float> areas(mesh.triangle_count(), 0.0f);
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+    bool sky = t >= scene.sky_first_triangle && t < scene.sky_first_triangle + scene.sky_triangle_count;
+    if (!sky) areas[t] = mesh.area(t);
+  }
+  DiscreteDistribution by_area(areas);
+  int tries = 0;
+  while (int(out.size()) < count / 2 && tries++ < count * 50) {
+    float x = rng.next_float() * scene.width, y = rng.next_float() * scene.height;
+    Ray ray = scene.camera.generate_ray(x, y);
+    Hit hit;
+    if (!accel.intersect(ray, hit)) continue;
+    SurfaceHit sh = make_surface_hit(scene, hit);
+    bool sky = sh.tri >= scene.sky_first_triangle && sh.tri < scene.sky_first_triangle + scene.sky_triangle_count;
+    if (sky) continue;
+    LightContext c;
+    c.p = sh.p;
+    c.n = face_forward(sh.ng, -ray.d);
+    c.ns = dot(sh.ns, c.n) < 0 ? -sh.ns : sh.ns;
+    c.footprint = hit.t * scene.camera.pixel_angle();
+    out.push_back(c);
+  }
+  while (int(out.size()) < count) {
+    uint32_t t = uint32_t(by_area.sample(rng.next_double()));
+    Vec2 b = sample_uniform_triangle({rng.next_float(), rng.next_float()});
+    LightContext c;
+    c.p = mesh.vertex(t, 0) * b.x + mesh.vertex(t, 1) * b.y + mesh.vertex(t, 2) * (1 - b.x - b.y);
+    c.n = normalize(mesh.face_cross(t));
+    if (rng.next_float() < 0.5f) c.n = -c.n;
+    c.ns = c.n;
+    c.footprint = 0.01f * scene.radius;
+    out.push_back(c);
+  }
+  return out;
+}
+
+bool light_can_contribute(const Light& l, const Vec3& p, const Vec3& n) {
+  if (luminance(l.radiance) <= 0) return false;
+  if (l.type == LightType::Directional) return dot(l.p0, n) > 0;
+  if (l.type == LightType::Point) return dot(l.p0 - p, n) > 0;
+  // Some point of the triangle (probe points) above the surface and facing p.
+  Pcg32 rng(17);
+  for (int i = 0; i < 64; ++i) {
+    Vec2 b = i < 3 ? Vec2{i == 0 ? 1.f : 0.f, i == 1 ? 1.f : 0.f} : sample_uniform_triangle({rng.next_float(), rng.next_float()});
+    Vec3 y = l.p0 * b.x + l.p1 * b.y + l.p2 * (1 - b.x - b.y);
+    Vec3 d = y - p;
+    if (dot(d, n) > 1e-6f * length(d) && !is_black(emitted_radiance(l, -normalize(d)))) return true;
+  }
+  return false;
+}
+
+void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler, int passes) {
+  if (!sampler.learns()) return;
+  IntegratorSettings is;
+  is.type = IntegratorType::Path;
+  is.max_depth = 3;
+  Integrator integrator(scene, accel, sampler, is);
+  Film film(scene.width, scene.height);
+  RenderSettings rs;
+  rs.spp = passes;
+  rs.pass_spp = 1;
+  render(scene, integrator, sampler, film, rs);
+}
+
+}  // namespace rll::test
