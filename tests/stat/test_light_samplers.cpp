@@ -29,6 +29,11 @@ const std::vector<SamplerCase>& sampler_cases() {
       {"uniform", "uniform", {}},
       {"power", "power", {}},
       {"tree", "tree", {}},
+      // RLL on a trained state (train_sampler renders passes first), every within-cluster mode.
+      {"rll_tree", "rll", {}},
+      {"rll_power", "rll", {"rll.within=power"}},
+      {"rll_uniform", "rll", {"rll.within=uniform"}},
+      {"rll_paper", "rll", {"rll.within=uniform", "rll.reward=fullpdf", "rll.prior=power", "rll.split_by=power"}},
   };
   return cases;
 }

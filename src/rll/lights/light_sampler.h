@@ -30,6 +30,9 @@ struct LightContext {
 struct SampledLight {
   uint32_t light = 0;
   float pmf = 0;  // 0: nothing was sampled
+  // Filled by samplers that choose a cluster first (rll, oracle), for their own record():
+  uint32_t cluster = 0;     // index of the cluster in the cell's cut
+  float cluster_pmf = 0;    // probability of that cluster
 };
 
 class LightSampler {

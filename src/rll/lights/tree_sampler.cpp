@@ -65,6 +65,22 @@ float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, con
   return pmf;
 }
 
+float tree_reach_pmf(const LightTree& tree, uint32_t node, const Vec3& p, const Vec3& n) {
+  uint32_t path[kMaxDepth];
+  int k = 0;
+  for (uint32_t i = node; i != LightTree::kRoot; i = tree.node(i).parent) path[k++] = i;
+  float pmf = 1;
+  uint32_t parent = LightTree::kRoot;
+  while (k-- > 0) {
+    const LightTreeNode& nd = tree.node(parent);
+    float p0 = first_child_probability(tree, nd, p, n);
+    pmf *= path[k] == nd.child ? p0 : 1 - p0;
+    if (pmf == 0) return 0;
+    parent = path[k];
+  }
+  return pmf;
+}
+
 TreeLightSampler::TreeLightSampler(const Scene& scene) : m_tree(*scene.light_tree) {
   if (m_tree.depth() >= kMaxDepth) fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
 }

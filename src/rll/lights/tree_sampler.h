@@ -16,6 +16,9 @@ SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, c
 // the same order, so the two agree exactly. 0 if `light` is not under `from`.
 float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, const Vec3& p, const Vec3& n);
 
+// The probability that a descent from the root passes through `node` (1 for the root).
+float tree_reach_pmf(const LightTree& tree, uint32_t node, const Vec3& p, const Vec3& n);
+
 class TreeLightSampler final : public LightSampler {
  public:
   explicit TreeLightSampler(const Scene& scene);

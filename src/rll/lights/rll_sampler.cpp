@@ -1,0 +1,334 @@
+#include "rll/lights/rll_sampler.h"
+
+#include <algorithm>
+
+#include "rll/core/error.h"
+#include "rll/core/parallel.h"
+#include "rll/core/params.h"
+#include "rll/lights/tree_sampler.h"
+#include "rll/scene/scene.h"
+
+namespace rll {
+
+RllSettings rll_settings_from(const Params& p) {
+  RllSettings s;
+  s.cut.cut_size = int(p.get_int("rll.cut_size", s.cut.cut_size));
+  s.cut.alpha = p.get_float("rll.alpha", s.cut.alpha);
+  s.cut.threshold = p.get_float("rll.T", s.cut.threshold);
+  s.cut.splits = int(p.get_int("rll.splits", s.cut.splits));
+  s.cut.epsilon = p.get_float("rll.epsilon", s.cut.epsilon);
+  auto weight = [&](const char* key) {
+    return p.get_choice(key, "importance", {"importance", "power"}) == "power" ? ClusterWeight::Power
+                                                                              : ClusterWeight::Importance;
+  };
+  s.cut.prior = weight("rll.prior");
+  s.cut.split = weight("rll.split_by");
+  std::string within = p.get_choice("rll.within", "tree", {"uniform", "power", "tree"});
+  s.within = within == "uniform" ? WithinCluster::Uniform : within == "power" ? WithinCluster::Power : WithinCluster::Tree;
+  std::string defensive = p.get_choice("rll.defensive", "tree", {"tree", "cell"});
+  s.defensive = defensive == "tree" ? Defensive::Tree : Defensive::Cell;
+  s.cut.prior_in_cdf = s.defensive == Defensive::Cell;
+  std::string reward = p.get_choice("rll.reward", "cluster", {"cluster", "fullpdf"});
+  s.reward = reward == "cluster" ? RewardKind::Cluster : RewardKind::FullPdf;
+  long capacity = p.get_int("rll.capacity", s.capacity);
+  if (capacity < 1 || capacity > (1l << 24)) fail("--set rll.capacity={}: must be in [1, 16777216]", capacity);
+  s.capacity = uint32_t(capacity);
+  s.grid.footprint_scale = p.get_float("rll.footprint_scale", s.grid.footprint_scale);
+  s.grid.max_cell = p.get_float("rll.max_cell", s.grid.max_cell);
+  s.grid.normal_bins = int(p.get_int("rll.normal_bins", s.grid.normal_bins));
+  s.grid.jitter = p.get_float("rll.jitter", s.grid.jitter);
+  if (!(s.grid.footprint_scale > 0)) fail("--set rll.footprint_scale must be positive");
+  if (!(s.grid.max_cell > 0 && s.grid.max_cell <= 1)) fail("--set rll.max_cell must be in (0, 1]");
+  if (s.grid.normal_bins < 1 || s.grid.normal_bins > 64) fail("--set rll.normal_bins must be in [1, 64]");
+  if (!(s.grid.jitter >= 0 && s.grid.jitter <= 1)) fail("--set rll.jitter must be in [0, 1]");
+  return s;
+}
+
+namespace {
+// Rewards are luminances of irradiance-like quantities; the fixed-point scale follows the
+// brightest light so that every scene gets the same relative resolution.
+double reward_scale(const Scene& scene) {
+  double s = 0;
+  for (const auto& l : scene.lights) {
+    double lum = luminance(l.radiance);
+    switch (l.type) {
+      case LightType::Triangle: s = std::max(s, kPi * lum * (l.two_sided ? 2 : 1)); break;
+      case LightType::Point: s = std::max(s, 4 * kPi * lum / double(scene.radius * scene.radius)); break;
+      case LightType::Directional: s = std::max(s, kPi * lum); break;
+    }
+  }
+  return s > 0 ? s : 1.0;
+}
+}  // namespace
+
+RllLightSampler::RllLightSampler(const Scene& scene, const RllSettings& s)
+    : m_tree(*scene.light_tree), m_s(s), m_keyer(s.grid, scene.bounds) {
+  m_table = std::make_unique<CellTable>(s.capacity);
+  m_cuts = std::make_unique<CutStore>(m_tree, s.capacity, s.cut, reward_scale(scene));
+  m_last_used = std::make_unique<std::atomic<uint32_t>[]>(s.capacity);
+  for (uint32_t c = 0; c < s.capacity; ++c) m_last_used[c].store(0, std::memory_order_relaxed);
+  refresh_light_powers(scene);
+  m_keyer.set_pass(0, 0);
+}
+
+void RllLightSampler::refresh_light_powers(const Scene& scene) {
+  m_power_prefix.assign(scene.lights.size() + 1, 0.0);
+  for (size_t i = 0; i < scene.lights.size(); ++i)
+    m_power_prefix[i + 1] = m_power_prefix[i] + double(light_bounds(scene.lights[i]).power);
+}
+
+size_t RllLightSampler::bytes() const {
+  return m_table->bytes() + m_cuts->bytes() + m_s.capacity * sizeof(uint32_t) + m_power_prefix.size() * sizeof(double);
+}
+
+void RllLightSampler::prepare(LightContext& ctx, float u) const {
+  ctx.cell = kNoCell;
+  if (length_sq(ctx.n) == 0) return;
+  CellCoord coord = m_keyer.locate(ctx.p, ctx.n, ctx.footprint, u);
+  bool created = false;
+  uint32_t cell = m_table->find_or_insert(m_keyer.key(coord), &created);
+  if (cell == CellTable::kNone) return;  // table full: no cell until eviction makes room
+  if (created) m_cuts->set_anchor(cell, m_keyer.anchor(coord));
+  m_last_used[cell].store(uint32_t(m_pass), std::memory_order_relaxed);
+  ctx.cell = cell;
+}
+
+bool RllLightSampler::has_cut(uint32_t cell) const { return cell != kNoCell && m_cuts->active(cell); }
+
+RllLightSampler::View RllLightSampler::view(uint32_t cell) const {
+  if (has_cut(cell)) return {m_cuts->size(cell), m_cuts->ends(cell), m_cuts->nodes(cell), m_cuts->cdf(cell)};
+  return {m_cuts->initial_size(), m_cuts->initial_ends(), m_cuts->initial_nodes(), nullptr};
+}
+
+SampledLight RllLightSampler::sample_within(const LightContext& ctx, uint32_t node, uint32_t begin, uint32_t end,
+                                            double u) const {
+  const uint32_t count = end - begin;
+  if (count == 1) return {begin, 1.0f};
+  switch (m_s.within) {
+    case WithinCluster::Tree: return tree_descend(m_tree, node, ctx.p, ctx.n, u);
+    case WithinCluster::Power: {
+      double lo = m_power_prefix[begin], total = m_power_prefix[end] - lo;
+      if (total > 0) {
+        double target = lo + u * total;
+        auto it = std::upper_bound(m_power_prefix.begin() + begin + 1, m_power_prefix.begin() + end + 1, target);
+        uint32_t l = std::min(uint32_t(it - m_power_prefix.begin()) - 1, end - 1);
+        while (l > begin && m_power_prefix[l + 1] == m_power_prefix[l]) --l;  // never a zero-power light
+        return {l, pmf_within(ctx, node, begin, end, l)};
+      }
+      [[fallthrough]];
+    }
+    case WithinCluster::Uniform: {
+      uint32_t l = begin + std::min(count - 1, uint32_t(u * count));
+      return {l, 1.0f / float(count)};
+    }
+  }
+  return {};
+}
+
+float RllLightSampler::pmf_within(const LightContext& ctx, uint32_t node, uint32_t begin, uint32_t end,
+                                  uint32_t light) const {
+  const uint32_t count = end - begin;
+  if (count == 1) return 1.0f;
+  switch (m_s.within) {
+    case WithinCluster::Tree: return tree_descend_pmf(m_tree, node, light, ctx.p, ctx.n);
+    case WithinCluster::Power: {
+      double total = m_power_prefix[end] - m_power_prefix[begin];
+      if (total > 0) return float((m_power_prefix[light + 1] - m_power_prefix[light]) / total);
+      [[fallthrough]];
+    }
+    case WithinCluster::Uniform: return 1.0f / float(count);
+  }
+  return 0;
+}
+
+float RllLightSampler::mixture_pmf(const LightContext& ctx, const View& v, uint32_t k, uint32_t l, float within,
+                                   float* cluster_pmf) const {
+  const float q = v.cdf[k] - (k > 0 ? v.cdf[k - 1] : 0.0f);  // the cell's CDF: learnt, or with the prior
+  if (m_s.defensive == Defensive::Cell) {
+    *cluster_pmf = q;
+    return q * within;
+  }
+  // P(l|x) = [(1 - eps) Q(s)/sum Q + eps reach(s|x)] P(l|s): the defensive prior of DESIGN 2 is
+  // the tree's probability of the cluster at x. Before the cell has learnt anything, the tree
+  // alone.
+  const float eps = learnt(ctx.cell) ? m_s.cut.epsilon : 1.0f;
+  const uint32_t node = v.nodes[k];
+  if (m_s.within == WithinCluster::Tree) {
+    *cluster_pmf = (1 - eps) * q + eps * tree_reach_pmf(m_tree, node, ctx.p, ctx.n);
+    return *cluster_pmf * within;
+  }
+  // Another within-cluster rule: mix the two distributions over lights.
+  float tree = tree_descend_pmf(m_tree, LightTree::kRoot, l, ctx.p, ctx.n);
+  float pmf = (1 - eps) * q * within + eps * tree;
+  *cluster_pmf = (1 - eps) * q + eps * tree_reach_pmf(m_tree, node, ctx.p, ctx.n);
+  return pmf;
+}
+
+bool RllLightSampler::learnt(uint32_t cell) const { return m_cuts->learnt(cell); }
+
+SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
+  View v = view(ctx.cell);
+  if (!has_cut(ctx.cell)) {
+    // A point without a learnt cut (a cell new in this pass, or none: table full) samples
+    // like the light tree. Its reward still goes to its cluster of the initial cut: given the
+    // cluster, the tree chose the light with probability tree_descend_pmf(cluster -> light).
+    SampledLight s = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u);
+    if (!(s.pmf > 0)) return {};
+    s.cluster = cluster_of(v, s.light);
+    float within = tree_descend_pmf(m_tree, v.nodes[s.cluster], s.light, ctx.p, ctx.n);
+    s.cluster_pmf = within > 0 ? s.pmf / within : s.pmf;
+    return s;
+  }
+  const float eps = m_s.defensive == Defensive::Tree ? (learnt(ctx.cell) ? m_s.cut.epsilon : 1.0f) : 0.0f;
+  uint32_t k, l;
+  float within;
+  if (u < eps) {
+    // The defensive branch: a descent of the whole tree, then its cluster in this cut.
+    SampledLight t = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u / eps);
+    if (!(t.pmf > 0)) return {};
+    l = t.light;
+    k = cluster_of(v, l);
+    within = pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], l);
+  } else {
+    // The learnt branch: a cluster from the cell's CDF (first entry above u; zero-width
+    // entries are never returned), then a light inside it.
+    double uc = (u - eps) / (1 - eps);
+    k = uint32_t(std::upper_bound(v.cdf, v.cdf + v.size, float(uc)) - v.cdf);
+    k = std::min(k, v.size - 1);
+    while (k > 0 && v.cdf[k] == v.cdf[k - 1]) --k;
+    float lo = k > 0 ? v.cdf[k - 1] : 0.0f;
+    float q = v.cdf[k] - lo;
+    if (!(q > 0)) return {};
+    double u_within = std::clamp((uc - double(lo)) / double(q), 0.0, 0x1.fffffffffffffp-1);
+    SampledLight w = sample_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], u_within);
+    if (!(w.pmf > 0)) return {};
+    l = w.light;
+    within = w.pmf;  // the same top-down product as pmf_within computes
+  }
+  SampledLight s;
+  s.light = l;
+  s.cluster = k;
+  s.pmf = mixture_pmf(ctx, v, k, l, within, &s.cluster_pmf);
+  return s.pmf > 0 ? s : SampledLight{};
+}
+
+uint32_t RllLightSampler::cluster_of(const View& v, uint32_t light) const {
+  return uint32_t(std::upper_bound(v.ends, v.ends + v.size, light) - v.ends);
+}
+
+float RllLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
+  if (!has_cut(ctx.cell)) return tree_descend_pmf(m_tree, LightTree::kRoot, light, ctx.p, ctx.n);
+  View v = view(ctx.cell);
+  uint32_t k = cluster_of(v, light);
+  if (k >= v.size) return 0;
+  float within = pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], light);
+  float cluster_pmf;
+  return mixture_pmf(ctx, v, k, light, within, &cluster_pmf);
+}
+
+void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, float estimate) {
+  if (ctx.cell == kNoCell || !(s.pmf > 0) || !(estimate >= 0) || !std::isfinite(estimate)) return;
+  const float within = s.pmf / s.cluster_pmf;
+  // DESIGN 2: the cluster reward estimates the cluster's total contribution I(s):
+  // r = estimate / P(l|s). The original code divided by the full pdf (fixed point P ~ sqrt(I)).
+  float reward = m_s.reward == RewardKind::Cluster ? estimate / within : estimate / s.pmf;
+  m_cuts->record(ctx.cell, s.cluster, reward, estimate / s.pmf);
+}
+
+void RllLightSampler::end_pass() {
+  const uint32_t cap = m_s.capacity;
+  std::atomic<uint32_t> splits{0}, collapses{0}, touched{0};
+  parallel_for(cap, 256, [&](size_t b, size_t e) {
+    uint32_t sp = 0, co = 0, to = 0;
+    for (size_t c = b; c < e; ++c) {
+      if (!m_table->in_use(uint32_t(c))) continue;
+      CutStore::PassStats st = m_cuts->end_pass(uint32_t(c));
+      sp += st.splits;
+      co += st.collapses;
+      to += st.touched;
+    }
+    splits += sp;
+    collapses += co;
+    touched += to;
+  });
+  m_splits_per_pass.push_back(splits);
+  m_collapses_per_pass.push_back(collapses);
+  m_touched_per_pass.push_back(touched);
+
+  // Eviction: when the table is nearly full or turned points away, forget the least recently
+  // used cells until it is 70% full. Ties go to the lower cell id.
+  uint64_t failed = m_table->failed_inserts();
+  m_failed_inserts += failed;
+  std::vector<uint32_t> evict;
+  if (failed > 0 || m_table->used() > cap * 9ull / 10) {
+    std::vector<uint32_t> used;
+    for (uint32_t c = 0; c < cap; ++c)
+      if (m_table->in_use(c)) used.push_back(c);
+    size_t target = cap * 7ull / 10;
+    if (used.size() > target) {
+      std::stable_sort(used.begin(), used.end(), [&](uint32_t a, uint32_t b) {
+        return m_last_used[a].load(std::memory_order_relaxed) < m_last_used[b].load(std::memory_order_relaxed);
+      });
+      evict.assign(used.begin(), used.begin() + long(used.size() - target));
+      for (uint32_t c : evict) m_cuts->clear(c);
+      m_evictions += evict.size();
+    }
+  }
+  // Cells whose insert lost a race, or were evicted, go back to the free list.
+  for (uint32_t c = 0; c < cap; ++c)
+    if (!m_table->in_use(c) && m_cuts->active(c)) m_cuts->clear(c);
+  m_table->remove_and_rebuild(evict);
+  ++m_pass;
+  m_keyer.set_pass(m_pass, 0);
+}
+
+void RllLightSampler::lights_changed(const Scene& scene) {
+  refresh_light_powers(scene);
+  parallel_for(m_s.capacity, 256, [&](size_t b, size_t e) {
+    for (size_t c = b; c < e; ++c) m_cuts->refresh(uint32_t(c));
+  });
+}
+
+nlohmann::json RllLightSampler::describe() const {
+  double mean_cut = 0;
+  uint32_t active = 0;
+  for (uint32_t c = 0; c < m_s.capacity; ++c)
+    if (m_cuts->active(c)) {
+      mean_cut += m_cuts->size(c);
+      ++active;
+    }
+  const char* within[] = {"uniform", "power", "tree"};
+  nlohmann::json j = {
+      {"name", name()},
+      {"parameters",
+       {{"cut_size", m_s.cut.cut_size},
+        {"alpha", m_s.cut.alpha},
+        {"T", m_s.cut.threshold},
+        {"splits", m_s.cut.splits},
+        {"epsilon", m_s.cut.epsilon},
+        {"prior", m_s.cut.prior == ClusterWeight::Power ? "power" : "importance"},
+        {"split_by", m_s.cut.split == ClusterWeight::Power ? "power" : "importance"},
+        {"within", within[int(m_s.within)]},
+        {"reward", m_s.reward == RewardKind::Cluster ? "cluster" : "fullpdf"},
+        {"defensive", m_s.defensive == Defensive::Tree ? "tree" : "cell"},
+        {"capacity", m_s.capacity},
+        {"footprint_scale", m_s.grid.footprint_scale},
+        {"max_cell", m_s.grid.max_cell},
+        {"normal_bins", m_s.grid.normal_bins},
+        {"jitter", m_s.grid.jitter}}},
+      {"passes", m_pass},
+      {"cells_used", m_table->used()},
+      {"cells_capacity", m_s.capacity},
+      {"cells_with_cut", active},
+      {"evictions", m_evictions},
+      {"failed_inserts", m_failed_inserts},
+      {"mean_cut_size", active ? mean_cut / active : 0.0},
+      {"splits_per_pass", m_splits_per_pass},
+      {"collapses_per_pass", m_collapses_per_pass},
+      {"cells_touched_per_pass", m_touched_per_pass},
+      {"bytes", bytes()},
+  };
+  return j;
+}
+
+}  // namespace rll
