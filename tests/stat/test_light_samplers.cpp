@@ -135,7 +135,9 @@ TEST_P(LightSamplerStat, ChiSquareOfSampledCounts) {
 
 TEST_P(LightSamplerStat, StratifiedCountsMatchPmf) {
   // With u stratified over [0,1), each light's share of draws divided by its pmf is one to
-  // within one draw: sum over draws of [light]/(pmf*N) ~ 1 (pbrt's sampler test).
+  // within two draws: sum over draws of [light]/(pmf*N) ~ 1 (pbrt's sampler test). Every
+  // sampler maps u to a light through at most two intervals of u per light (RLL's defensive
+  // mixture has two branches; the others one), so the count is N*pmf +- 2.
   Fixture& f = fixture();
   const size_t n = f.scene.lights.size();
   const int N = 200000;
@@ -150,7 +152,7 @@ TEST_P(LightSamplerStat, StratifiedCountsMatchPmf) {
         continue;
       }
       double expected = p * N;
-      ASSERT_NEAR(count[l] / expected, 1.0, 1.0 / expected + 1e-3) << "context " << c << " light " << l;
+      ASSERT_NEAR(count[l] / expected, 1.0, 2.0 / expected + 1e-4) << "context " << c << " light " << l;
     }
   }
 }

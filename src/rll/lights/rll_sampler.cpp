@@ -143,7 +143,7 @@ float RllLightSampler::pmf_within(const LightContext& ctx, uint32_t node, uint32
 
 float RllLightSampler::mixture_pmf(const LightContext& ctx, const View& v, uint32_t k, uint32_t l, float within,
                                    float* cluster_pmf) const {
-  const float q = v.cdf[k] - (k > 0 ? v.cdf[k - 1] : 0.0f);  // the cell's CDF: learnt, or with the prior
+  const float q = cdf_width(v, k);  // the cell's CDF: learnt, or with the prior
   if (m_s.defensive == Defensive::Cell) {
     *cluster_pmf = q;
     return q * within;
@@ -162,6 +162,10 @@ float RllLightSampler::mixture_pmf(const LightContext& ctx, const View& v, uint3
   float pmf = (1 - eps) * q * within + eps * tree;
   *cluster_pmf = (1 - eps) * q + eps * tree_reach_pmf(m_tree, node, ctx.p, ctx.n);
   return pmf;
+}
+
+float RllLightSampler::cdf_width(const View& v, uint32_t k) const {
+  return float(double(v.cdf[k]) - (k > 0 ? double(v.cdf[k - 1]) : 0.0));
 }
 
 bool RllLightSampler::learnt(uint32_t cell) const { return m_cuts->learnt(cell); }
@@ -192,14 +196,16 @@ SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
   } else {
     // The learnt branch: a cluster from the cell's CDF (first entry above u; zero-width
     // entries are never returned), then a light inside it.
+    // Compared and differenced in double: the interval of u that selects cluster k is exactly
+    // [cdf[k-1], cdf[k]), and its width is what the pmf reports (cdf_width).
     double uc = (u - eps) / (1 - eps);
-    k = uint32_t(std::upper_bound(v.cdf, v.cdf + v.size, float(uc)) - v.cdf);
+    k = uint32_t(std::upper_bound(v.cdf, v.cdf + v.size, uc, [](double x, float c) { return x < double(c); }) - v.cdf);
     k = std::min(k, v.size - 1);
     while (k > 0 && v.cdf[k] == v.cdf[k - 1]) --k;
-    float lo = k > 0 ? v.cdf[k - 1] : 0.0f;
-    float q = v.cdf[k] - lo;
+    double lo = k > 0 ? double(v.cdf[k - 1]) : 0.0;
+    double q = double(v.cdf[k]) - lo;
     if (!(q > 0)) return {};
-    double u_within = std::clamp((uc - double(lo)) / double(q), 0.0, 0x1.fffffffffffffp-1);
+    double u_within = std::clamp((uc - lo) / q, 0.0, 0x1.fffffffffffffp-1);
     SampledLight w = sample_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], u_within);
     if (!(w.pmf > 0)) return {};
     l = w.light;

@@ -62,6 +62,8 @@ class RllLightSampler final : public LightSampler {
   bool has_cut(uint32_t cell) const;
   bool learnt(uint32_t cell) const;
   uint32_t cluster_of(const View& v, uint32_t light) const;
+  // Probability of cluster k in the cell's CDF: the exact width of its interval.
+  float cdf_width(const View& v, uint32_t k) const;
   View view(uint32_t cell) const;
   // Light inside cluster node `node` covering [begin, end), and its probability.
   SampledLight sample_within(const LightContext& ctx, uint32_t node, uint32_t begin, uint32_t end, double u) const;
