@@ -1,8 +1,611 @@
+// rll's JSON scene format (docs/scene-format.md): camera, film, materials, shapes (OBJ files
+// and inline primitives), point and directional lights, sky. Strict: an unknown field, a wrong
+// type, a non-finite number or a duplicate key is an error naming the file and the JSON
+// pointer of the field.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+
 #include "rll/core/error.h"
+#include "rll/scene/builder.h"
 #include "rll/scene/load.h"
+#include "rll/scene/text_scan.h"
 
 namespace rll {
-void load_json_scene(const std::filesystem::path& path, Scene& scene) {
-  fail("{}: JSON scenes are not supported yet", path.string());
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+// JSON pointer (RFC 6901) of a child field or element.
+std::string child(const std::string& ptr, std::string_view key) {
+  std::string s = ptr + "/";
+  for (char c : key) {
+    if (c == '~')
+      s += "~0";
+    else if (c == '/')
+      s += "~1";
+    else
+      s += c;
+  }
+  return s;
 }
+std::string child(const std::string& ptr, size_t index) {
+  return ptr + "/" + std::to_string(index);
+}
+std::string where(const std::string& ptr) {
+  return ptr.empty() ? "/" : ptr;
+}
+
+// Errors below are thrown without the file name; load_json_scene adds it in front.
+const json& check_is_object(const json& v, const std::string& ptr) {
+  if (!v.is_object()) fail("{} must be an object (got {})", where(ptr), v.type_name());
+  return v;
+}
+
+void check_object(const json& v, const std::string& ptr,
+                  std::initializer_list<std::string_view> known) {
+  check_is_object(v, ptr);
+  for (const auto& item : v.items()) {
+    if (std::find(known.begin(), known.end(), item.key()) != known.end()) continue;
+    std::string list;
+    for (auto k : known) list += (list.empty() ? "" : ", ") + std::string(k);
+    fail("unknown field \"{}\" in {} (known fields: {})", item.key(), where(ptr), list);
+  }
+}
+
+const json& check_array(const json& v, const std::string& ptr) {
+  if (!v.is_array()) fail("{} must be an array (got {})", ptr, v.type_name());
+  return v;
+}
+
+float to_number(const json& v, const std::string& ptr) {
+  if (!v.is_number()) fail("{} must be a number (got {})", ptr, v.type_name());
+  double d = v.get<double>();
+  if (!std::isfinite(d) || !std::isfinite(float(d)))
+    fail("{} must be a finite number (got {})", ptr, v.dump());
+  return float(d);
+}
+
+int to_int(const json& v, const std::string& ptr) {
+  if (!v.is_number_integer()) fail("{} must be an integer (got {})", ptr, v.dump());
+  if (v.is_number_unsigned() ? v.get<uint64_t>() > uint64_t(INT32_MAX)
+                             : (v.get<int64_t>() > INT32_MAX || v.get<int64_t>() < INT32_MIN))
+    fail("{} is out of range (got {})", ptr, v.dump());
+  return int(v.get<int64_t>());
+}
+
+bool to_bool(const json& v, const std::string& ptr) {
+  if (!v.is_boolean()) fail("{} must be true or false (got {})", ptr, v.type_name());
+  return v.get<bool>();
+}
+
+std::string to_string(const json& v, const std::string& ptr) {
+  if (!v.is_string()) fail("{} must be a string (got {})", ptr, v.type_name());
+  return v.get<std::string>();
+}
+
+Vec3 to_vec3(const json& v, const std::string& ptr) {
+  if (!v.is_array() || v.size() != 3)
+    fail("{} must be an array of 3 numbers (got {})", ptr,
+         v.is_array() ? fmt::format("{} values", v.size()) : v.type_name());
+  return Vec3(to_number(v[0], child(ptr, 0)), to_number(v[1], child(ptr, 1)),
+              to_number(v[2], child(ptr, 2)));
+}
+
+Vec3 to_direction(const json& v, const std::string& ptr) {
+  Vec3 d = to_vec3(v, ptr);
+  if (!(length_sq(d) > 0) || !std::isfinite(length_sq(d)))
+    fail("{} must be a non-zero vector", ptr);
+  return d;
+}
+
+Rgb to_colour(const json& v, const std::string& ptr) {
+  Rgb c = to_vec3(v, ptr);
+  for (int i = 0; i < 3; ++i)
+    if (c[i] < 0) fail("{} must not be negative (got {})", child(ptr, size_t(i)), c[i]);
+  return c;
+}
+
+// The field `key` of `obj` converted by `conv`; nullopt when absent.
+template <typename T>
+std::optional<T> optional_field(const json& obj, const std::string& ptr, const char* key,
+                                T (*conv)(const json&, const std::string&)) {
+  auto it = obj.find(key);
+  if (it == obj.end()) return std::nullopt;
+  return conv(*it, child(ptr, key));
+}
+
+template <typename T>
+T required_field(const json& obj, const std::string& ptr, const char* key,
+                 T (*conv)(const json&, const std::string&)) {
+  auto it = obj.find(key);
+  if (it == obj.end()) fail("{}: missing field \"{}\"", where(ptr), key);
+  return conv(*it, child(ptr, key));
+}
+
+float positive(float x, const std::string& ptr) {
+  if (!(x > 0)) fail("{} must be positive (got {})", ptr, x);
+  return x;
+}
+
+// Affine transform p -> A p + t of a shape.
+struct Affine {
+  float a[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  Vec3 t;
+  Vec3 apply(const Vec3& p) const {
+    return Vec3(a[0][0] * p.x + a[0][1] * p.y + a[0][2] * p.z,
+                a[1][0] * p.x + a[1][1] * p.y + a[1][2] * p.z,
+                a[2][0] * p.x + a[2][1] * p.y + a[2][2] * p.z) +
+           t;
+  }
+  float det() const {
+    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+           a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+  }
+  // Normals transform with the inverse transpose; the cofactor matrix is that times det(A), and
+  // the scale does not matter since shading normalizes.
+  Vec3 apply_normal(const Vec3& n) const {
+    Vec3 c0(a[1][1] * a[2][2] - a[1][2] * a[2][1], a[1][2] * a[2][0] - a[1][0] * a[2][2],
+            a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+    Vec3 c1(a[0][2] * a[2][1] - a[0][1] * a[2][2], a[0][0] * a[2][2] - a[0][2] * a[2][0],
+            a[0][1] * a[2][0] - a[0][0] * a[2][1]);
+    Vec3 c2(a[0][1] * a[1][2] - a[0][2] * a[1][1], a[0][2] * a[1][0] - a[0][0] * a[1][2],
+            a[0][0] * a[1][1] - a[0][1] * a[1][0]);
+    Vec3 r = c0 * n.x + c1 * n.y + c2 * n.z;
+    return det() < 0 ? -r : r;
+  }
+  // this = m * this
+  void prepend(const float m[3][3]) {
+    float r[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        r[i][j] = m[i][0] * a[0][j] + m[i][1] * a[1][j] + m[i][2] * a[2][j];
+    std::copy(&r[0][0], &r[0][0] + 9, &a[0][0]);
+  }
+};
+
+Affine to_transform(const json& v, const std::string& ptr) {
+  check_object(v, ptr, {"translate", "scale", "rotate", "matrix"});
+  Affine x;
+  if (v.contains("matrix")) {
+    if (v.size() > 1) fail("{}: give either \"matrix\" or translate/scale/rotate, not both", ptr);
+    const std::string mp = child(ptr, "matrix");
+    const json& m = v["matrix"];
+    if (!m.is_array() || m.size() != 4) fail("{} must be an array of 4 rows of 4 numbers", mp);
+    float r[4][4];
+    for (size_t i = 0; i < 4; ++i) {
+      if (!m[i].is_array() || m[i].size() != 4)
+        fail("{} must be an array of 4 numbers", child(mp, i));
+      for (size_t j = 0; j < 4; ++j) r[i][j] = to_number(m[i][j], child(child(mp, i), j));
+    }
+    if (r[3][0] != 0 || r[3][1] != 0 || r[3][2] != 0 || r[3][3] != 1)
+      fail("{} must be [0, 0, 0, 1] (only affine transforms)", child(mp, 3));
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) x.a[i][j] = r[i][j];
+      x.t[i] = r[i][3];
+    }
+  } else {
+    // Scale, then rotate, then translate.
+    if (auto it = v.find("scale"); it != v.end()) {
+      Vec3 s = it->is_number() ? Vec3(to_number(*it, child(ptr, "scale")))
+                               : to_vec3(*it, child(ptr, "scale"));
+      const float m[3][3] = {{s.x, 0, 0}, {0, s.y, 0}, {0, 0, s.z}};
+      x.prepend(m);
+    }
+    if (auto it = v.find("rotate"); it != v.end()) {
+      const std::string rp = child(ptr, "rotate");
+      check_object(*it, rp, {"axis", "angle"});
+      Vec3 u = normalize(required_field(*it, rp, "axis", to_direction));
+      float th = radians(required_field(*it, rp, "angle", to_number));
+      float c = std::cos(th), s = std::sin(th), k = 1 - c;
+      const float m[3][3] = {{c + u.x * u.x * k, u.x * u.y * k - u.z * s, u.x * u.z * k + u.y * s},
+                             {u.y * u.x * k + u.z * s, c + u.y * u.y * k, u.y * u.z * k - u.x * s},
+                             {u.z * u.x * k - u.y * s, u.z * u.y * k + u.x * s, c + u.z * u.z * k}};
+      x.prepend(m);
+    }
+    if (auto it = v.find("translate"); it != v.end()) x.t = to_vec3(*it, child(ptr, "translate"));
+  }
+  float d = x.det();
+  if (!(std::abs(d) > 0) || !std::isfinite(d)) fail("{} is singular (it flattens the shape)", ptr);
+  return x;
+}
+
+// Builds the scene from a parsed JSON document.
+class JsonSceneReader {
+ public:
+  JsonSceneReader(const fs::path& path, Scene& scene) : m_path(path), m_scene(scene) {}
+
+  void read(const json& root) {
+    check_object(root, "", {"camera", "film", "materials", "shapes", "lights", "sky"});
+    if (auto it = root.find("materials"); it != root.end())
+      for (const auto& item : check_is_object(*it, "/materials").items()) {
+        std::string ptr = child("/materials", item.key());
+        if (item.key().empty()) fail("{}: a material name must not be empty", ptr);
+        m_named[item.key()] = add_material(item.value(), ptr, item.key());
+      }
+    if (auto it = root.find("camera"); it != root.end()) read_camera(*it, "/camera");
+    if (auto it = root.find("film"); it != root.end()) read_film(*it, "/film");
+    if (auto it = root.find("shapes"); it != root.end()) {
+      check_array(*it, "/shapes");
+      for (size_t i = 0; i < it->size(); ++i) read_shape((*it)[i], child("/shapes", i));
+    }
+    if (auto it = root.find("lights"); it != root.end()) {
+      check_array(*it, "/lights");
+      for (size_t i = 0; i < it->size(); ++i) read_light((*it)[i], child("/lights", i));
+    }
+    if (auto it = root.find("sky"); it != root.end()) read_sky(*it, "/sky");
+  }
+
+ private:
+  fs::path resolve(const std::string& name) const {
+    return (m_path.parent_path() / name).lexically_normal();
+  }
+
+  // A file named by the scene, which must exist.
+  fs::path referenced_file(const json& v, const std::string& ptr) const {
+    std::string name = to_string(v, ptr);
+    if (name.empty()) fail("{} must not be empty", ptr);
+    fs::path p = resolve(name);
+    if (!fs::is_regular_file(p)) fail("{}: '{}' not found ({})", ptr, name, p.string());
+    return p;
+  }
+
+  uint32_t add_material(const json& v, const std::string& ptr, const std::string& name) {
+    check_object(v, ptr,
+                 {"type", "albedo", "roughness", "eta", "k", "ior", "specular", "emission",
+                  "two_sided", "texture"});
+    Material m;
+    m.name = name;
+    std::string type = optional_field(v, ptr, "type", to_string).value_or("diffuse");
+    std::vector<std::string_view> applies;
+    if (type == "diffuse") {
+      m.type = MaterialType::Diffuse;
+      applies = {"type", "albedo", "texture", "emission", "two_sided"};
+    } else if (type == "conductor") {
+      m.type = MaterialType::Conductor;
+      applies = {"type", "eta", "k", "specular", "roughness", "emission", "two_sided"};
+    } else if (type == "plastic") {
+      m.type = MaterialType::Plastic;
+      applies = {"type",      "albedo", "texture",  "specular",
+                 "roughness", "ior",    "emission", "two_sided"};
+    } else {
+      fail("{}: unknown material type '{}' (rll knows diffuse, conductor, plastic)",
+           child(ptr, "type"), type);
+    }
+    for (const auto& item : v.items())
+      if (std::find(applies.begin(), applies.end(), item.key()) == applies.end())
+        fail("{}: field \"{}\" does not apply to a {} material", ptr, item.key(), type);
+    m.albedo = optional_field(v, ptr, "albedo", to_colour).value_or(m.albedo);
+    m.specular = optional_field(v, ptr, "specular", to_colour).value_or(m.specular);
+    m.eta = optional_field(v, ptr, "eta", to_colour).value_or(m.eta);
+    for (int i = 0; i < 3; ++i) positive(m.eta[i], child(child(ptr, "eta"), size_t(i)));
+    m.k = optional_field(v, ptr, "k", to_colour).value_or(m.k);
+    m.ior = optional_field(v, ptr, "ior", to_number).value_or(m.ior);
+    if (!(m.ior >= 1)) fail("{} must be at least 1 (got {})", child(ptr, "ior"), m.ior);
+    m.roughness = optional_field(v, ptr, "roughness", to_number).value_or(m.roughness);
+    if (!(m.roughness >= 0 && m.roughness <= 1))
+      fail("{} must be in [0, 1] (got {})", child(ptr, "roughness"), m.roughness);
+    m.emission = optional_field(v, ptr, "emission", to_colour).value_or(m.emission);
+    m.two_sided_emission = optional_field(v, ptr, "two_sided", to_bool).value_or(false);
+    if (v.contains("texture")) m.albedo_texture = texture(v["texture"], child(ptr, "texture"));
+    m_scene.materials.push_back(m);
+    return uint32_t(m_scene.materials.size() - 1);
+  }
+
+  int texture(const json& v, const std::string& ptr) {
+    fs::path p = referenced_file(v, ptr);
+    auto it = m_textures.find(p);
+    if (it != m_textures.end()) return it->second;
+    try {
+      m_scene.textures.push_back(read_image(p));
+    } catch (const Error& e) {
+      fail("{}: {}", ptr, e.what());
+    }
+    return m_textures[p] = int(m_scene.textures.size() - 1);
+  }
+
+  // A material given by name (from /materials) or inline.
+  uint32_t material_ref(const json& v, const std::string& ptr) {
+    if (v.is_string()) {
+      auto it = m_named.find(v.get<std::string>());
+      if (it == m_named.end())
+        fail("{}: no material named \"{}\" in /materials", ptr, v.get<std::string>());
+      return it->second;
+    }
+    if (!v.is_object())
+      fail("{} must be a material name or a material object (got {})", ptr, v.type_name());
+    return add_material(v, ptr, ptr);
+  }
+
+  uint32_t shape_material(const json& v, const std::string& ptr) {
+    if (auto it = v.find("material"); it != v.end())
+      return material_ref(*it, child(ptr, "material"));
+    if (!m_default_material) {
+      Material m;
+      m.name = "default";
+      m_scene.materials.push_back(m);
+      m_default_material = uint32_t(m_scene.materials.size() - 1);
+    }
+    return *m_default_material;
+  }
+
+  void read_camera(const json& v, const std::string& ptr) {
+    check_object(v, ptr, {"position", "target", "up", "fov"});
+    Camera& c = m_scene.camera;
+    c.position = required_field(v, ptr, "position", to_vec3);
+    c.target = required_field(v, ptr, "target", to_vec3);
+    c.up = optional_field(v, ptr, "up", to_direction).value_or(Vec3(0, 1, 0));
+    c.fov = optional_field(v, ptr, "fov", to_number).value_or(45.0f);
+    if (!(c.fov > 0 && c.fov < 180))
+      fail("{} must be in (0, 180) degrees (got {})", child(ptr, "fov"), c.fov);
+    if (!(length_sq(c.target - c.position) > 0)) fail("{}: position and target must differ", ptr);
+    m_scene.has_camera = true;
+  }
+
+  void read_film(const json& v, const std::string& ptr) {
+    check_object(v, ptr, {"width", "height"});
+    for (const char* key : {"width", "height"}) {
+      auto value = optional_field(v, ptr, key, to_int);
+      if (!value) continue;
+      if (*value <= 0) fail("{} must be a positive integer (got {})", child(ptr, key), *value);
+      (std::string_view(key) == "width" ? m_scene.width : m_scene.height) = *value;
+    }
+  }
+
+  void read_shape(const json& v, const std::string& ptr) {
+    if (!v.is_object()) fail("{} must be an object (got {})", ptr, v.type_name());
+    const size_t t0 = m_scene.mesh.triangle_count(), v0 = m_scene.mesh.positions.size();
+    if (v.contains("file")) {
+      if (v.contains("type")) fail("{}: give either \"file\" or \"type\", not both", ptr);
+      read_mesh_file(v, ptr);
+    } else {
+      std::string type = required_field(v, ptr, "type", to_string);
+      SceneBuilder b(m_scene);
+      if (type == "quad") {
+        check_object(v, ptr, {"type", "origin", "edge1", "edge2", "material", "transform"});
+        Vec3 o = required_field(v, ptr, "origin", to_vec3),
+             e1 = required_field(v, ptr, "edge1", to_vec3),
+             e2 = required_field(v, ptr, "edge2", to_vec3);
+        if (!(length_sq(cross(e1, e2)) > 0))
+          fail("{}: edge1 and edge2 must be non-zero and not parallel", ptr);
+        b.quad(o, e1, e2, shape_material(v, ptr));
+      } else if (type == "triangle") {
+        check_object(v, ptr, {"type", "vertices", "material", "transform"});
+        const std::string vp = child(ptr, "vertices");
+        auto it = v.find("vertices");
+        if (it == v.end()) fail("{}: missing field \"vertices\"", ptr);
+        if (!it->is_array() || it->size() != 3) fail("{} must be an array of 3 points", vp);
+        Vec3 p[3];
+        for (size_t i = 0; i < 3; ++i) p[i] = to_vec3((*it)[i], child(vp, i));
+        if (!(length_sq(cross(p[1] - p[0], p[2] - p[0])) > 0))
+          fail("{}: the triangle is degenerate", vp);
+        b.triangle(p[0], p[1], p[2], shape_material(v, ptr));
+      } else if (type == "box") {
+        check_object(v, ptr, {"type", "min", "max", "inward", "skip", "material", "transform"});
+        Vec3 lo = required_field(v, ptr, "min", to_vec3),
+             hi = required_field(v, ptr, "max", to_vec3);
+        if (!(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z))
+          fail("{}: min must be below max on every axis", ptr);
+        unsigned skip = 0;
+        if (auto it = v.find("skip"); it != v.end()) {
+          const std::string sp = child(ptr, "skip");
+          check_array(*it, sp);
+          static const char* kFaces[] = {"-x", "+x", "-y", "+y", "-z", "+z"};
+          for (size_t i = 0; i < it->size(); ++i) {
+            std::string f = to_string((*it)[i], child(sp, i));
+            auto k = std::find(std::begin(kFaces), std::end(kFaces), f);
+            if (k == std::end(kFaces))
+              fail("{}: unknown face '{}' (faces: -x +x -y +y -z +z)", child(sp, i), f);
+            skip |= 1u << (k - std::begin(kFaces));
+          }
+        }
+        b.box(lo, hi, shape_material(v, ptr),
+              optional_field(v, ptr, "inward", to_bool).value_or(false), skip);
+      } else if (type == "sphere") {
+        check_object(
+            v, ptr,
+            {"type", "center", "radius", "subdivisions", "inward", "material", "transform"});
+        Vec3 c = required_field(v, ptr, "center", to_vec3);
+        float r = positive(required_field(v, ptr, "radius", to_number), child(ptr, "radius"));
+        int sub = optional_field(v, ptr, "subdivisions", to_int).value_or(3);
+        if (sub < 0 || sub > 8)
+          fail("{} must be in [0, 8] (got {})", child(ptr, "subdivisions"), sub);
+        b.sphere(c, r, sub, shape_material(v, ptr),
+                 optional_field(v, ptr, "inward", to_bool).value_or(false));
+      } else {
+        fail(
+            "{}: unknown shape type '{}' (rll knows quad, triangle, box, sphere, or {{\"file\": "
+            "...}})",
+            child(ptr, "type"), type);
+      }
+    }
+    if (auto it = v.find("transform"); it != v.end())
+      transform(to_transform(*it, child(ptr, "transform")), t0, v0);
+  }
+
+  void read_mesh_file(const json& v, const std::string& ptr) {
+    check_object(v, ptr, {"file", "material", "material_map", "transform"});
+    const fs::path file = referenced_file(v["file"], child(ptr, "file"));
+    std::string ext = file.extension().string();
+    for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".obj")
+      fail("{}: '{}': rll reads meshes from .obj files", child(ptr, "file"), file.string());
+    const size_t t0 = m_scene.mesh.triangle_count(), m0 = m_scene.materials.size();
+    try {
+      load_obj(file, m_scene);
+    } catch (const Error& e) {
+      fail("{}: {}", ptr, e.what());
+    }
+    const size_t t1 = m_scene.mesh.triangle_count(), m1 = m_scene.materials.size();
+    if (v.contains("material") && v.contains("material_map"))
+      fail("{}: give either \"material\" or \"material_map\", not both", ptr);
+    if (auto it = v.find("material"); it != v.end()) {
+      uint32_t m = material_ref(*it, child(ptr, "material"));
+      std::fill(m_scene.mesh.material.begin() + t0, m_scene.mesh.material.begin() + t1, m);
+    }
+    if (auto it = v.find("material_map"); it != v.end()) {
+      const std::string mp = child(ptr, "material_map");
+      check_is_object(*it, mp);
+      std::map<uint32_t, uint32_t> replace;
+      for (const auto& item : it->items()) {
+        size_t k = m0;
+        while (k < m1 && m_scene.materials[k].name != item.key()) ++k;
+        if (k == m1)
+          fail("{}: {} has no material named \"{}\"", mp, file.filename().string(), item.key());
+        replace[uint32_t(k)] = material_ref(item.value(), child(mp, item.key()));
+      }
+      for (size_t t = t0; t < t1; ++t) {
+        auto r = replace.find(m_scene.mesh.material[t]);
+        if (r != replace.end()) m_scene.mesh.material[t] = r->second;
+      }
+    }
+  }
+
+  // Transforms the triangles from t0 and the vertices from v0 on (a shape just added).
+  void transform(const Affine& x, size_t t0, size_t v0) {
+    Mesh& mesh = m_scene.mesh;
+    for (size_t i = v0; i < mesh.positions.size(); ++i)
+      mesh.positions[i] = x.apply(mesh.positions[i]);
+    for (size_t i = v0; i < mesh.normals.size(); ++i)
+      mesh.normals[i] = x.apply_normal(mesh.normals[i]);
+    // A mirroring transform turns the winding around; flip it back so that front faces (and
+    // one-sided emitters) keep facing the way the transformed normals do.
+    if (x.det() < 0)
+      for (size_t t = t0; t < mesh.triangles.size(); ++t)
+        std::swap(mesh.triangles[t][1], mesh.triangles[t][2]);
+  }
+
+  void read_light(const json& v, const std::string& ptr) {
+    if (!v.is_object()) fail("{} must be an object (got {})", ptr, v.type_name());
+    std::string type = required_field(v, ptr, "type", to_string);
+    if (type == "directional") {
+      check_object(v, ptr, {"type", "direction", "irradiance"});
+      Vec3 d = required_field(v, ptr, "direction",
+                              to_direction);  // normalized by make_directional_light
+      m_scene.lights.push_back(
+          make_directional_light(d, required_field(v, ptr, "irradiance", to_colour)));
+    } else if (type == "point") {
+      check_object(v, ptr, {"type", "position", "intensity"});
+      m_scene.lights.push_back(make_point_light(required_field(v, ptr, "position", to_vec3),
+                                                required_field(v, ptr, "intensity", to_colour)));
+    } else {
+      fail("{}: unknown light type '{}' (rll knows directional, point)", child(ptr, "type"), type);
+    }
+  }
+
+  void read_sky(const json& v, const std::string& ptr) {
+    check_object(v, ptr, {"type", "triangles", "radiance", "up", "radius_scale"});
+    std::string type = required_field(v, ptr, "type", to_string);
+    if (type != "dome")
+      fail("{}: unknown sky type '{}' (rll knows dome)", child(ptr, "type"), type);
+    SkyDome sky;
+    sky.triangles = optional_field(v, ptr, "triangles", to_int).value_or(sky.triangles);
+    if (sky.triangles < 4 || sky.triangles > (1 << 22))
+      fail("{} must be in [4, {}] (got {})", child(ptr, "triangles"), 1 << 22, sky.triangles);
+    sky.radiance = optional_field(v, ptr, "radiance", to_colour).value_or(sky.radiance);
+    sky.up = normalize(optional_field(v, ptr, "up", to_direction).value_or(sky.up));
+    sky.radius_scale = optional_field(v, ptr, "radius_scale", to_number).value_or(sky.radius_scale);
+    if (!(sky.radius_scale > 2))
+      fail("{} must be greater than 2 (got {})", child(ptr, "radius_scale"), sky.radius_scale);
+    m_scene.sky = sky;
+  }
+
+  fs::path m_path;
+  Scene& m_scene;
+  std::map<std::string, uint32_t> m_named;
+  std::map<fs::path, int> m_textures;
+  std::optional<uint32_t> m_default_material;
+};
+
+// nlohmann keeps the last of two equal keys silently; this parser callback makes it an error,
+// tracking the JSON pointer of the object being parsed.
+class DuplicateKeyCheck {
+ public:
+  bool operator()(int, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+      case json::parse_event_t::array_start:
+        m_stack.push_back({event == json::parse_event_t::array_start, 0, {}, {}});
+        break;
+      case json::parse_event_t::key: {
+        Frame& f = m_stack.back();
+        f.key = parsed.get<std::string>();
+        if (!f.keys.insert(f.key).second)
+          fail("duplicate field \"{}\" in {}", f.key, where(pointer()));
+        break;
+      }
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        m_stack.pop_back();
+        if (!m_stack.empty() && m_stack.back().array) ++m_stack.back().index;
+        break;
+      case json::parse_event_t::value:
+        if (!m_stack.empty() && m_stack.back().array) ++m_stack.back().index;
+        break;
+    }
+    return true;
+  }
+
+ private:
+  struct Frame {
+    bool array;
+    size_t index;
+    std::string key;
+    std::set<std::string> keys;
+  };
+  // Pointer of the innermost object (without its current key).
+  std::string pointer() const {
+    std::string p;
+    for (size_t i = 1; i < m_stack.size(); ++i) {
+      const Frame& parent = m_stack[i - 1];
+      p = parent.array ? child(p, parent.index) : child(p, parent.key);
+    }
+    return p;
+  }
+  std::vector<Frame> m_stack;
+};
+
+}  // namespace
+
+void load_json_scene(const fs::path& path, Scene& scene) {
+  const std::string file = path.string();
+  if (!fs::exists(path)) fail("{}: file not found", file);
+  const std::string text = read_text_file(path);
+  json root;
+  try {
+    root = json::parse(text, DuplicateKeyCheck(), true, /*ignore_comments=*/true);
+  } catch (const json::parse_error& e) {
+    // e.byte counts from 1 and points one past the character that failed.
+    size_t at = std::min(text.size(), e.byte > 0 ? size_t(e.byte - 1) : size_t(0));
+    size_t line = 1 + size_t(std::count(text.begin(), text.begin() + long(at), '\n'));
+    size_t newline = at == 0 ? std::string::npos : text.rfind('\n', at - 1);
+    size_t column = at - (newline == std::string::npos ? 0 : newline + 1) + 1;
+    std::string what = e.what();
+    // nlohmann's message starts "[json.exception.parse_error.101] parse error at ...: ".
+    if (size_t k = what.find("]"); k != std::string::npos) {
+      size_t c = what.find(": ", k);
+      if (c != std::string::npos) what = what.substr(c + 2);
+    }
+    fail("{}:{}:{}: invalid JSON: {}", file, line, column, what);
+  } catch (const json::exception& e) {
+    // A number too large for a double: nlohmann gives no position for it.
+    std::string what = e.what();
+    if (size_t k = what.find("] "); k != std::string::npos) what = what.substr(k + 2);
+    fail("{}: invalid JSON: {}", file, what);
+  } catch (const Error& e) {
+    fail("{}: {}", file, e.what());
+  }
+  try {
+    JsonSceneReader(path, scene).read(root);
+  } catch (const Error& e) {
+    fail("{}: {}", file, e.what());
+  }
+}
+
 }  // namespace rll

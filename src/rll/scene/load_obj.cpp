@@ -1,8 +1,445 @@
+// Wavefront OBJ + MTL reader. tinyobjloader parses faces, polygons, groups and materials; a
+// validating scan of the text before it gives errors with line numbers (tinyobjloader reads
+// "nan", "inf" or "abc" as 0 and reports bad indices only at the end of the file) and the
+// vertex data, correctly rounded, so that a saved scene reads back bit for bit.
+#include <tiny_obj_loader.h>
+
+#include <cmath>
+#include <map>
+#include <set>
+#include <sstream>
+#include <streambuf>
+
 #include "rll/core/error.h"
 #include "rll/scene/load.h"
+#include "rll/scene/text_scan.h"
 
 namespace rll {
-void load_obj(const std::filesystem::path& path, Scene& scene) {
-  fail("{}: OBJ files are not supported yet", path.string());
+namespace fs = std::filesystem;
+
+namespace {
+
+// Aluminium's complex index of refraction: a near-white metal for MTL materials that are
+// mirrors (illum 3, or only Ks), so that Ks alone gives the tint.
+const Rgb kTintableEta{1.66f, 0.88f, 0.52f}, kTintableK{9.22f, 6.27f, 4.84f};
+
+// All MTL files an OBJ names, parsed by tinyobjloader into one list.
+struct MtlLibrary {
+  std::vector<tinyobj::material_t> materials;
+  std::map<std::string, int> by_name;
+  std::vector<fs::path> source;  // the MTL file of each material
+  std::vector<bool> has_kd;      // whether the material has a Kd statement
+  std::vector<fs::path> files;   // loaded files, each once
+};
+
+// Vertex data read by the scan, in file order (the order tinyobjloader's indices refer to).
+struct ObjVertices {
+  std::vector<Vec3> positions, normals;
+  std::vector<Vec2> uvs;
+};
+
+[[noreturn]] void fail_line(const std::string& file, size_t line, const std::string& what) {
+  fail("{}:{}: {}", file, line, what);
 }
+
+// Reads up to `max` numbers from `rest` into `out`; fails naming the line on any token that is
+// not a finite number. Returns how many were read.
+int read_numbers(std::string_view rest, float* out, int max, const std::string& file, size_t line,
+                 std::string_view what) {
+  int n = 0;
+  std::string_view tok;
+  while (next_token(rest, tok)) {
+    float v = 0;
+    switch (parse_float(tok, v)) {
+      case NumberStatus::Ok:
+        break;
+      case NumberStatus::NonFinite:
+        fail_line(file, line, fmt::format("{} '{}' is not a finite number", what, tok));
+      case NumberStatus::Malformed:
+        fail_line(file, line, fmt::format("{} '{}' is not a number", what, tok));
+    }
+    if (n >= max)
+      fail_line(file, line, fmt::format("too many values for {} (at most {})", what, max));
+    out[n++] = v;
+  }
+  return n;
+}
+
+// Validates an MTL file's numeric statements and returns its text with one-value colours
+// ("Kd 0.5") spelt out as three, which the MTL format allows and tinyobjloader does not read.
+// Adds to `with_kd` the materials that have a Kd (tinyobjloader makes a missing one 0.6 when
+// there is a map_Kd, 0 otherwise).
+std::string normalize_mtl(std::string_view text, const std::string& file,
+                          std::set<std::string>& with_kd) {
+  static const char* kColours[] = {"Ka", "Kd", "Ks", "Ke", "Tf"};
+  static const char* kScalars[] = {"Ns", "Ni", "d",   "Tr",    "Pr",    "Pm",
+                                   "Ps", "Pc", "Pcr", "aniso", "anisor"};
+  std::string out;
+  out.reserve(text.size() + 64);
+  TextLines lines(text);
+  std::string_view line;
+  std::string material;
+  while (lines.next(line)) {
+    std::string_view rest = line, kw;
+    std::string rewritten;
+    if (next_token(rest, kw)) {
+      if (kw == "newmtl") {
+        // tinyobjloader names the material by the rest of the line after one separator.
+        size_t at = line.find("newmtl") + 7;
+        material = at <= line.size() ? std::string(line.substr(at)) : std::string();
+      }
+      if (kw == "Kd") with_kd.insert(material);
+      bool colour = std::find(std::begin(kColours), std::end(kColours), kw) != std::end(kColours);
+      bool scalar = std::find(std::begin(kScalars), std::end(kScalars), kw) != std::end(kScalars);
+      if (colour) {
+        std::string_view probe = rest, first;
+        if (next_token(probe, first) && (first == "spectral" || first == "xyz"))
+          fail_line(file, lines.number(),
+                    fmt::format("'{} {}' colours are not supported (use r g b)", kw, first));
+        float v[3];
+        int n = read_numbers(rest, v, 3, file, lines.number(), kw);
+        if (n != 1 && n != 3)
+          fail_line(file, lines.number(), fmt::format("{} needs 3 values (r g b) or 1", kw));
+        for (int i = 0; i < n; ++i)
+          if (v[i] < 0) fail_line(file, lines.number(), fmt::format("{} must not be negative", kw));
+        if (n == 1) rewritten = fmt::format("{} {} {} {}", kw, v[0], v[0], v[0]);
+      } else if (scalar) {
+        float v;
+        if (read_numbers(rest, &v, 1, file, lines.number(), kw) != 1)
+          fail_line(file, lines.number(), fmt::format("{} needs one value", kw));
+        if (kw == "Ns" && v < 0) fail_line(file, lines.number(), "Ns must not be negative");
+      } else if (kw == "illum") {
+        std::string_view tok;
+        long v;
+        if (!next_token(rest, tok) || !parse_long(tok, v))
+          fail_line(file, lines.number(), "illum needs an integer");
+      }
+    }
+    if (rewritten.empty())
+      out.append(line);
+    else
+      out += rewritten;
+    out += '\n';
+  }
+  return out;
+}
+
+void load_mtl(const fs::path& mtl, const std::string& obj_file, size_t obj_line,
+              std::string_view name, MtlLibrary& lib) {
+  if (std::find(lib.files.begin(), lib.files.end(), mtl) != lib.files.end()) return;
+  if (!fs::is_regular_file(mtl))
+    fail_line(obj_file, obj_line,
+              fmt::format("material library '{}' not found ({})", name, mtl.string()));
+  std::set<std::string> with_kd;
+  std::string text = normalize_mtl(read_text_file(mtl), mtl.string(), with_kd);
+  std::istringstream in(text);
+  std::string warn, err;
+  const size_t first = lib.materials.size();
+  tinyobj::LoadMtl(&lib.by_name, &lib.materials, &in, &warn, &err);
+  if (!err.empty()) fail("{}: {}", mtl.string(), err);
+  lib.source.resize(lib.materials.size(), mtl);
+  for (size_t i = first; i < lib.materials.size(); ++i)
+    lib.has_kd.push_back(with_kd.count(lib.materials[i].name) > 0);
+  lib.files.push_back(mtl);
+}
+
+// Highest 1-based index a face used, and where: positive indices may refer to vertices defined
+// later in the file, so they are checked against the final counts.
+struct IndexUse {
+  long max = 0;
+  size_t line = 0;
+};
+
+// Checks one face index: 0 is never valid, a negative one counts back from the vertices read so
+// far, a positive one is checked at the end.
+void check_index(long idx, size_t count, IndexUse& use, const std::string& file, size_t line,
+                 const char* what) {
+  if (idx == 0) fail_line(file, line, fmt::format("{} index 0 (OBJ indices start at 1)", what));
+  if (idx < 0) {
+    if (size_t(-idx) > count)
+      fail_line(file, line,
+                fmt::format("{} index {} reaches before the first {} ({} so far)", what, idx, what,
+                            count));
+  } else if (idx > use.max) {
+    use.max = idx;
+    use.line = line;
+  }
+}
+
+// The validating scan: vertices, normals and uvs into `v`, face indices and material names
+// checked, the MTL files read into `lib`.
+void scan_obj(std::string_view text, const fs::path& path, ObjVertices& v, MtlLibrary& lib) {
+  const std::string file = path.string();
+  IndexUse use_v, use_vt, use_vn;
+  TextLines lines(text);
+  std::string_view line;
+  while (lines.next(line)) {
+    std::string_view rest = line, kw;
+    if (!next_token(rest, kw) || kw[0] == '#') continue;
+    const size_t ln = lines.number();
+    if (kw == "v") {
+      float c[7];  // x y z, then w or r g b
+      if (read_numbers(rest, c, 7, file, ln, "vertex coordinate") < 3)
+        fail_line(file, ln, "a vertex needs 3 coordinates");
+      v.positions.push_back({c[0], c[1], c[2]});
+    } else if (kw == "vn") {
+      float c[3];
+      if (read_numbers(rest, c, 3, file, ln, "normal coordinate") != 3)
+        fail_line(file, ln, "a normal needs 3 coordinates");
+      v.normals.push_back({c[0], c[1], c[2]});
+    } else if (kw == "vt") {
+      float c[3] = {0, 0, 0};
+      if (read_numbers(rest, c, 3, file, ln, "texture coordinate") < 1)
+        fail_line(file, ln, "a texture coordinate needs at least 1 value");
+      v.uvs.push_back({c[0], c[1]});
+    } else if (kw == "f") {
+      std::string_view tok;
+      int corners = 0;
+      while (next_token(rest, tok)) {
+        ++corners;
+        std::string_view parts[3];
+        int np = 0;
+        for (size_t b = 0;; ++np) {
+          size_t e = tok.find('/', b);
+          if (np == 3) fail_line(file, ln, fmt::format("malformed face vertex '{}'", tok));
+          parts[np] = tok.substr(b, e == std::string_view::npos ? std::string_view::npos : e - b);
+          if (e == std::string_view::npos) {
+            ++np;
+            break;
+          }
+          b = e + 1;
+        }
+        long idx;
+        if (!parse_long(parts[0], idx))
+          fail_line(file, ln, fmt::format("malformed face vertex '{}'", tok));
+        check_index(idx, v.positions.size(), use_v, file, ln, "vertex");
+        if (np >= 2 && !parts[1].empty()) {
+          if (!parse_long(parts[1], idx))
+            fail_line(file, ln, fmt::format("malformed face vertex '{}'", tok));
+          check_index(idx, v.uvs.size(), use_vt, file, ln, "texture coordinate");
+        }
+        if (np == 3) {
+          if (!parse_long(parts[2], idx))
+            fail_line(file, ln, fmt::format("malformed face vertex '{}'", tok));
+          check_index(idx, v.normals.size(), use_vn, file, ln, "normal");
+        }
+      }
+      if (corners < 3)
+        fail_line(file, ln, fmt::format("a face needs at least 3 vertices (got {})", corners));
+      if (corners > 255)
+        fail_line(file, ln, fmt::format("a face with {} vertices (at most 255)", corners));
+    } else if (kw == "mtllib") {
+      // Names separated by spaces; a backslash escapes a space inside one (as tinyobjloader reads
+      // them).
+      std::string name;
+      auto flush = [&] {
+        if (!name.empty()) load_mtl(path.parent_path() / name, file, ln, name, lib);
+        name.clear();
+      };
+      std::string_view names = rest;
+      while (!names.empty() && (names[0] == ' ' || names[0] == '\t')) names.remove_prefix(1);
+      for (size_t i = 0; i < names.size(); ++i) {
+        if (names[i] == '\\' && i + 1 < names.size() && names[i + 1] == ' ')
+          name += names[++i];
+        else if (names[i] == ' ' || names[i] == '\t')
+          flush();
+        else
+          name += names[i];
+      }
+      flush();
+    } else if (kw == "usemtl") {
+      std::string_view name;
+      if (!next_token(rest, name)) fail_line(file, ln, "usemtl needs a material name");
+      if (!lib.by_name.count(std::string(name))) {
+        std::string libs;
+        for (const auto& f : lib.files) libs += (libs.empty() ? "" : ", ") + f.filename().string();
+        fail_line(file, ln,
+                  libs.empty() ? fmt::format("usemtl '{}' but no mtllib was read before it", name)
+                               : fmt::format("usemtl '{}': no such material in {}", name, libs));
+      }
+    }
+  }
+  auto check_max = [&](const IndexUse& use, size_t count, const char* what) {
+    if (size_t(use.max) > count)
+      fail_line(file, use.line,
+                fmt::format("{} index {} is out of range (the file has {})", what, use.max, count));
+  };
+  check_max(use_v, v.positions.size(), "vertex");
+  check_max(use_vt, v.uvs.size(), "texture coordinate");
+  check_max(use_vn, v.normals.size(), "normal");
+}
+
+// Hands tinyobjloader the MTL files the scan already read, all of them at the first mtllib.
+class PreloadedMaterials : public tinyobj::MaterialReader {
+ public:
+  explicit PreloadedMaterials(const MtlLibrary& lib) : m_lib(lib) {}
+  bool operator()(const std::string&, std::vector<tinyobj::material_t>* materials,
+                  std::map<std::string, int>* by_name, std::string*, std::string*) override {
+    if (!m_done) {
+      *materials = m_lib.materials;
+      *by_name = m_lib.by_name;
+      m_done = true;
+    }
+    return true;
+  }
+
+ private:
+  const MtlLibrary& m_lib;
+  bool m_done = false;
+};
+
+// Lets tinyobjloader read the text already in memory without a copy.
+struct ViewBuffer : std::streambuf {
+  explicit ViewBuffer(const std::string& s) {
+    char* p = const_cast<char*>(s.data());
+    setg(p, p, p + s.size());
+  }
+};
+
+Rgb rgb(const tinyobj::real_t* c) {
+  return Rgb(float(c[0]), float(c[1]), float(c[2]));
+}
+
+// The MTL -> Material mapping documented in docs/scene-format.md.
+Material convert_material(const tinyobj::material_t& t, bool has_kd, const fs::path& mtl,
+                          Scene& scene, std::map<fs::path, int>& textures) {
+  Material m;
+  m.name = t.name;
+  Rgb kd = has_kd ? rgb(t.diffuse) : Rgb(0), ks = rgb(t.specular);
+  m.emission = rgb(t.emission);
+  if (!t.diffuse_texname.empty()) {
+    fs::path tex = mtl.parent_path() / t.diffuse_texname;
+    if (!fs::exists(tex) && t.diffuse_texname.find('\\') != std::string::npos) {
+      std::string unix_name = t.diffuse_texname;
+      std::replace(unix_name.begin(), unix_name.end(), '\\', '/');
+      tex = mtl.parent_path() / unix_name;
+    }
+    tex = tex.lexically_normal();
+    auto it = textures.find(tex);
+    if (it == textures.end()) {
+      if (!fs::is_regular_file(tex))
+        fail("{}: material '{}': texture '{}' not found ({})", mtl.string(), t.name,
+             t.diffuse_texname, tex.string());
+      try {
+        scene.textures.push_back(read_image(tex));
+      } catch (const Error& e) {
+        fail("{}: material '{}': {}", mtl.string(), t.name, e.what());
+      }
+      it = textures.emplace(tex, int(scene.textures.size() - 1)).first;
+    }
+    m.albedo_texture = it->second;
+    if (is_black(kd))
+      kd = Rgb(1);  // the texture multiplies Kd; a missing or black Kd must not hide it
+  }
+  float alpha = std::sqrt(2.0f / (float(t.shininess) + 2.0f));
+  if (t.illum == 3 || (is_black(kd) && !is_black(ks))) {
+    m.type = MaterialType::Conductor;
+    m.specular = ks;
+    m.eta = kTintableEta;
+    m.k = kTintableK;
+    m.roughness = alpha;
+  } else if (!is_black(ks)) {
+    m.type = MaterialType::Plastic;
+    m.albedo = kd;
+    m.specular = ks;
+    m.roughness = alpha;
+    m.ior = t.ior > 1 ? float(t.ior) : 1.5f;
+  } else {
+    m.albedo = kd;
+  }
+  return m;
+}
+
+}  // namespace
+
+void load_obj(const fs::path& path, Scene& scene) {
+  const std::string file = path.string();
+  if (!fs::exists(path)) fail("{}: file not found", file);
+  const std::string text = read_text_file(path);
+
+  ObjVertices v;
+  MtlLibrary lib;
+  scan_obj(text, path, v, lib);
+
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> materials;
+  std::string warn, err;
+  ViewBuffer buffer(text);
+  std::istream in(&buffer);
+  PreloadedMaterials reader(lib);
+  bool ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, &reader, true, false);
+  if (!ok || !err.empty()) {
+    while (!err.empty() && err.back() == '\n') err.pop_back();
+    fail("{}: {}", file, err.empty() ? "cannot parse the file" : err);
+  }
+  if (attrib.vertices.size() != 3 * v.positions.size() ||
+      attrib.normals.size() != 3 * v.normals.size() || attrib.texcoords.size() != 2 * v.uvs.size())
+    fail("{}: tinyobjloader read {} vertices where rll counted {}", file,
+         attrib.vertices.size() / 3, v.positions.size());
+
+  // OBJ indexes positions, normals and uvs separately; the mesh has one index per vertex. Each
+  // distinct (position, normal, uv) triple becomes one vertex, found through a short chain of
+  // the variants of its position (almost always one or two), so no hashing is needed.
+  Mesh mesh;
+  const bool has_normals = !v.normals.empty(), has_uvs = !v.uvs.empty();
+  std::vector<int32_t> first_variant(v.positions.size(), -1), next_variant;
+  std::vector<std::array<int32_t, 2>> variant_key;  // (normal, uv) of each mesh vertex
+  auto vertex = [&](const tinyobj::index_t& idx) {
+    int32_t k = first_variant[size_t(idx.vertex_index)];
+    for (; k >= 0; k = next_variant[size_t(k)])
+      if (variant_key[size_t(k)][0] == idx.normal_index &&
+          variant_key[size_t(k)][1] == idx.texcoord_index)
+        return uint32_t(k);
+    k = int32_t(mesh.positions.size());
+    mesh.positions.push_back(v.positions[size_t(idx.vertex_index)]);
+    if (has_normals)
+      mesh.normals.push_back(idx.normal_index >= 0 ? v.normals[size_t(idx.normal_index)] : Vec3(0));
+    if (has_uvs)
+      mesh.uvs.push_back(idx.texcoord_index >= 0 ? v.uvs[size_t(idx.texcoord_index)] : Vec2{});
+    variant_key.push_back({idx.normal_index, idx.texcoord_index});
+    next_variant.push_back(first_variant[size_t(idx.vertex_index)]);
+    first_variant[size_t(idx.vertex_index)] = k;
+    return uint32_t(k);
+  };
+
+  // Local material ids: the MTL materials in order, then one default for faces without usemtl.
+  const uint32_t default_material = uint32_t(lib.materials.size());
+  bool uses_default = false;
+  size_t triangle_total = 0;
+  for (const auto& s : shapes) triangle_total += s.mesh.num_face_vertices.size();
+  mesh.triangles.reserve(triangle_total);
+  mesh.material.reserve(triangle_total);
+  mesh.positions.reserve(v.positions.size());
+  for (const auto& s : shapes) {
+    size_t offset = 0;
+    for (size_t f = 0; f < s.mesh.num_face_vertices.size(); ++f) {
+      const size_t n = s.mesh.num_face_vertices[f];
+      if (n == 3) {
+        mesh.triangles.push_back({vertex(s.mesh.indices[offset]),
+                                  vertex(s.mesh.indices[offset + 1]),
+                                  vertex(s.mesh.indices[offset + 2])});
+        int mat = s.mesh.material_ids[f];
+        if (mat < 0) uses_default = true;
+        mesh.material.push_back(mat < 0 ? default_material : uint32_t(mat));
+      }
+      offset += n;
+    }
+  }
+  mesh.light.assign(mesh.triangles.size(), -1);
+  if (mesh.triangles.empty()) fail("{}: the file has no faces", file);
+
+  const uint32_t material_offset = uint32_t(scene.materials.size());
+  std::map<fs::path, int> textures;
+  for (size_t i = 0; i < lib.materials.size(); ++i)
+    scene.materials.push_back(
+        convert_material(lib.materials[i], lib.has_kd[i], lib.source[i], scene, textures));
+  if (uses_default) {
+    Material m;
+    m.name = "default";
+    scene.materials.push_back(m);
+  }
+  scene.mesh.append(mesh, material_offset);
+}
+
 }  // namespace rll

@@ -1,0 +1,18 @@
+// Writes a scene in rll's JSON format, its geometry in one OBJ + MTL beside it, so that
+// load_scene reads the same scene back (used by `rll convert`).
+#pragma once
+
+#include <filesystem>
+
+#include "rll/scene/scene.h"
+
+namespace rll {
+
+// Writes `json` (which must end in .json) and, beside it, <stem>.obj, <stem>.mtl and each used
+// texture as <stem>_tex<N>.exr, every file atomically. The sky dome is written as the "sky"
+// entry, not as triangles; point and directional lights as "lights"; triangle lights come back
+// from their emissive materials. Materials are written exactly in the JSON and approximately in
+// the MTL (for other programs). An animation is not saved: the scene is written as it is now.
+void save_json_scene(const Scene& scene, const std::filesystem::path& json);
+
+}  // namespace rll

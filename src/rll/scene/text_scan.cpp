@@ -1,0 +1,84 @@
+#include "rll/scene/text_scan.h"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "rll/core/error.h"
+
+namespace rll {
+
+std::string read_text_file(const std::filesystem::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) fail("{}: cannot open the file", path.string());
+  std::ostringstream s;
+  s << f.rdbuf();
+  if (f.bad()) fail("{}: read error", path.string());
+  return std::move(s).str();
+}
+
+bool TextLines::next(std::string_view& line) {
+  if (m_pos >= m_text.size()) return false;
+  size_t end = m_text.find_first_of("\r\n", m_pos);
+  if (end == std::string_view::npos) end = m_text.size();
+  line = m_text.substr(m_pos, end - m_pos);
+  m_pos = end;
+  if (m_pos < m_text.size()) {
+    if (m_text[m_pos] == '\r' && m_pos + 1 < m_text.size() && m_text[m_pos + 1] == '\n') ++m_pos;
+    ++m_pos;
+  }
+  ++m_number;
+  return true;
+}
+
+bool next_token(std::string_view& rest, std::string_view& token) {
+  size_t b = rest.find_first_not_of(" \t");
+  if (b == std::string_view::npos) {
+    rest = {};
+    return false;
+  }
+  size_t e = rest.find_first_of(" \t", b);
+  if (e == std::string_view::npos) e = rest.size();
+  token = rest.substr(b, e - b);
+  rest = rest.substr(e);
+  return true;
+}
+
+namespace {
+std::string_view strip_plus(std::string_view s) {
+  // from_chars rejects a leading '+', which OBJ writers do emit.
+  if (s.size() > 1 && s[0] == '+' && s[1] != '-' && s[1] != '+') s.remove_prefix(1);
+  return s;
+}
+}  // namespace
+
+NumberStatus parse_float(std::string_view s, float& out) {
+  s = strip_plus(s);
+  const char *b = s.data(), *e = s.data() + s.size();
+  auto r = std::from_chars(b, e, out);
+  if (r.ec == std::errc() && r.ptr == e)
+    return std::isfinite(out) ? NumberStatus::Ok : NumberStatus::NonFinite;
+  if (r.ec != std::errc::result_out_of_range || r.ptr != e) return NumberStatus::Malformed;
+  // Out of float range: either an overflow (not finite) or an underflow, which rounds to a
+  // denormal or zero like any other parser would.
+  long double wide = 0;
+  auto rw = std::from_chars(b, e, wide);
+  if (rw.ec == std::errc()) {
+    out = float(wide);
+    return std::isfinite(out) ? NumberStatus::Ok : NumberStatus::NonFinite;
+  }
+  if (s.find("e-") != std::string_view::npos || s.find("E-") != std::string_view::npos) {
+    out = 0;
+    return NumberStatus::Ok;
+  }
+  return NumberStatus::NonFinite;
+}
+
+bool parse_long(std::string_view s, long& out) {
+  s = strip_plus(s);
+  auto r = std::from_chars(s.data(), s.data() + s.size(), out);
+  return r.ec == std::errc() && r.ptr == s.data() + s.size();
+}
+
+}  // namespace rll
