@@ -60,6 +60,35 @@ const char* kQuadObj =
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
+// Mesh::append, which every loader goes through
+
+TEST(MeshAppend, KeepsPerVertexArraysEmptyOrFull) {
+  auto tri = [](bool normals, bool uvs) {
+    Mesh m;
+    m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+    if (normals) m.normals.assign(3, Vec3(0, 0, 1));
+    if (uvs) m.uvs.assign(3, Vec2{0.5f, 0.5f});
+    m.triangles = {{0, 1, 2}};
+    m.material = {0};
+    m.light = {-1};
+    return m;
+  };
+  Mesh a = tri(false, false);
+  a.append(tri(false, false), 0);
+  EXPECT_TRUE(a.normals.empty());  // no uvs anywhere must stay no uvs (barycentric fallback)
+  EXPECT_TRUE(a.uvs.empty());
+  a.append(tri(true, true), 0);
+  ASSERT_EQ(a.normals.size(), 9u);
+  ASSERT_EQ(a.uvs.size(), 9u);
+  EXPECT_EQ(a.normals[0], Vec3(0));
+  EXPECT_EQ(a.normals[8], Vec3(0, 0, 1));
+  a.append(tri(false, false), 0);
+  EXPECT_EQ(a.normals.size(), 12u);
+  EXPECT_EQ(a.uvs.size(), 12u);
+  EXPECT_EQ(a.triangles[3][0], 9u);
+}
+
+// ---------------------------------------------------------------------------------------------
 // OBJ / MTL
 
 TEST(ObjLoader, TriangulatesPolygonsAndKeepsCounts) {

@@ -18,16 +18,14 @@ const char* material_type_name(MaterialType t) {
 
 void Mesh::append(const Mesh& o, uint32_t material_offset) {
   uint32_t base = uint32_t(positions.size());
-  bool had_normals = !normals.empty() || positions.empty();
-  bool had_uvs = !uvs.empty() || positions.empty();
   // Keep the per-vertex arrays either empty or full: pad with "none" where one side lacks them.
   if (!o.normals.empty() && normals.empty() && !positions.empty()) normals.assign(positions.size(), Vec3(0));
   if (!o.uvs.empty() && uvs.empty() && !positions.empty()) uvs.assign(positions.size(), Vec2{});
   positions.insert(positions.end(), o.positions.begin(), o.positions.end());
   if (!o.normals.empty()) normals.insert(normals.end(), o.normals.begin(), o.normals.end());
-  else if (!normals.empty() || !had_normals) normals.resize(positions.size(), Vec3(0));
+  else if (!normals.empty()) normals.resize(positions.size(), Vec3(0));
   if (!o.uvs.empty()) uvs.insert(uvs.end(), o.uvs.begin(), o.uvs.end());
-  else if (!uvs.empty() || !had_uvs) uvs.resize(positions.size(), Vec2{});
+  else if (!uvs.empty()) uvs.resize(positions.size(), Vec2{});
   for (const auto& t : o.triangles) triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
   for (uint32_t m : o.material) material.push_back(m + material_offset);
   light.insert(light.end(), o.light.begin(), o.light.end());
