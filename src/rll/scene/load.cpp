@@ -12,6 +12,35 @@ std::string lower_extension(const fs::path& p) {
   for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
   return e;
 }
+
+// Drops the materials no triangle uses and the textures no remaining material uses: an OBJ
+// brings its whole MTL, and a JSON scene may replace some of those materials.
+void drop_unused_materials(Scene& scene) {
+  std::vector<int64_t> material_id(scene.materials.size(), -1);
+  for (uint32_t m : scene.mesh.material)
+    if (m < material_id.size()) material_id[m] = 0;
+  std::vector<Material> kept;
+  for (size_t m = 0; m < scene.materials.size(); ++m)
+    if (material_id[m] == 0) {
+      material_id[m] = int64_t(kept.size());
+      kept.push_back(std::move(scene.materials[m]));
+    }
+  for (auto& m : scene.mesh.material)
+    if (m < material_id.size()) m = uint32_t(material_id[m]);
+  std::vector<int> texture_id(scene.textures.size(), -1);
+  std::vector<Image> textures;
+  for (auto& m : kept) {
+    if (m.albedo_texture < 0 || m.albedo_texture >= int(scene.textures.size())) continue;
+    int& id = texture_id[size_t(m.albedo_texture)];
+    if (id < 0) {
+      id = int(textures.size());
+      textures.push_back(std::move(scene.textures[size_t(m.albedo_texture)]));
+    }
+    m.albedo_texture = id;
+  }
+  scene.materials = std::move(kept);
+  scene.textures = std::move(textures);
+}
 }  // namespace
 
 Scene load_scene(const std::string& spec, const LoadOptions& options) {
@@ -28,6 +57,7 @@ Scene load_scene(const std::string& spec, const LoadOptions& options) {
     if (ext == ".json") load_json_scene(path, scene);
     else if (ext == ".obj") load_obj(path, scene);
     else fail("{}: unknown scene format '{}' (rll reads .json, .obj and builtin:NAME)", spec, ext);
+    drop_unused_materials(scene);
   }
   if (options.width < 0 || options.height < 0) fail("resolution must be positive");
   if (options.width > 0) scene.width = options.width;

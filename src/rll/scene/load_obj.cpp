@@ -350,6 +350,75 @@ Material convert_material(const tinyobj::material_t& t, bool has_kd, const fs::p
   return m;
 }
 
+// OBJ indexes positions, normals and uvs separately; the mesh has one index per vertex. Each
+// distinct (position, normal, uv) triple becomes one vertex, found through a short chain of the
+// variants of its position (almost always one or two), so no hashing is needed. Vertices are
+// numbered in the file's order of positions (variants of one position in order of first use),
+// so that a file written from a mesh reads back with the same numbering. Local material ids:
+// the MTL materials in order, `default_material` for faces without usemtl.
+Mesh build_mesh(const ObjVertices& v, const std::vector<tinyobj::shape_t>& shapes,
+                uint32_t default_material, bool& uses_default) {
+  std::vector<int32_t> first_variant(v.positions.size(), -1), next_variant;
+  std::vector<uint32_t> variant_count(v.positions.size(), 0), variant_rank;
+  std::vector<int32_t> variant_position;
+  std::vector<std::array<int32_t, 2>> variant_key;  // (normal, uv)
+  auto variant = [&](const tinyobj::index_t& idx) {
+    const size_t p = size_t(idx.vertex_index);
+    int32_t k = first_variant[p];
+    for (; k >= 0; k = next_variant[size_t(k)])
+      if (variant_key[size_t(k)][0] == idx.normal_index &&
+          variant_key[size_t(k)][1] == idx.texcoord_index)
+        return uint32_t(k);
+    k = int32_t(variant_key.size());
+    variant_key.push_back({idx.normal_index, idx.texcoord_index});
+    variant_position.push_back(int32_t(p));
+    variant_rank.push_back(variant_count[p]++);
+    next_variant.push_back(first_variant[p]);
+    first_variant[p] = k;
+    return uint32_t(k);
+  };
+
+  Mesh mesh;
+  size_t triangle_total = 0;
+  for (const auto& s : shapes) triangle_total += s.mesh.num_face_vertices.size();
+  mesh.triangles.reserve(triangle_total);
+  mesh.material.reserve(triangle_total);
+  for (const auto& s : shapes) {
+    size_t offset = 0;
+    for (size_t f = 0; f < s.mesh.num_face_vertices.size(); ++f) {
+      const size_t n = s.mesh.num_face_vertices[f];
+      if (n == 3) {  // always, since tinyobjloader triangulates
+        const auto* idx = &s.mesh.indices[offset];
+        mesh.triangles.push_back({variant(idx[0]), variant(idx[1]), variant(idx[2])});
+        int mat = s.mesh.material_ids[f];
+        if (mat < 0) uses_default = true;
+        mesh.material.push_back(mat < 0 ? default_material : uint32_t(mat));
+      }
+      offset += n;
+    }
+  }
+
+  // Final vertex id = (variants of all earlier positions) + rank among its position's variants.
+  std::vector<uint32_t> start(v.positions.size() + 1, 0);
+  for (size_t p = 0; p < v.positions.size(); ++p) start[p + 1] = start[p] + variant_count[p];
+  const size_t nv = variant_key.size();
+  std::vector<uint32_t> final_id(nv);
+  mesh.positions.resize(nv);
+  if (!v.normals.empty()) mesh.normals.resize(nv);
+  if (!v.uvs.empty()) mesh.uvs.resize(nv);
+  for (size_t k = 0; k < nv; ++k) {
+    const uint32_t id = start[size_t(variant_position[k])] + variant_rank[k];
+    final_id[k] = id;
+    mesh.positions[id] = v.positions[size_t(variant_position[k])];
+    const auto [n, t] = variant_key[k];
+    if (!v.normals.empty()) mesh.normals[id] = n >= 0 ? v.normals[size_t(n)] : Vec3(0);
+    if (!v.uvs.empty()) mesh.uvs[id] = t >= 0 ? v.uvs[size_t(t)] : Vec2{};
+  }
+  for (auto& tri : mesh.triangles)
+    for (auto& i : tri) i = final_id[i];
+  return mesh;
+}
+
 }  // namespace
 
 void load_obj(const fs::path& path, Scene& scene) {
@@ -378,54 +447,9 @@ void load_obj(const fs::path& path, Scene& scene) {
     fail("{}: tinyobjloader read {} vertices where rll counted {}", file,
          attrib.vertices.size() / 3, v.positions.size());
 
-  // OBJ indexes positions, normals and uvs separately; the mesh has one index per vertex. Each
-  // distinct (position, normal, uv) triple becomes one vertex, found through a short chain of
-  // the variants of its position (almost always one or two), so no hashing is needed.
-  Mesh mesh;
-  const bool has_normals = !v.normals.empty(), has_uvs = !v.uvs.empty();
-  std::vector<int32_t> first_variant(v.positions.size(), -1), next_variant;
-  std::vector<std::array<int32_t, 2>> variant_key;  // (normal, uv) of each mesh vertex
-  auto vertex = [&](const tinyobj::index_t& idx) {
-    int32_t k = first_variant[size_t(idx.vertex_index)];
-    for (; k >= 0; k = next_variant[size_t(k)])
-      if (variant_key[size_t(k)][0] == idx.normal_index &&
-          variant_key[size_t(k)][1] == idx.texcoord_index)
-        return uint32_t(k);
-    k = int32_t(mesh.positions.size());
-    mesh.positions.push_back(v.positions[size_t(idx.vertex_index)]);
-    if (has_normals)
-      mesh.normals.push_back(idx.normal_index >= 0 ? v.normals[size_t(idx.normal_index)] : Vec3(0));
-    if (has_uvs)
-      mesh.uvs.push_back(idx.texcoord_index >= 0 ? v.uvs[size_t(idx.texcoord_index)] : Vec2{});
-    variant_key.push_back({idx.normal_index, idx.texcoord_index});
-    next_variant.push_back(first_variant[size_t(idx.vertex_index)]);
-    first_variant[size_t(idx.vertex_index)] = k;
-    return uint32_t(k);
-  };
-
-  // Local material ids: the MTL materials in order, then one default for faces without usemtl.
   const uint32_t default_material = uint32_t(lib.materials.size());
   bool uses_default = false;
-  size_t triangle_total = 0;
-  for (const auto& s : shapes) triangle_total += s.mesh.num_face_vertices.size();
-  mesh.triangles.reserve(triangle_total);
-  mesh.material.reserve(triangle_total);
-  mesh.positions.reserve(v.positions.size());
-  for (const auto& s : shapes) {
-    size_t offset = 0;
-    for (size_t f = 0; f < s.mesh.num_face_vertices.size(); ++f) {
-      const size_t n = s.mesh.num_face_vertices[f];
-      if (n == 3) {
-        mesh.triangles.push_back({vertex(s.mesh.indices[offset]),
-                                  vertex(s.mesh.indices[offset + 1]),
-                                  vertex(s.mesh.indices[offset + 2])});
-        int mat = s.mesh.material_ids[f];
-        if (mat < 0) uses_default = true;
-        mesh.material.push_back(mat < 0 ? default_material : uint32_t(mat));
-      }
-      offset += n;
-    }
-  }
+  Mesh mesh = build_mesh(v, shapes, default_material, uses_default);
   mesh.light.assign(mesh.triangles.size(), -1);
   if (mesh.triangles.empty()) fail("{}: the file has no faces", file);
 

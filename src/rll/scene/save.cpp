@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -11,7 +12,8 @@
 
 namespace rll {
 namespace fs = std::filesystem;
-using json = nlohmann::json;
+// Ordered, so that the file reads camera, film, materials, shapes, lights, sky, and "type" first.
+using json = nlohmann::ordered_json;
 
 namespace {
 
@@ -89,6 +91,30 @@ void append_mtl(std::string& out, const std::string& name, const Material& m,
   out += "\n";
 }
 
+// JSON as a person would write it: one field a line, arrays of numbers on one line.
+void write_pretty(std::string& out, const json& j, int indent) {
+  const std::string pad(size_t(indent) + 2, ' ');
+  if (j.is_array() &&
+      std::all_of(j.begin(), j.end(), [](const json& e) { return e.is_primitive(); })) {
+    out += '[';
+    for (size_t i = 0; i < j.size(); ++i) out += (i ? ", " : "") + j[i].dump();
+    out += ']';
+  } else if (j.is_structured() && !j.empty()) {
+    out += j.is_object() ? "{\n" : "[\n";
+    bool first = true;
+    for (const auto& item : j.items()) {
+      out += first ? "" : ",\n";
+      first = false;
+      out += pad;
+      if (j.is_object()) out += json(item.key()).dump() + ": ";
+      write_pretty(out, item.value(), indent + 2);
+    }
+    out += "\n" + std::string(size_t(indent), ' ') + (j.is_object() ? "}" : "]");
+  } else {
+    out += j.dump();
+  }
+}
+
 }  // namespace
 
 void save_json_scene(const Scene& scene, const fs::path& json_path) {
@@ -161,54 +187,64 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
       material_map[names[i]] = names[i];
     }
 
-    // Vertices in order of first use, so that reading the OBJ back (which numbers vertices in
-    // that order) gives the same mesh.
-    std::vector<int64_t> remap(mesh.positions.size(), -1);
-    std::vector<uint32_t> order;
-    order.reserve(mesh.positions.size());
+    // The vertices the written triangles use, in the mesh's order: the OBJ reader numbers
+    // vertices in the order of the file's positions, so the mesh reads back numbered the same.
+    std::vector<bool> used(mesh.positions.size(), false);
     for (size_t t = 0; t < mesh.triangle_count(); ++t)
       if (written(t))
-        for (uint32_t v : mesh.triangles[t])
-          if (remap[v] < 0) {
-            remap[v] = int64_t(order.size());
-            order.push_back(v);
-          }
+        for (uint32_t v : mesh.triangles[t]) used[v] = true;
+    std::vector<int64_t> remap(mesh.positions.size(), -1);
+    std::vector<uint32_t> order;
+    for (size_t v = 0; v < used.size(); ++v)
+      if (used[v]) {
+        remap[v] = int64_t(order.size());
+        order.push_back(uint32_t(v));
+      }
+    // A zero normal means "none" and a zero uv is the default: those are left out (other
+    // programs read "vn 0 0 0" as a broken normal), and read back as zero all the same.
     const bool normals = !mesh.normals.empty(), uvs = !mesh.uvs.empty();
+    std::vector<int64_t> uv_index(order.size(), 0), normal_index(order.size(), 0);
     fmt::memory_buffer obj;
-    fmt::format_to(std::back_inserter(obj),
-                   "# Written by rll; {} describes the scene.\nmtllib {}\n",
+    auto out = std::back_inserter(obj);
+    fmt::format_to(out, "# Written by rll; {} describes the scene.\nmtllib {}\n",
                    json_path.filename().string(), escape_spaces(mtl_name));
     for (uint32_t v : order) {
       const Vec3& p = mesh.positions[v];
-      fmt::format_to(std::back_inserter(obj), "v {} {} {}\n", p.x, p.y, p.z);
+      fmt::format_to(out, "v {} {} {}\n", p.x, p.y, p.z);
     }
-    if (uvs)
-      for (uint32_t v : order)
-        fmt::format_to(std::back_inserter(obj), "vt {} {}\n", mesh.uvs[v].x, mesh.uvs[v].y);
+    int64_t count = 0;
+    if (uvs) {
+      for (size_t i = 0; i < order.size(); ++i) {
+        const Vec2& t = mesh.uvs[order[i]];
+        if (t.x == 0 && t.y == 0) continue;
+        fmt::format_to(out, "vt {} {}\n", t.x, t.y);
+        uv_index[i] = ++count;
+      }
+      // Keep the mesh's uvs (all zero) rather than none, which would read back as barycentrics.
+      if (count == 0) fmt::format_to(out, "vt 0 0\n");
+    }
+    count = 0;
     if (normals)
-      for (uint32_t v : order) {
-        const Vec3& n = mesh.normals[v];
-        fmt::format_to(std::back_inserter(obj), "vn {} {} {}\n", n.x, n.y, n.z);
+      for (size_t i = 0; i < order.size(); ++i) {
+        const Vec3& n = mesh.normals[order[i]];
+        if (n == Vec3(0)) continue;
+        fmt::format_to(out, "vn {} {} {}\n", n.x, n.y, n.z);
+        normal_index[i] = ++count;
       }
     int64_t current = -1;
     for (size_t t = 0; t < mesh.triangle_count(); ++t) {
       if (!written(t)) continue;
       if (int64_t(mesh.material[t]) != current) {
         current = mesh.material[t];
-        fmt::format_to(std::back_inserter(obj), "usemtl {}\n",
-                       names[size_t(material_slot[size_t(current)])]);
+        fmt::format_to(out, "usemtl {}\n", names[size_t(material_slot[size_t(current)])]);
       }
       obj.push_back('f');
       for (uint32_t v : mesh.triangles[t]) {
-        int64_t i = remap[v] + 1;
-        if (normals && uvs)
-          fmt::format_to(std::back_inserter(obj), " {}/{}/{}", i, i, i);
-        else if (normals)
-          fmt::format_to(std::back_inserter(obj), " {}//{}", i, i);
-        else if (uvs)
-          fmt::format_to(std::back_inserter(obj), " {}/{}", i, i);
-        else
-          fmt::format_to(std::back_inserter(obj), " {}", i);
+        const size_t i = size_t(remap[v]);
+        fmt::format_to(out, " {}", i + 1);
+        if (uv_index[i] > 0) fmt::format_to(out, "/{}", uv_index[i]);
+        if (normal_index[i] > 0)
+          fmt::format_to(out, "{}/{}", uv_index[i] > 0 ? "" : "/", normal_index[i]);
       }
       obj.push_back('\n');
     }
@@ -217,7 +253,9 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
     j["materials"] = materials;
     j["shapes"] = json::array({{{"file", obj_name}, {"material_map", material_map}}});
   }
-  write_file_atomic(json_path, j.dump(2) + "\n");
+  std::string text;
+  write_pretty(text, j, 0);
+  write_file_atomic(json_path, text + "\n");
 }
 
 }  // namespace rll
