@@ -140,6 +140,12 @@ TEST(ObjLoader, RelativeIndicesCountBackFromTheLastVertex) {
   EXPECT_EQ(s.mesh.vertex(0, 2), Vec3(1, 1, 0));
 }
 
+TEST(ObjLoader, AcceptsCommentsAfterValues) {
+  TempDir dir;
+  Scene s = read_obj(dir, "# a triangle\nv 0 0 0 # origin\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_EQ(s.mesh.positions.size(), 3u);
+}
+
 TEST(ObjLoader, HandlesCrLfAndCrLineEndings) {
   TempDir dir;
   Scene s = read_obj(dir, "v 0 0 0\r\nv 1 0 0\rv 0 1 0\r\nf 1 2 3\r\n");
@@ -384,6 +390,10 @@ TEST(JsonLoader, LoadsTexturesAndCommentsAndFitsACameraWhenNoneIsGiven) {
   })");
   ASSERT_EQ(s.textures.size(), 1u);
   EXPECT_EQ(s.textures[0].width(), 4);
+  // The textured quad has uvs over [0, 1]^2 rather than per-triangle barycentrics.
+  ASSERT_EQ(s.mesh.uvs.size(), s.mesh.positions.size());
+  EXPECT_EQ(s.mesh.uvs[s.mesh.triangles[0][1]].x, 1.0f);
+  EXPECT_EQ(s.mesh.uvs[s.mesh.triangles[0][2]].y, 1.0f);
   EXPECT_FALSE(s.has_camera);
   s.finalize();
   EXPECT_TRUE(s.has_camera);

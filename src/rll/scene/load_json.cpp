@@ -335,6 +335,17 @@ class JsonSceneReader {
     return *m_default_material;
   }
 
+  // SceneBuilder gives quads (and boxes) uvs over [0, 1]^2 only when the mesh already has uvs;
+  // a texture needs them, where otherwise each triangle would show its own barycentric patch.
+  // The quads' vertices from v0 on come in fours: p, p+e1, p+e1+e2, p+e2.
+  void quad_uvs(uint32_t material, size_t v0) {
+    Mesh& mesh = m_scene.mesh;
+    if (m_scene.materials[material].albedo_texture < 0) return;
+    mesh.uvs.resize(mesh.positions.size(), Vec2{});
+    static const Vec2 kCorners[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    for (size_t i = v0; i < mesh.positions.size(); ++i) mesh.uvs[i] = kCorners[(i - v0) % 4];
+  }
+
   void read_camera(const json& v, const std::string& ptr) {
     check_object(v, ptr, {"position", "target", "up", "fov"});
     Camera& c = m_scene.camera;
@@ -374,7 +385,9 @@ class JsonSceneReader {
              e2 = required_field(v, ptr, "edge2", to_vec3);
         if (!(length_sq(cross(e1, e2)) > 0))
           fail("{}: edge1 and edge2 must be non-zero and not parallel", ptr);
-        b.quad(o, e1, e2, shape_material(v, ptr));
+        uint32_t m = shape_material(v, ptr);
+        b.quad(o, e1, e2, m);
+        quad_uvs(m, v0);
       } else if (type == "triangle") {
         check_object(v, ptr, {"type", "vertices", "material", "transform"});
         const std::string vp = child(ptr, "vertices");
@@ -405,8 +418,9 @@ class JsonSceneReader {
             skip |= 1u << (k - std::begin(kFaces));
           }
         }
-        b.box(lo, hi, shape_material(v, ptr),
-              optional_field(v, ptr, "inward", to_bool).value_or(false), skip);
+        uint32_t m = shape_material(v, ptr);
+        b.box(lo, hi, m, optional_field(v, ptr, "inward", to_bool).value_or(false), skip);
+        quad_uvs(m, v0);
       } else if (type == "sphere") {
         check_object(
             v, ptr,

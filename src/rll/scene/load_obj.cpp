@@ -49,6 +49,7 @@ int read_numbers(std::string_view rest, float* out, int max, const std::string& 
   int n = 0;
   std::string_view tok;
   while (next_token(rest, tok)) {
+    if (tok[0] == '#') break;  // a comment after the values
     float v = 0;
     switch (parse_float(tok, v)) {
       case NumberStatus::Ok:

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -20,26 +21,34 @@ std::string read_text_file(const std::filesystem::path& path) {
 
 bool TextLines::next(std::string_view& line) {
   if (m_pos >= m_text.size()) return false;
-  size_t end = m_text.find_first_of("\r\n", m_pos);
-  if (end == std::string_view::npos) end = m_text.size();
-  line = m_text.substr(m_pos, end - m_pos);
-  m_pos = end;
-  if (m_pos < m_text.size()) {
-    if (m_text[m_pos] == '\r' && m_pos + 1 < m_text.size() && m_text[m_pos + 1] == '\n') ++m_pos;
-    ++m_pos;
+  // memchr for '\n' is fast; a '\r' (CRLF, or a lone CR ending a line) is then looked for
+  // only within the line found.
+  const char* begin = m_text.data() + m_pos;
+  const size_t left = m_text.size() - m_pos;
+  const void* nl = std::memchr(begin, '\n', left);
+  size_t len = nl ? size_t(static_cast<const char*>(nl) - begin) : left;
+  const void* cr = std::memchr(begin, '\r', len);
+  size_t skip = nl ? 1 : 0;
+  if (cr) {
+    size_t at = size_t(static_cast<const char*>(cr) - begin);
+    skip = (at + 1 < left && begin[at + 1] == '\n') ? 2 : 1;
+    len = at;
   }
+  line = std::string_view(begin, len);
+  m_pos += len + skip;
   ++m_number;
   return true;
 }
 
 bool next_token(std::string_view& rest, std::string_view& token) {
-  size_t b = rest.find_first_not_of(" \t");
-  if (b == std::string_view::npos) {
+  size_t b = 0, n = rest.size();
+  while (b < n && (rest[b] == ' ' || rest[b] == '\t')) ++b;
+  if (b == n) {
     rest = {};
     return false;
   }
-  size_t e = rest.find_first_of(" \t", b);
-  if (e == std::string_view::npos) e = rest.size();
+  size_t e = b;
+  while (e < n && rest[e] != ' ' && rest[e] != '\t') ++e;
   token = rest.substr(b, e - b);
   rest = rest.substr(e);
   return true;

@@ -1,0 +1,120 @@
+// The `rll` program on bad input: a non-zero exit (never a crash: exit code < 128), a message
+// naming the file (and line) or the flag, and no image written.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "support/test_support.h"
+
+using namespace rll::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kTriangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+
+// Runs `rll render <args...> -o <dir>/out.png` and checks the failure: exit code in [1, 127],
+// every one of `mentions` in the output, and no image left behind.
+void expect_render_error(const TempDir& dir, std::vector<std::string> args,
+                         std::initializer_list<std::string> mentions,
+                         const std::string& output = "out.png") {
+  const fs::path out = dir / output;
+  args.insert(args.begin(), "render");
+  args.insert(args.end(), {"-o", out.string(), "--quiet"});
+  CommandResult r = run_rll(args);
+  std::string cmd;
+  for (const auto& a : args) cmd += " " + a;
+  SCOPED_TRACE("rll" + cmd + "\n" + r.output);
+  EXPECT_GE(r.exit_code, 1);
+  EXPECT_LT(r.exit_code, 128);  // 128 + signal: a crash
+  for (const auto& m : mentions) EXPECT_NE(r.output.find(m), std::string::npos) << "missing: " << m;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+
+TEST(CliErrors, MissingSceneFile) {
+  TempDir dir;
+  expect_render_error(dir, {(dir / "nothere.json").string()}, {"nothere.json", "not found"});
+  expect_render_error(dir, {(dir / "nothere.obj").string()}, {"nothere.obj", "not found"});
+}
+
+TEST(CliErrors, MalformedJson) {
+  TempDir dir;
+  auto p = dir.write("bad.json", "{\n  \"film\": {\"width\": 8,, \"height\": 8}\n}\n");
+  expect_render_error(dir, {p.string()}, {"bad.json:2:", "invalid JSON"});
+}
+
+TEST(CliErrors, UnknownJsonField) {
+  TempDir dir;
+  auto p = dir.write("typo.json", R"({"camer": {"position": [0, 0, 1], "target": [0, 0, 0]}})");
+  expect_render_error(dir, {p.string()}, {"typo.json", "unknown field \"camer\" in /"});
+}
+
+TEST(CliErrors, MalformedObj) {
+  TempDir dir;
+  auto p = dir.write("bad.obj", std::string(kTriangle) + "f 1 2 3\nf 1 2 7\n");
+  expect_render_error(dir, {p.string()}, {"bad.obj:5:", "index 7"});
+  auto q = dir.write("garbage.obj", std::string(kTriangle) + "v 1 two 3\nf 1 2 3\n");
+  expect_render_error(dir, {q.string()}, {"garbage.obj:4:", "'two'"});
+}
+
+TEST(CliErrors, MalformedObjReferencedFromJson) {
+  TempDir dir;
+  dir.write("mesh.obj", std::string(kTriangle) + "f 1 2 0\n");
+  auto p = dir.write("scene.json", R"({"shapes": [{"file": "mesh.obj"}]})");
+  expect_render_error(dir, {p.string()}, {"scene.json", "/shapes/0", "mesh.obj:4:"});
+}
+
+TEST(CliErrors, NanVertex) {
+  TempDir dir;
+  auto p = dir.write("nan.obj", "v 0 0 0\nv 1 0 0\nv 0 NaN 0\nf 1 2 3\n");
+  expect_render_error(dir, {p.string()}, {"nan.obj:3:", "NaN"});
+}
+
+TEST(CliErrors, InfiniteVertex) {
+  TempDir dir;
+  auto p = dir.write("inf.obj", "v 0 0 0\nv 1e40 0 0\nv 0 1 0\nf 1 2 3\n");
+  expect_render_error(dir, {p.string()}, {"inf.obj:2:", "finite"});
+  auto q = dir.write("inf2.obj", "v 0 0 0\nv 1 0 0\nv 0 1 -inf\nf 1 2 3\n");
+  expect_render_error(dir, {q.string()}, {"inf2.obj:3:"});
+}
+
+TEST(CliErrors, SceneWithoutLights) {
+  TempDir dir;
+  auto p = dir.write("dark.obj", std::string(kTriangle) + "f 1 2 3\n");
+  expect_render_error(dir, {p.string()}, {"dark.obj", "no lights"});
+  auto q = dir.write("dark.json",
+                     R"({"shapes": [{"type": "box", "min": [0, 0, 0], "max": [1, 1, 1]}]})");
+  expect_render_error(dir, {q.string()}, {"dark.json", "no lights"});
+}
+
+TEST(CliErrors, MissingMaterialLibrary) {
+  TempDir dir;
+  auto p = dir.write("m.obj", "mtllib gone.mtl\n" + std::string(kTriangle) + "f 1 2 3\n");
+  expect_render_error(dir, {p.string()}, {"m.obj:1:", "gone.mtl"});
+}
+
+TEST(CliErrors, BadFlags) {
+  TempDir dir;
+  const std::string scene = "builtin:cornell-box";
+  expect_render_error(dir, {scene, "--sppp", "4"}, {"--sppp"});
+  expect_render_error(dir, {scene, "--res", "8x8", "--spp", "1", "--sampler", "nope"}, {"nope"});
+  expect_render_error(dir, {scene, "--res", "8x8", "--spp", "1", "--set", "rll.nope=1"},
+                      {"rll.nope"});
+  expect_render_error(dir, {scene, "--res", "0x10"}, {"--res", "0x10"});
+  expect_render_error(dir, {scene, "--res", "10by10"}, {"--res", "10by10"});
+  expect_render_error(dir, {scene, "--res", "8x8", "--spp", "1"}, {"out.txt", ".png"}, "out.txt");
+}
+
+TEST(CliErrors, AGoodSceneStillRenders) {
+  // The counterpart of the cases above: the same kind of files, well formed, render.
+  TempDir dir;
+  dir.write("lamp.mtl", "newmtl lamp\nKe 2 2 2\n");
+  auto p =
+      dir.write("lit.obj", "mtllib lamp.mtl\n" + std::string(kTriangle) + "usemtl lamp\nf 1 2 3\n");
+  CommandResult r = run_rll({"render", p.string(), "--res", "8x8", "--spp", "1", "--quiet", "-o",
+                             (dir / "o.png").string()});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "o.png"));
+}
