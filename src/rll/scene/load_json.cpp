@@ -289,8 +289,8 @@ class JsonSceneReader {
     m.ior = optional_field(v, ptr, "ior", to_number).value_or(m.ior);
     if (!(m.ior >= 1)) fail("{} must be at least 1 (got {})", child(ptr, "ior"), m.ior);
     m.roughness = optional_field(v, ptr, "roughness", to_number).value_or(m.roughness);
-    if (!(m.roughness >= 0 && m.roughness <= 1))
-      fail("{} must be in [0, 1] (got {})", child(ptr, "roughness"), m.roughness);
+    if (!(m.roughness >= 0))
+      fail("{} must not be negative (got {})", child(ptr, "roughness"), m.roughness);
     m.emission = optional_field(v, ptr, "emission", to_colour).value_or(m.emission);
     m.two_sided_emission = optional_field(v, ptr, "two_sided", to_bool).value_or(false);
     if (v.contains("texture")) m.albedo_texture = texture(v["texture"], child(ptr, "texture"));
