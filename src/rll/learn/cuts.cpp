@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <queue>
 
 #include "rll/core/error.h"
@@ -16,28 +15,29 @@ namespace {
 constexpr double kPowerShare = 0.04;
 constexpr double kUniformShare = 0.01;
 
-// prior = (1 - power_share - uniform) * weight + power_share * power + uniform / count.
-void mix_prior(size_t K, double power_share, const std::function<double(size_t)>& power,
-               const std::function<double(size_t)>& weight, std::vector<double>& out) {
+// prior = (1 - power_share - uniform) * weight + power_share * power + uniform / count, with
+// power(k) and weight(k) given by the caller.
+template <typename Power, typename Weight>
+void mix_prior(size_t K, double power_share, const Power& power, const Weight& weight, std::vector<double>& out) {
   double psum = 0, wsum = 0;
   size_t with_power = 0;
   for (size_t k = 0; k < K; ++k) {
-    double p = std::max(0.0, power(k));
+    double p = std::max(0.0, double(power(k)));
     psum += p;
-    wsum += std::max(0.0, weight(k));
+    wsum += std::max(0.0, double(weight(k)));
     with_power += p > 0;
   }
-  double ps = wsum > 0 ? power_share : 1.0 - kUniformShare;
-  double us = kUniformShare;
+  out.resize(K);
   if (!(psum > 0)) {  // nothing emits: uniform
-    out.assign(K, 1.0 / double(K));
+    std::fill(out.begin(), out.end(), 1.0 / double(K));
     return;
   }
-  out.resize(K);
+  const double ps = wsum > 0 ? power_share : 1.0 - kUniformShare;
+  const double ws = (1 - ps - kUniformShare) / (wsum > 0 ? wsum : 1.0);
+  const double us = kUniformShare / double(with_power);
   for (size_t k = 0; k < K; ++k) {
-    double p = std::max(0.0, power(k));
-    double w = wsum > 0 ? std::max(0.0, weight(k)) / wsum : 0.0;
-    out[k] = (1 - ps - us) * w + ps * p / psum + (p > 0 ? us / double(with_power) : 0.0);
+    double p = std::max(0.0, double(power(k)));
+    out[k] = ws * std::max(0.0, double(weight(k))) + ps * p / psum + (p > 0 ? us : 0.0);
   }
 }
 }  // namespace
@@ -265,6 +265,10 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
   PassStats st;
   thread_local Cut cut;
   const size_t base = size_t(cell) * m_m;
+  uint64_t n_total = 0;
+  const size_t K_now = active(cell) ? m_size[cell] : m_initial.size();
+  for (size_t k = 0; k < K_now; ++k) n_total += m_count[base + k].load(std::memory_order_relaxed);
+  if (active(cell) && n_total == 0) return st;  // nothing new: the cut and CDF stand
   if (active(cell)) {
     load(cell, cut);
   } else {
@@ -279,8 +283,6 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
   // each reward replaced by the pass mean, gives Q := b Q + (1-b) mean with b = (1-a)^n: the
   // same whatever order the threads delivered the rewards in. (A plain running mean was tried
   // and lost 3x: the rule's long memory of the prior estimate is a useful shrinkage.)
-  uint64_t n_total = 0;
-  for (size_t k = 0; k < K; ++k) n_total += m_count[base + k].load(std::memory_order_relaxed);
   if (n_total > 0) {
     st.touched = true;
     double estimate = double(m_cell_sum[cell].load(std::memory_order_relaxed)) * m_scale / double(n_total);

@@ -91,39 +91,52 @@ LightBounds merge(const LightBounds& a, const LightBounds& b) {
   return m;
 }
 
+ImportanceBounds importance_bounds(const LightBounds& b) {
+  ImportanceBounds f;
+  f.center = b.box.empty() ? Vec3(0) : b.box.center();
+  f.radius2 = b.box.empty() ? 0.0f : 0.25f * length_sq(b.box.diagonal());
+  f.axis = b.axis;
+  f.cos_o = b.cos_theta_o;
+  f.sin_o = safe_sqrt(1 - b.cos_theta_o * b.cos_theta_o);
+  f.cos_e = b.cos_theta_e;
+  f.power = b.power;
+  f.flags = (b.two_sided ? ImportanceBounds::kTwoSided : 0) | (b.infinite ? ImportanceBounds::kInfinite : 0);
+  return f;
+}
+
 float light_importance(const LightBounds& b, const Vec3& p, const Vec3& n) {
+  return light_importance(importance_bounds(b), p, n);
+}
+
+float light_importance(const ImportanceBounds& b, const Vec3& p, const Vec3& n) {
   if (!(b.power > 0)) return 0;
   const bool has_normal = n.x != 0 || n.y != 0 || n.z != 0;
-  if (b.infinite) {
+  if (b.flags & ImportanceBounds::kInfinite) {
     if (!has_normal) return b.power;
     // Best cosine between the normal and any direction of the cone.
     float cos_i = dot(b.axis, n), sin_i = safe_sqrt(1 - cos_i * cos_i);
-    float sin_o = safe_sqrt(1 - b.cos_theta_o * b.cos_theta_o);
-    float c = cos_sub_clamped(sin_i, cos_i, sin_o, b.cos_theta_o);
+    float c = cos_sub_clamped(sin_i, cos_i, b.sin_o, b.cos_o);
     return c > 0 ? b.power * c : 0;
   }
-  Vec3 pc = b.box.center();
-  Vec3 d = p - pc;  // from the lights to the point
+  Vec3 d = p - b.center;  // from the lights to the point
   float dist2 = length_sq(d);
-  float r2 = 0.25f * length_sq(b.box.diagonal());
   // Clamp the distance for points near or inside the box: the box may hold lights at any
   // distance from p, so importance is bounded by the box's own size there.
-  float d2 = std::max(dist2, r2);
+  float d2 = std::max(dist2, b.radius2);
   float cos_b = -1, sin_b = 0;  // half-angle of the box's bounding sphere seen from p
-  if (dist2 > r2) {
-    float sin2 = r2 / dist2;
-    cos_b = safe_sqrt(1 - sin2);
+  if (dist2 > b.radius2) {
+    float sin2 = b.radius2 / dist2;
+    cos_b = std::sqrt(1 - sin2);
     sin_b = std::sqrt(sin2);
   }
-  Vec3 wi = dist2 > 0 ? d / std::sqrt(dist2) : Vec3(0, 0, 1);
+  Vec3 wi = dist2 > 0 ? d * (1.0f / std::sqrt(dist2)) : Vec3(0, 0, 1);
   float cos_w = dot(b.axis, wi);
-  if (b.two_sided) cos_w = std::abs(cos_w);
+  if (b.flags & ImportanceBounds::kTwoSided) cos_w = std::abs(cos_w);
   float sin_w = safe_sqrt(1 - cos_w * cos_w);
-  float sin_o = safe_sqrt(1 - b.cos_theta_o * b.cos_theta_o);
-  float cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, b.cos_theta_o);
-  float sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, b.cos_theta_o);
+  float cos_x = cos_sub_clamped(sin_w, cos_w, b.sin_o, b.cos_o);
+  float sin_x = sin_sub_clamped(sin_w, cos_w, b.sin_o, b.cos_o);
   float cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-  if (cos_p <= b.cos_theta_e) return 0;
+  if (cos_p <= b.cos_e) return 0;
   float importance = b.power * cos_p / std::max(d2, 1e-20f);
   if (has_normal) {
     // Receiver side: the best cosine between n and a direction towards the lights' sphere.

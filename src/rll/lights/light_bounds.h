@@ -19,6 +19,22 @@ struct LightBounds {
   bool infinite = false;     // lights without a position (directional)
 };
 
+// LightBounds reduced to what light_importance needs, with its derived terms precomputed (the
+// tree's descents evaluate it twice per level).
+struct ImportanceBounds {
+  Vec3 center;
+  float radius2 = 0;  // squared half-diagonal of the box
+  Vec3 axis{0, 0, 1};
+  float cos_o = 1;
+  float sin_o = 0;
+  float cos_e = 0;
+  float power = 0;
+  uint32_t flags = 0;  // kTwoSided | kInfinite
+  static constexpr uint32_t kTwoSided = 1, kInfinite = 2;
+};
+ImportanceBounds importance_bounds(const LightBounds& b);
+float light_importance(const ImportanceBounds& b, const Vec3& p, const Vec3& n);
+
 LightBounds light_bounds(const Light& light);
 // Bounds of the union of two sets of lights of the same kind (finite or infinite).
 LightBounds merge(const LightBounds& a, const LightBounds& b);

@@ -130,6 +130,7 @@ LightTree LightTree::build(Scene& scene) {
     for (size_t i = b; i < e; ++i)
       if (tree.m_nodes[i].is_leaf()) tree.m_leaf_of[tree.m_nodes[i].begin] = uint32_t(i);
   });
+  tree.prepare_importance();
   if (finite == n) tree.m_finite_root = kRoot;
   else if (finite == 0) tree.m_infinite_root = kRoot;
   else {
@@ -149,6 +150,14 @@ void LightTree::refit(const std::vector<Light>& lights) {
     LightTreeNode& nd = m_nodes[i];
     if (!nd.is_leaf()) nd.bounds = merge(m_nodes[nd.child].bounds, m_nodes[nd.child + 1].bounds);
   }
+  prepare_importance();
+}
+
+void LightTree::prepare_importance() {
+  m_fast.resize(m_nodes.size());
+  parallel_for(m_nodes.size(), 4096, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) m_fast[i] = importance_bounds(m_nodes[i].bounds);
+  });
 }
 
 void build_light_tree(Scene& scene) {

@@ -42,14 +42,16 @@ class LightTree {
   // Roots of the finite and infinite subtrees (kNone where absent; either may be kRoot).
   uint32_t finite_root() const { return m_finite_root; }
   uint32_t infinite_root() const { return m_infinite_root; }
-  float importance(uint32_t node, const Vec3& p, const Vec3& n) const {
-    return light_importance(m_nodes[node].bounds, p, n);
-  }
+  float importance(uint32_t node, const Vec3& p, const Vec3& n) const { return light_importance(m_fast[node], p, n); }
   uint32_t depth() const { return m_depth; }
-  size_t bytes() const { return m_nodes.size() * sizeof(LightTreeNode) + m_leaf_of.size() * sizeof(uint32_t); }
+  size_t bytes() const {
+    return m_nodes.size() * (sizeof(LightTreeNode) + sizeof(ImportanceBounds)) + m_leaf_of.size() * sizeof(uint32_t);
+  }
 
  private:
+  void prepare_importance();
   std::vector<LightTreeNode> m_nodes;
+  std::vector<ImportanceBounds> m_fast;  // per node, for importance()
   std::vector<uint32_t> m_leaf_of;
   uint32_t m_finite_root = kNone, m_infinite_root = kNone;
   uint32_t m_depth = 0;
