@@ -89,7 +89,7 @@ void run(const RenderOptions& o) {
   Scene scene = load_scene(o.scene, lo);
   IntegratorSettings is = make_integrator_settings(o.integrator, o.max_depth, params);
   Accel accel(scene.mesh);
-  auto sampler = make_light_sampler(o.sampler, scene, params);
+  auto sampler = make_light_sampler(o.sampler, scene, params, &accel);
   params.check_all_used();
   Integrator integrator(scene, accel, *sampler, is);
 

@@ -68,7 +68,7 @@ Image render_scene(const Scene& scene, const RenderRequest& req) {
   ThreadLimit limit(req.threads);
   Params params = Params::parse(req.set);
   Accel accel(scene.mesh);
-  auto sampler = make_light_sampler(req.sampler, scene, params);
+  auto sampler = make_light_sampler(req.sampler, scene, params, &accel);
   params.check_all_used();
   Integrator integrator(scene, accel, *sampler, req.integrator);
   Film film(scene.width, scene.height);

@@ -253,6 +253,20 @@ void CutStore::clear(uint32_t cell) {
   m_cell_sum[cell].store(0, std::memory_order_relaxed);
 }
 
+void CutStore::assign(uint32_t cell, const std::vector<uint32_t>& nodes, const std::vector<float>& q) {
+  Cut cut;
+  cut.nodes = nodes;
+  cut.q = q;
+  cut.weight.resize(nodes.size());
+  double total = 0;
+  for (size_t k = 0; k < nodes.size(); ++k) {
+    cut.weight[k] = weight_of(cell, nodes[k]);
+    total += std::max(0.0f, q[k]);
+  }
+  m_total[cell] = float(total);
+  store(cell, cut);
+}
+
 void CutStore::refresh(uint32_t cell) {
   if (!active(cell)) return;
   thread_local Cut cut;

@@ -107,6 +107,8 @@ class CutStore {
   void refresh(uint32_t cell);
   // Forgets a cell (eviction).
   void clear(uint32_t cell);
+  // Gives a cell a cut with known values (the oracle): prior weights from the cell's anchor.
+  void assign(uint32_t cell, const std::vector<uint32_t>& nodes, const std::vector<float>& q);
 
   size_t bytes() const;
 

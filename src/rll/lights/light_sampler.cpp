@@ -2,6 +2,7 @@
 
 #include "rll/core/error.h"
 #include "rll/core/params.h"
+#include "rll/lights/oracle_sampler.h"
 #include "rll/lights/rll_sampler.h"
 #include "rll/lights/simple_samplers.h"
 #include "rll/lights/tree_sampler.h"
@@ -9,16 +10,21 @@
 namespace rll {
 
 const std::vector<std::string>& light_sampler_names() {
-  static const std::vector<std::string> names = {"uniform", "power", "tree", "rll"};
+  static const std::vector<std::string> names = {"uniform", "power", "tree", "rll", "oracle"};
   return names;
 }
 
 std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const Scene& scene,
-                                                 const Params& params) {
+                                                 const Params& params, const Accel* accel) {
   if (name == "uniform") return std::make_unique<UniformLightSampler>(scene);
   if (name == "power") return std::make_unique<PowerLightSampler>(scene);
   if (name == "tree") return std::make_unique<TreeLightSampler>(scene);
   if (name == "rll") return std::make_unique<RllLightSampler>(scene, rll_settings_from(params));
+  if (name == "oracle") {
+    if (!accel) fail("the oracle sampler traces rays before rendering and needs the scene's ray tracer");
+    // The oracle samples with RLL's settings (rll.*), so that only the learning differs.
+    return std::make_unique<OracleLightSampler>(scene, *accel, rll_settings_from(params), oracle_settings_from(params));
+  }
   std::string list;
   for (const auto& n : light_sampler_names()) list += (list.empty() ? "" : ", ") + n;
   fail("unknown light sampler '{}' (valid: {})", name, list);

@@ -15,6 +15,7 @@ namespace rll {
 struct Scene;
 class Params;
 class LightTree;
+class Accel;
 
 inline constexpr uint32_t kNoCell = ~0u;
 
@@ -73,8 +74,9 @@ class LightSampler {
 const std::vector<std::string>& light_sampler_names();
 
 // Builds a sampler by name with its parameters from `params` (keys "<name>.<param>");
-// throws rll::Error listing valid names on an unknown name.
+// throws rll::Error listing valid names on an unknown name. The oracle traces rays before
+// rendering and needs `accel`.
 std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const Scene& scene,
-                                                 const Params& params);
+                                                 const Params& params, const Accel* accel = nullptr);
 
 }  // namespace rll

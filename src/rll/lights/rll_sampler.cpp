@@ -233,6 +233,7 @@ float RllLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
 }
 
 void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, float estimate) {
+  if (m_frozen) return;
   if (ctx.cell == kNoCell || !(s.pmf > 0) || !(estimate >= 0) || !std::isfinite(estimate)) return;
   const float within = s.pmf / s.cluster_pmf;
   // DESIGN 2: the cluster reward estimates the cluster's total contribution I(s):
@@ -242,6 +243,7 @@ void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, flo
 }
 
 void RllLightSampler::end_pass() {
+  if (m_frozen) return;
   const uint32_t cap = m_s.capacity;
   std::atomic<uint32_t> splits{0}, collapses{0}, touched{0};
   parallel_for(cap, 256, [&](size_t b, size_t e) {

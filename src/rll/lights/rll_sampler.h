@@ -40,14 +40,17 @@ class RllLightSampler final : public LightSampler {
   void prepare(LightContext& ctx, float u) const override;
   SampledLight sample(const LightContext& ctx, double u) const override;
   float pmf(const LightContext& ctx, uint32_t light) const override;
-  bool learns() const override { return true; }
+  bool learns() const override { return !m_frozen; }
   void record(const LightContext& ctx, const SampledLight& s, float estimate) override;
   void end_pass() override;
   void lights_changed(const Scene& scene) override;
   nlohmann::json describe() const override;
 
+  // Stops learning: record() and end_pass() do nothing from now on (the oracle).
+  void freeze() { m_frozen = true; }
   // For tests and the oracle: the learnt state.
   const CutStore& cuts() const { return *m_cuts; }
+  CutStore& cuts() { return *m_cuts; }
   const CellTable& table() const { return *m_table; }
   uint64_t passes() const { return m_pass; }
   size_t bytes() const;
@@ -82,6 +85,7 @@ class RllLightSampler final : public LightSampler {
   std::unique_ptr<std::atomic<uint32_t>[]> m_last_used;  // pass of last lookup, per cell
   std::vector<double> m_power_prefix;                    // per light, tree order
   uint64_t m_pass = 0;
+  bool m_frozen = false;
   // Statistics.
   uint64_t m_evictions = 0, m_failed_inserts = 0;
   std::vector<uint32_t> m_splits_per_pass, m_collapses_per_pass, m_touched_per_pass;

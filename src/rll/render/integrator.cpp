@@ -48,34 +48,6 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sam
                        IntegratorSettings settings)
     : m_scene(scene), m_accel(accel), m_sampler(sampler), m_settings(settings), m_learns(sampler.learns()) {}
 
-namespace {
-// Ray leaving p in direction d, offset to the side of the geometric normal that d points to.
-Ray spawn_ray(const Vec3& p, const Vec3& ng, const Vec3& d, float tmax = kInf) {
-  Ray r;
-  float eps = ray_epsilon(p);
-  r.o = p + face_forward(ng, d) * eps;
-  r.d = d;
-  r.tmin = 0;
-  r.tmax = tmax;
-  return r;
-}
-
-// Shadow ray from surface point p (geometric normal ng) to point y on a light with normal ny
-// (zero for a point light): both ends are pushed off their surfaces and the ray is aimed from
-// one offset end to the other, so that it never hits the light itself, even at grazing angles.
-Ray spawn_ray_to(const Vec3& p, const Vec3& ng, const Vec3& y, const Vec3& ny) {
-  Vec3 d0 = y - p;
-  Ray r;
-  r.o = p + face_forward(ng, d0) * ray_epsilon(p);
-  Vec3 target = length_sq(ny) > 0 ? y + face_forward(ny, -d0) * ray_epsilon(y) : y;
-  Vec3 d = target - r.o;
-  float len = length(d);
-  r.d = d / len;
-  r.tmin = 0;
-  r.tmax = len * (1 - 1e-4f);
-  return r;
-}
-}  // namespace
 
 Rgb Integrator::sample_light(const Vertex& v, SampleStream& stream, RayCounters& counters, bool mis) const {
   // Draw the random numbers unconditionally so that every sample uses the same dimensions.

@@ -29,6 +29,28 @@ SurfaceHit make_surface_hit(const Scene& scene, const Hit& hit) {
   return s;
 }
 
+Ray spawn_ray(const Vec3& p, const Vec3& ng, const Vec3& d, float tmax) {
+  Ray r;
+  r.o = p + face_forward(ng, d) * ray_epsilon(p);
+  r.d = d;
+  r.tmin = 0;
+  r.tmax = tmax;
+  return r;
+}
+
+Ray spawn_ray_to(const Vec3& p, const Vec3& ng, const Vec3& y, const Vec3& ny) {
+  Vec3 d0 = y - p;
+  Ray r;
+  r.o = p + face_forward(ng, d0) * ray_epsilon(p);
+  Vec3 target = length_sq(ny) > 0 ? y + face_forward(ny, -d0) * ray_epsilon(y) : y;
+  Vec3 d = target - r.o;
+  float len = length(d);
+  r.d = d / len;
+  r.tmin = 0;
+  r.tmax = len * (1 - 1e-4f);
+  return r;
+}
+
 Rgb sample_texture(const Image& tex, Vec2 uv) {
   if (tex.width() == 0) return Rgb(1);
   float x = (uv.x - std::floor(uv.x)) * tex.width() - 0.5f;

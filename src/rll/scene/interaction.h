@@ -19,6 +19,13 @@ struct SurfaceHit {
 
 SurfaceHit make_surface_hit(const Scene& scene, const Hit& hit);
 
+// Ray leaving p in direction d, offset to the side of the geometric normal that d points to.
+Ray spawn_ray(const Vec3& p, const Vec3& ng, const Vec3& d, float tmax = kInf);
+// Shadow ray from surface point p (geometric normal ng) to point y on a light with normal ny
+// (zero for a point light): both ends are pushed off their surfaces and the ray is aimed from
+// one offset end to the other, so that it never hits the light itself, even at grazing angles.
+Ray spawn_ray_to(const Vec3& p, const Vec3& ng, const Vec3& y, const Vec3& ny);
+
 // Bilinear lookup with repeat wrapping, v pointing up the image.
 Rgb sample_texture(const Image& texture, Vec2 uv);
 

@@ -41,6 +41,13 @@ Light make_triangle_light(const Vec3& a, const Vec3& b, const Vec3& c, const Rgb
 Light make_point_light(const Vec3& position, const Rgb& intensity);
 Light make_directional_light(const Vec3& direction_to_light, const Rgb& irradiance);
 
+// Solid angle of a triangle seen from p (Van Oosterom & Strackee).
+float triangle_solid_angle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+// Triangle lights are sampled uniformly in the solid angle they subtend (Arvo 1995) where it
+// is well conditioned, by area elsewhere (tiny or nearly flat-on-the-horizon triangles); both
+// sample_li and pdf_li apply the same rule.
+inline constexpr float kMinSphericalSolidAngle = 3e-4f, kMaxSphericalSolidAngle = 6.2f;
+
 // Samples a point on the light as seen from p; pdf 0 when nothing is emitted towards p.
 LightLiSample sample_li(const Light& light, const Vec3& p, Vec2 u);
 // Solid-angle pdf that sample_li produced point y on a triangle light, seen from p along wi.

@@ -1,0 +1,187 @@
+#include "rll/lights/oracle_sampler.h"
+
+#include <algorithm>
+#include <chrono>
+#include <mutex>
+
+#include "rll/accel/accel.h"
+#include "rll/core/error.h"
+#include "rll/core/parallel.h"
+#include "rll/core/params.h"
+#include "rll/core/rng.h"
+#include "rll/core/sampling.h"
+#include "rll/learn/cuts.h"
+#include "rll/lights/tree_sampler.h"
+#include "rll/scene/interaction.h"
+
+namespace rll {
+
+OracleSettings oracle_settings_from(const Params& p) {
+  OracleSettings s;
+  s.discovery_spp = int(p.get_int("oracle.discovery_spp", s.discovery_spp));
+  s.bounces = int(p.get_int("oracle.bounces", s.bounces));
+  s.points_per_cell = int(p.get_int("oracle.points", s.points_per_cell));
+  s.rays = int(p.get_int("oracle.rays", s.rays));
+  s.refine = int(p.get_int("oracle.refine", s.refine));
+  if (s.discovery_spp < 1 || s.bounces < 0 || s.points_per_cell < 1 || s.rays < 1 || s.refine < 0)
+    fail("--set oracle.*: discovery_spp, points and rays must be >= 1, bounces and refine >= 0");
+  return s;
+}
+
+namespace {
+
+struct CellPoint {
+  uint32_t cell;
+  uint64_t order;  // random key: the kept points of a cell are those with the smallest keys
+  LightContext ctx;
+};
+
+// Occluded contribution of the lights under `node` at the points, irradiance-like (cosine
+// at the point, no BSDF): mean of f/p over points x rays, the light chosen by the tree's
+// descent inside the node.
+double estimate(const Scene& scene, const Accel& accel, uint32_t node, const std::vector<LightContext>& pts,
+                int rays, Pcg32& rng, uint64_t& traced) {
+  const LightTree& tree = *scene.light_tree;
+  double sum = 0;
+  for (const LightContext& x : pts)
+    for (int r = 0; r < rays; ++r) {
+      SampledLight t = tree_descend(tree, node, x.p, x.n, rng.next_double());
+      Vec2 u{rng.next_float(), rng.next_float()};
+      if (!(t.pmf > 0)) continue;
+      const Light& light = scene.lights[t.light];
+      LightLiSample ls = sample_li(light, x.p, u);
+      if (!(ls.pdf > 0)) continue;
+      float cos = dot(ls.wi, x.ns);
+      if (cos <= 0 || dot(ls.wi, x.n) <= 0) continue;
+      Ray shadow = std::isfinite(ls.dist)
+                       ? spawn_ray_to(x.p, x.n, ls.point, light.type == LightType::Triangle ? light.n : Vec3(0))
+                       : spawn_ray(x.p, x.n, ls.wi, length(x.p - scene.bounds.center()) + 1.01f * scene.radius);
+      ++traced;
+      if (accel.occluded(shadow)) continue;
+      sum += double(luminance(ls.L)) * cos / ls.pdf / t.pmf;
+    }
+  return sum / double(pts.size() * size_t(rays));
+}
+
+}  // namespace
+
+OracleLightSampler::OracleLightSampler(const Scene& scene, const Accel& accel, const RllSettings& rll,
+                                       const OracleSettings& s)
+    : m_s(s) {
+  auto t0 = std::chrono::steady_clock::now();
+  RllSettings fixed = rll;
+  fixed.grid.jitter = 0;  // one fixed grid: the oracle's cells never move
+  m_rll = std::make_unique<RllLightSampler>(scene, fixed);
+  const LightTree& tree = *scene.light_tree;
+
+  // 1. Discovery: camera paths (diffuse bounces) find the cells and points where NEE happens.
+  const int w = scene.width, h = scene.height;
+  std::mutex merge;
+  std::vector<CellPoint> found;
+  parallel_for(size_t(h), 1, [&](size_t y0, size_t y1) {
+    std::vector<CellPoint> local;
+    for (size_t y = y0; y < y1; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int k = 0; k < s.discovery_spp; ++k) {
+          SampleStream st(s.seed, y * w + x, uint64_t(k));
+          Vec2 j = st.next2();
+          Ray ray = scene.camera.generate_ray(x + j.x, float(y) + j.y);
+          float footprint = 0, prev_pdf = 1 / sqr(scene.camera.pixel_angle());
+          for (int depth = 0; depth <= s.bounces; ++depth) {
+            Hit hit;
+            if (!accel.intersect(ray, hit)) break;
+            SurfaceHit sh = make_surface_hit(scene, hit);
+            if (sh.tri >= scene.sky_first_triangle && sh.tri < scene.sky_first_triangle + scene.sky_triangle_count) break;
+            LightContext c;
+            c.n = face_forward(sh.ng, -ray.d);
+            c.ns = dot(sh.ns, c.n) < 0 ? -sh.ns : sh.ns;
+            c.p = sh.p;
+            footprint += hit.t / std::sqrt(prev_pdf * std::max(1e-2f, absdot(ray.d, sh.ng)));
+            c.footprint = footprint;
+            m_rll->prepare(c, st.next());
+            if (c.cell != kNoCell) local.push_back({c.cell, mix64(st.next_double() * 0x1p53), c});
+            Vec3 d = Frame(c.ns).to_world(sample_cosine_hemisphere(st.next2()));
+            if (dot(d, c.n) <= 0) break;
+            prev_pdf = std::max(1e-3f, dot(d, c.ns) * kInvPi);
+            ray = spawn_ray(c.p, c.n, d);
+          }
+        }
+    std::lock_guard lock(merge);
+    found.insert(found.end(), local.begin(), local.end());
+  });
+  // Deterministic whatever the thread count: order by (cell key, random key).
+  const CellTable& table = m_rll->table();
+  std::sort(found.begin(), found.end(), [&](const CellPoint& a, const CellPoint& b) {
+    uint64_t ka = table.key_of(a.cell), kb = table.key_of(b.cell);
+    return ka != kb ? ka < kb : a.order < b.order;
+  });
+  std::vector<std::pair<size_t, size_t>> ranges;  // per cell: [begin, end) in found
+  for (size_t i = 0; i < found.size();) {
+    size_t j = i;
+    while (j < found.size() && found[j].cell == found[i].cell) ++j;
+    ranges.push_back({i, std::min(j, i + size_t(s.points_per_cell))});
+    i = j;
+  }
+  m_cells = uint32_t(ranges.size());
+
+  // 2. Per cell: every cluster of the initial cut estimated with shadow rays, then greedy
+  // split-collapse on the estimates (split the largest, collapse the smallest twin pair).
+  CutStore& cuts = m_rll->cuts();
+  const int M = rll.cut.cut_size;
+  const std::vector<uint32_t> initial = initial_cut(tree, M);
+  std::atomic<uint64_t> rays{0};
+  parallel_for(ranges.size(), 1, [&](size_t b, size_t e) {
+    uint64_t traced = 0;
+    for (size_t r = b; r < e; ++r) {
+      std::vector<LightContext> pts;
+      for (size_t i = ranges[r].first; i < ranges[r].second; ++i) pts.push_back(found[i].ctx);
+      const uint32_t cell = found[ranges[r].first].cell;
+      Pcg32 rng(s.seed, table.key_of(cell));
+      std::vector<uint32_t> nodes = initial;
+      std::vector<float> q(nodes.size());
+      for (size_t k = 0; k < nodes.size(); ++k) q[k] = float(estimate(scene, accel, nodes[k], pts, s.rays, rng, traced));
+      for (int step = 0; step < s.refine; ++step) {
+        long best = -1;
+        for (size_t k = 0; k < nodes.size(); ++k)
+          if (!tree.node(nodes[k]).is_leaf() && (best < 0 || q[k] > q[best])) best = long(k);
+        if (best < 0) break;
+        if (int(nodes.size()) >= M) {
+          long pmin = -1;
+          for (size_t k = 0; k + 1 < nodes.size(); ++k) {
+            if (long(k) == best || long(k + 1) == best) continue;
+            const LightTreeNode& a = tree.node(nodes[k]);
+            if (a.parent == LightTree::kNone || tree.node(a.parent).child != nodes[k] || nodes[k + 1] != nodes[k] + 1) continue;
+            if (pmin < 0 || q[k] + q[k + 1] < q[pmin] + q[pmin + 1]) pmin = long(k);
+          }
+          if (pmin < 0 || !(q[best] > q[pmin] + q[pmin + 1])) break;
+          nodes[pmin] = tree.node(nodes[pmin]).parent;
+          q[pmin] += q[pmin + 1];
+          nodes.erase(nodes.begin() + pmin + 1);
+          q.erase(q.begin() + pmin + 1);
+          if (best > pmin) --best;
+        }
+        uint32_t child = tree.node(nodes[best]).child;
+        nodes[best] = child;
+        q[best] = float(estimate(scene, accel, child, pts, s.rays, rng, traced));
+        nodes.insert(nodes.begin() + best + 1, child + 1);
+        q.insert(q.begin() + best + 1, float(estimate(scene, accel, child + 1, pts, s.rays, rng, traced)));
+      }
+      cuts.assign(cell, nodes, q);
+    }
+    rays += traced;
+  });
+  m_rays = rays.load();
+  m_rll->freeze();
+  m_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+nlohmann::json OracleLightSampler::describe() const {
+  nlohmann::json j = m_rll->describe();
+  j["name"] = name();
+  j["oracle"] = {{"discovery_spp", m_s.discovery_spp}, {"bounces", m_s.bounces},   {"points", m_s.points_per_cell},
+                 {"rays", m_s.rays},                   {"refine", m_s.refine},     {"cells", m_cells},
+                 {"shadow_rays", m_rays},              {"precompute_seconds", m_seconds}};
+  return j;
+}
+
+}  // namespace rll

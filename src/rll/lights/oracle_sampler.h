@@ -1,0 +1,45 @@
+// The oracle (DESIGN 5): RLL's cells and cuts with the learning replaced by knowledge. Before
+// rendering (and outside its time), every cell met by camera and bounce vertices gets each
+// cluster's occluded contribution estimated exhaustively with many shadow rays, and its cut
+// refined greedily on those estimates. It samples like RLL (same defensive mixture, same
+// within-cluster rule), so the gap between the two measures the learning alone.
+#pragma once
+
+#include <memory>
+
+#include "rll/lights/rll_sampler.h"
+
+namespace rll {
+
+class Accel;
+
+struct OracleSettings {
+  int discovery_spp = 4;      // camera paths per pixel used to find cells and their points
+  int bounces = 2;            // diffuse bounces followed during discovery (0: camera only)
+  int points_per_cell = 8;    // shading points kept per cell (reservoir)
+  int rays = 4;               // shadow rays per point and cluster
+  int refine = 32;            // greedy split-collapse steps per cell on the estimates
+  uint64_t seed = 77;
+};
+
+OracleSettings oracle_settings_from(const Params& params);
+
+class OracleLightSampler final : public LightSampler {
+ public:
+  OracleLightSampler(const Scene& scene, const Accel& accel, const RllSettings& rll, const OracleSettings& settings);
+  std::string name() const override { return "oracle"; }
+  void prepare(LightContext& ctx, float u) const override { m_rll->prepare(ctx, u); }
+  SampledLight sample(const LightContext& ctx, double u) const override { return m_rll->sample(ctx, u); }
+  float pmf(const LightContext& ctx, uint32_t light) const override { return m_rll->pmf(ctx, light); }
+  nlohmann::json describe() const override;
+  double precompute_seconds() const { return m_seconds; }
+
+ private:
+  std::unique_ptr<RllLightSampler> m_rll;
+  OracleSettings m_s;
+  double m_seconds = 0;
+  uint64_t m_rays = 0;
+  uint32_t m_cells = 0;
+};
+
+}  // namespace rll
