@@ -1,5 +1,8 @@
 #include "rll/scene/light.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "rll/core/sampling.h"
 
 namespace rll {
@@ -61,31 +64,49 @@ float triangle_solid_angle(const Vec3& p, const Vec3& a, const Vec3& b, const Ve
 
 namespace {
 
-// Uniform direction in the spherical triangle (A, B, C) (unit vectors) of area `omega`
-// (Arvo 1995): choose the sub-triangle area u0*omega, which fixes a point C' on arc AC, then a
-// point on arc BC' with the right density.
-Vec3 sample_spherical_triangle(const Vec3& A, const Vec3& B, const Vec3& C, float omega, Vec2 u) {
-  // Angle at A between arcs AB and AC, from the normals of the planes OAB and OAC.
-  Vec3 n_ab = cross(A, B), n_ac = cross(A, C);
-  float l_ab = length(n_ab), l_ac = length(n_ac);
-  if (!(l_ab > 0 && l_ac > 0)) return A;
-  float cos_alpha = clamp(dot(n_ab, n_ac) / (l_ab * l_ac), -1.0f, 1.0f);
-  float alpha = std::acos(cos_alpha), sin_alpha = std::sin(alpha);
-  float cos_c = dot(A, B);
-  float area = u.x * omega;
-  float s = std::sin(area - alpha), t = std::cos(area - alpha);
-  float uu = t - cos_alpha, vv = s + sin_alpha * cos_c;
-  float q = ((vv * t - uu * s) * cos_alpha - vv) / ((vv * s + uu * t) * sin_alpha);
-  q = clamp(q, -1.0f, 1.0f);
-  Vec3 c_perp = C - A * dot(C, A);
-  float lp = length(c_perp);
-  if (!(lp > 0)) return A;
-  Vec3 C2 = A * q + c_perp * (safe_sqrt(1 - q * q) / lp);
-  float z = 1 - u.y * (1 - dot(C2, B));
-  Vec3 b_perp = C2 - B * dot(C2, B);
-  float lb = length(b_perp);
-  if (!(lb > 0)) return B;
-  return normalize(B * z + b_perp * (safe_sqrt(1 - z * z) / lb));
+// Double-precision 3-vectors for the spherical warp below, whose angle differences lose most
+// of a float's precision on thin triangles.
+struct D3 {
+  double x, y, z;
+};
+D3 d3(const Vec3& v) { return {v.x, v.y, v.z}; }
+D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+D3 operator-(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+D3 operator*(D3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
+double ddot(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+D3 dcross(D3 a, D3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+double dlen(D3 a) { return std::sqrt(ddot(a, a)); }
+D3 dnorm(D3 a) { return a * (1 / dlen(a)); }
+
+// Uniform direction in the spherical triangle spanned by directions a, b, c (Arvo 1995):
+// choose the sub-triangle area u.x * omega, which fixes a point C' on arc AC, then a point on
+// arc BC' with the right density.
+Vec3 sample_spherical_triangle(const Vec3& a, const Vec3& b, const Vec3& c, Vec2 u) {
+  D3 A = dnorm(d3(a)), B = dnorm(d3(b)), C = dnorm(d3(c));
+  // Angles at the vertices, from the normals of the planes through the origin and two vertices.
+  D3 n_ab = dcross(A, B), n_ac = dcross(A, C), n_bc = dcross(B, C);
+  double l_ab = dlen(n_ab), l_ac = dlen(n_ac), l_bc = dlen(n_bc);
+  if (!(l_ab > 0 && l_ac > 0 && l_bc > 0)) return a;
+  auto angle = [](D3 x, double lx, D3 y, double ly) { return std::acos(std::clamp(ddot(x, y) / (lx * ly), -1.0, 1.0)); };
+  double alpha = angle(n_ab, l_ab, n_ac, l_ac);
+  double beta = angle(n_ab * -1.0, l_ab, n_bc, l_bc);
+  double gamma = angle(n_ac, l_ac, n_bc, l_bc);
+  double omega = alpha + beta + gamma - M_PI;
+  double cos_alpha = std::cos(alpha), sin_alpha = std::sin(alpha), cos_c = ddot(A, B);
+  double area = u.x * omega;
+  double s = std::sin(area - alpha), t = std::cos(area - alpha);
+  double uu = t - cos_alpha, vv = s + sin_alpha * cos_c;
+  double q = std::clamp(((vv * t - uu * s) * cos_alpha - vv) / ((vv * s + uu * t) * sin_alpha), -1.0, 1.0);
+  D3 c_perp = C - A * ddot(C, A);
+  double lp = dlen(c_perp);
+  if (!(lp > 0)) return a;
+  D3 C2 = A * q + c_perp * (std::sqrt(std::max(0.0, 1 - q * q)) / lp);
+  double z = 1 - u.y * (1 - ddot(C2, B));
+  D3 b_perp = C2 - B * ddot(C2, B);
+  double lb = dlen(b_perp);
+  if (!(lb > 0)) return b;
+  D3 w = dnorm(B * z + b_perp * (std::sqrt(std::max(0.0, 1 - z * z)) / lb));
+  return {float(w.x), float(w.y), float(w.z)};
 }
 
 bool use_spherical(float omega) { return omega > kMinSphericalSolidAngle && omega < kMaxSphericalSolidAngle; }
@@ -100,7 +121,7 @@ LightLiSample sample_li(const Light& l, const Vec3& p, Vec2 u) {
       float omega = triangle_solid_angle(p, l.p0, l.p1, l.p2);
       Vec3 y;
       if (use_spherical(omega)) {
-        Vec3 w = sample_spherical_triangle(normalize(l.p0 - p), normalize(l.p1 - p), normalize(l.p2 - p), omega, u);
+        Vec3 w = sample_spherical_triangle(l.p0 - p, l.p1 - p, l.p2 - p, u);
         // The point on the triangle's plane along w.
         float denom = dot(l.n, w);
         if (denom == 0) return s;
