@@ -31,6 +31,7 @@ struct RenderOptions {
   int threads = 0;
   int max_depth = 5;
   int pass_spp = 1;
+  int max_pass_spp = 8;
   int frames = 1;
   std::string output;
   std::string stats;
@@ -81,6 +82,7 @@ void run(const RenderOptions& o) {
   if (o.time < 0) fail("--time must not be negative");
   if (o.frames < 1) fail("--frames must be at least 1");
   if (o.pass_spp < 1) fail("--pass-spp must be at least 1");
+  if (o.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
   Params params = Params::parse(o.set);
   fs::path output = o.output.empty() ? fs::path(default_output(o.scene)) : fs::path(o.output);
   prepare_output(output, "-o", {".exr", ".png"});
@@ -98,6 +100,7 @@ void run(const RenderOptions& o) {
   rs.time_limit = o.time;
   rs.seed = o.seed;
   rs.pass_spp = o.pass_spp;
+  rs.max_pass_spp = o.max_pass_spp;
   const int frames = o.frames;
   nlohmann::json frame_stats = nlohmann::json::array();
   RenderProgress total;
@@ -175,8 +178,11 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
   cmd->add_option("--max-depth", o->max_depth, "Path length limit (path integrator; 1 = direct light)")
       ->capture_default_str();
-  cmd->add_option("--pass-spp", o->pass_spp, "Samples per pixel in one pass (learning happens between passes)")
+  cmd->add_option("--pass-spp", o->pass_spp,
+                  "Samples per pixel of the first passes; passes double every two passes up to --max-pass-spp "
+                  "(learning samplers adapt between passes)")
       ->capture_default_str();
+  cmd->add_option("--max-pass-spp", o->max_pass_spp, "Largest pass, in samples per pixel")->capture_default_str();
   cmd->add_option("--frames", o->frames, "Frames to render; animated scenes move between frames, learning persists")
       ->capture_default_str();
   cmd->add_option("-o,--output", o->output, "Output image, .exr (linear) or .png (sRGB); default out/<scene>.png");

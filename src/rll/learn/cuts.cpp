@@ -79,31 +79,17 @@ bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes) {
 }
 
 template <typename WeightOf, typename ShareOf>
-int SplitCollapse::step(Cut& cut, float total, const WeightOf& weight_of, const ShareOf& share_of) const {
+int SplitCollapse::step(Cut& cut, std::vector<float>& qe, const WeightOf& weight_of, const ShareOf& share_of) const {
   const size_t K = cut.nodes.size();
-  thread_local std::vector<double> pri;
-  mix_prior(
-      K, m_floor, [&](size_t k) { return double(m_tree.node(cut.nodes[k]).bounds.power); },
-      [&](size_t k) { return double(cut.weight[k]); }, pri);
-  // Q of a cluster never visited: the cell's total shared by the prior.
-  auto q_eff = [&](size_t k) { return cut.q[k] >= 0 ? cut.q[k] : float(total * pri[k]); };
   // l_max: the splittable cluster (more than one light) with the largest Q.
   long best = -1;
-  float best_q = -1;
-  for (size_t k = 0; k < K; ++k) {
-    if (m_tree.node(cut.nodes[k]).is_leaf()) continue;
-    float q = q_eff(k);
-    if (q > best_q) {
-      best_q = q;
-      best = long(k);
-    }
-  }
+  for (size_t k = 0; k < K; ++k)
+    if (!m_tree.node(cut.nodes[k]).is_leaf() && (best < 0 || qe[k] > qe[best])) best = long(k);
   if (best < 0) return 0;
   // p_min: among parents whose two children are both in the cut (the minimum of Q over all
   // nodes above the cut is always attained at such a parent), the one with the smallest Q,
   // not the parent of l_max.
   long pmin = -1;
-  float pmin_q = kInf;
   if (int(K) >= m_max) {
     for (size_t k = 0; k + 1 < K; ++k) {
       if (long(k) == best || long(k + 1) == best) continue;
@@ -111,34 +97,34 @@ int SplitCollapse::step(Cut& cut, float total, const WeightOf& weight_of, const 
       if (a.parent == LightTree::kNone || m_tree.node(a.parent).child != cut.nodes[k] ||
           cut.nodes[k + 1] != cut.nodes[k] + 1)
         continue;
-      float q = q_eff(k) + q_eff(k + 1);
-      if (q < pmin_q) {
-        pmin_q = q;
-        pmin = long(k);
-      }
+      if (pmin < 0 || qe[k] + qe[k + 1] < qe[pmin] + qe[pmin + 1]) pmin = long(k);
     }
-    if (pmin < 0 || !(best_q > m_t * pmin_q)) return 0;
+    if (pmin < 0 || !(qe[best] > m_t * (qe[pmin] + qe[pmin + 1]))) return 0;
     // Collapse: the parent replaces its two children, Q summed.
     uint32_t parent = m_tree.node(cut.nodes[pmin]).parent;
     bool unvisited = cut.q[pmin] < 0 && cut.q[pmin + 1] < 0;
-    cut.q[pmin] = unvisited ? -1.0f : q_eff(pmin) + q_eff(pmin + 1);
+    qe[pmin] += qe[pmin + 1];
+    cut.q[pmin] = unvisited ? -1.0f : qe[pmin];
     cut.nodes[pmin] = parent;
     cut.weight[pmin] = weight_of(parent);
     cut.nodes.erase(cut.nodes.begin() + pmin + 1);
     cut.q.erase(cut.q.begin() + pmin + 1);
     cut.weight.erase(cut.weight.begin() + pmin + 1);
+    qe.erase(qe.begin() + pmin + 1);
     if (best > pmin) --best;
   }
   // Split: l_max's two children replace it, Q shared in proportion to share_of.
   const LightTreeNode& nd = m_tree.node(cut.nodes[best]);
   float s0 = share_of(nd.child), s1 = share_of(nd.child + 1);
   float f0 = s0 + s1 > 0 ? s0 / (s0 + s1) : 0.5f;
-  float q = cut.q[best];
+  float q = cut.q[best], e = qe[best];
   cut.nodes[best] = nd.child;
   cut.q[best] = q >= 0 ? q * f0 : -1.0f;
+  qe[best] = e * f0;
   cut.weight[best] = weight_of(nd.child);
   cut.nodes.insert(cut.nodes.begin() + best + 1, nd.child + 1);
   cut.q.insert(cut.q.begin() + best + 1, q >= 0 ? q * (1 - f0) : -1.0f);
+  qe.insert(qe.begin() + best + 1, e * (1 - f0));
   cut.weight.insert(cut.weight.begin() + best + 1, weight_of(nd.child + 1));
   return pmin < 0 ? 2 : 1;
 }
@@ -155,6 +141,7 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   if (s.splits < 0) fail("rll.splits must not be negative (got {})", s.splits);
   // Fixed point with 2^-24 of the reward scale per step.
   m_scale = std::max(reward_scale, 1e-30) * 0x1p-24;
+  m_log_keep = std::log1p(-double(s.alpha));
   m_initial = initial_cut(tree, m_m);
   for (uint32_t n : m_initial) m_initial_ends.push_back(tree.node(n).end);
 
@@ -300,7 +287,7 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
   if (n_total > 0) {
     st.touched = true;
     double estimate = double(m_cell_sum[cell].load(std::memory_order_relaxed)) * m_scale / double(n_total);
-    double b = std::pow(1.0 - m_s.alpha, double(n_total));
+    double b = std::exp(double(n_total) * m_log_keep);
     m_total[cell] = m_total[cell] < 0 ? float(estimate) : float(b * m_total[cell] + (1 - b) * estimate);
     thread_local std::vector<double> pri;
     prior(cut, pri);
@@ -308,7 +295,7 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
       uint32_t n = m_count[base + k].load(std::memory_order_relaxed);
       if (n == 0) continue;
       double mean = double(m_sum[base + k].load(std::memory_order_relaxed)) * m_scale / n;
-      double bk = std::pow(1.0 - m_s.alpha, double(n));
+      double bk = std::exp(double(n) * m_log_keep);
       double old = cut.q[k] >= 0 ? cut.q[k] : m_total[cell] * pri[k];
       cut.q[k] = float(bk * old + (1 - bk) * mean);
     }
@@ -317,14 +304,17 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
       m_count[base + k].store(0, std::memory_order_relaxed);
     }
     m_cell_sum[cell].store(0, std::memory_order_relaxed);
-    SplitCollapse sc(m_tree, m_m, m_s.threshold, power_floor());
+    SplitCollapse sc(m_tree, m_m, m_s.threshold);
+    thread_local std::vector<float> qe;
+    qe.resize(K);
+    for (size_t k = 0; k < K; ++k) qe[k] = cut.q[k] >= 0 ? cut.q[k] : float(std::max(0.0f, m_total[cell]) * pri[k]);
     auto prior_weight = [&](uint32_t node) { return weight_of(cell, node); };
     auto share = [&](uint32_t node) {
       return m_s.split == ClusterWeight::Power ? m_tree.node(node).bounds.power
                                                : m_tree.importance(node, m_anchor[cell].p, m_anchor[cell].n);
     };
     for (int i = 0; i < m_s.splits; ++i) {
-      int r = sc.step(cut, std::max(0.0f, m_total[cell]), prior_weight, share);
+      int r = sc.step(cut, qe, prior_weight, share);
       if (r == 0) break;
       ++st.splits;
       if (r == 1) ++st.collapses;

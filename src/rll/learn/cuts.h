@@ -47,24 +47,21 @@ std::vector<uint32_t> initial_cut(const LightTree& tree, int cut_size);
 // True if the nodes partition [0, light_count) into contiguous ranges in order.
 bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes);
 
-// Split-collapse on a cut (DESIGN 2).
+// Split-collapse on a cut (DESIGN 2), with `qe` the effective Q of every cluster (the learnt
+// value, or for a cluster never visited its prior share of the cell's total), kept in step.
 class SplitCollapse {
  public:
-  // `power_floor`: the share of the prior that follows power (see CutStore).
-  SplitCollapse(const LightTree& tree, int max_size, float threshold, double power_floor)
-      : m_tree(tree), m_max(max_size), m_t(threshold), m_floor(power_floor) {}
+  SplitCollapse(const LightTree& tree, int max_size, float threshold) : m_tree(tree), m_max(max_size), m_t(threshold) {}
   // One step: returns 1 for a split with a collapse, 2 for a pure split (K < M), 0 if nothing
-  // changed. `total` is the cell's estimated total contribution: unvisited clusters get their
-  // prior's share of it. `weight_of(node)` is the prior weight of a node entering the cut;
-  // `share_of(node)` splits a cluster's Q between its children.
+  // changed. `weight_of(node)` is the prior weight of a node entering the cut; `share_of(node)`
+  // splits a cluster's Q between its children.
   template <typename WeightOf, typename ShareOf>
-  int step(Cut& cut, float total, const WeightOf& weight_of, const ShareOf& share_of) const;
+  int step(Cut& cut, std::vector<float>& qe, const WeightOf& weight_of, const ShareOf& share_of) const;
 
  private:
   const LightTree& m_tree;
   int m_max;
   float m_t;
-  double m_floor;
 };
 
 class CutStore {
@@ -123,7 +120,8 @@ class CutStore {
   const LightTree& m_tree;
   CutSettings m_s;
   int m_m;
-  double m_scale;  // fixed point: reward units per integer step
+  double m_scale;     // fixed point: reward units per integer step
+  double m_log_keep;  // log(1 - alpha)
 
   std::vector<uint32_t> m_initial, m_initial_ends;
 

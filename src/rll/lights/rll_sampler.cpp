@@ -142,7 +142,7 @@ float RllLightSampler::pmf_within(const LightContext& ctx, uint32_t node, uint32
 }
 
 float RllLightSampler::mixture_pmf(const LightContext& ctx, const View& v, uint32_t k, uint32_t l, float within,
-                                   float* cluster_pmf) const {
+                                   const DescentPath* path, float* cluster_pmf) const {
   const float q = cdf_width(v, k);  // the cell's CDF: learnt, or with the prior
   if (m_s.defensive == Defensive::Cell) {
     *cluster_pmf = q;
@@ -150,18 +150,16 @@ float RllLightSampler::mixture_pmf(const LightContext& ctx, const View& v, uint3
   }
   // P(l|x) = [(1 - eps) Q(s)/sum Q + eps reach(s|x)] P(l|s): the defensive prior of DESIGN 2 is
   // the tree's probability of the cluster at x. Before the cell has learnt anything, the tree
-  // alone.
+  // alone. A descent from the root that went through the cluster (`path`) already holds reach.
   const float eps = learnt(ctx.cell) ? m_s.cut.epsilon : 1.0f;
   const uint32_t node = v.nodes[k];
-  if (m_s.within == WithinCluster::Tree) {
-    *cluster_pmf = (1 - eps) * q + eps * tree_reach_pmf(m_tree, node, ctx.p, ctx.n);
-    return *cluster_pmf * within;
-  }
+  int at = path ? path->index_of(node) : -1;
+  float reach = at >= 0 ? path->product(0, at) : tree_reach_pmf(m_tree, node, ctx.p, ctx.n);
+  *cluster_pmf = (1 - eps) * q + eps * reach;
+  if (m_s.within == WithinCluster::Tree) return *cluster_pmf * within;
   // Another within-cluster rule: mix the two distributions over lights.
-  float tree = tree_descend_pmf(m_tree, LightTree::kRoot, l, ctx.p, ctx.n);
-  float pmf = (1 - eps) * q * within + eps * tree;
-  *cluster_pmf = (1 - eps) * q + eps * tree_reach_pmf(m_tree, node, ctx.p, ctx.n);
-  return pmf;
+  float tree = path ? path->product(0, path->length - 1) : tree_descend_pmf(m_tree, LightTree::kRoot, l, ctx.p, ctx.n);
+  return (1 - eps) * q * within + eps * tree;
 }
 
 float RllLightSampler::cdf_width(const View& v, uint32_t k) const {
@@ -172,32 +170,39 @@ bool RllLightSampler::learnt(uint32_t cell) const { return m_cuts->learnt(cell);
 
 SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
   View v = view(ctx.cell);
+  DescentPath path;
   if (!has_cut(ctx.cell)) {
     // A point without a learnt cut (a cell new in this pass, or none: table full) samples
     // like the light tree. Its reward still goes to its cluster of the initial cut: given the
-    // cluster, the tree chose the light with probability tree_descend_pmf(cluster -> light).
-    SampledLight s = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u);
+    // cluster, the tree chose the light with the probability of the path below the cluster.
+    SampledLight s = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &path);
     if (!(s.pmf > 0)) return {};
     s.cluster = cluster_of(v, s.light);
-    float within = tree_descend_pmf(m_tree, v.nodes[s.cluster], s.light, ctx.p, ctx.n);
+    int at = path.index_of(v.nodes[s.cluster]);
+    float within = path.product(at, path.length - 1);
     s.cluster_pmf = within > 0 ? s.pmf / within : s.pmf;
     return s;
   }
   const float eps = m_s.defensive == Defensive::Tree ? (learnt(ctx.cell) ? m_s.cut.epsilon : 1.0f) : 0.0f;
   uint32_t k, l;
   float within;
+  const DescentPath* descent = nullptr;
   if (u < eps) {
     // The defensive branch: a descent of the whole tree, then its cluster in this cut.
-    SampledLight t = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u / eps);
+    SampledLight t = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u / eps, &path);
     if (!(t.pmf > 0)) return {};
     l = t.light;
     k = cluster_of(v, l);
-    within = pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], l);
+    if (m_s.within == WithinCluster::Tree)
+      within = path.product(path.index_of(v.nodes[k]), path.length - 1);
+    else
+      within = pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], l);
+    descent = &path;
   } else {
     // The learnt branch: a cluster from the cell's CDF (first entry above u; zero-width
-    // entries are never returned), then a light inside it.
-    // Compared and differenced in double: the interval of u that selects cluster k is exactly
-    // [cdf[k-1], cdf[k]), and its width is what the pmf reports (cdf_width).
+    // entries are never returned), then a light inside it. Compared and differenced in
+    // double: the interval of u that selects cluster k is exactly [cdf[k-1], cdf[k]), and its
+    // width is what the pmf reports (cdf_width).
     double uc = (u - eps) / (1 - eps);
     k = uint32_t(std::upper_bound(v.cdf, v.cdf + v.size, uc, [](double x, float c) { return x < double(c); }) - v.cdf);
     k = std::min(k, v.size - 1);
@@ -214,7 +219,7 @@ SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
   SampledLight s;
   s.light = l;
   s.cluster = k;
-  s.pmf = mixture_pmf(ctx, v, k, l, within, &s.cluster_pmf);
+  s.pmf = mixture_pmf(ctx, v, k, l, within, descent, &s.cluster_pmf);
   return s.pmf > 0 ? s : SampledLight{};
 }
 
@@ -229,7 +234,7 @@ float RllLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
   if (k >= v.size) return 0;
   float within = pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], light);
   float cluster_pmf;
-  return mixture_pmf(ctx, v, k, light, within, &cluster_pmf);
+  return mixture_pmf(ctx, v, k, light, within, nullptr, &cluster_pmf);
 }
 
 void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, float estimate) {

@@ -12,6 +12,7 @@
 #include "rll/learn/cell_grid.h"
 #include "rll/learn/cuts.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/lights/tree_sampler.h"
 
 namespace rll {
 
@@ -73,8 +74,9 @@ class RllLightSampler final : public LightSampler {
   float pmf_within(const LightContext& ctx, uint32_t node, uint32_t begin, uint32_t end, uint32_t light) const;
   // The full pmf of light l in cluster k (which contains it), and the cluster's probability.
   // `within` is pmf_within(l), already known to the caller.
+  // `path`: a descent from the root that reached l, if the caller has one (saves the reach).
   float mixture_pmf(const LightContext& ctx, const View& v, uint32_t k, uint32_t l, float within,
-                    float* cluster_pmf) const;
+                    const DescentPath* path, float* cluster_pmf) const;
   void refresh_light_powers(const Scene& scene);
 
   const LightTree& m_tree;

@@ -6,7 +6,7 @@
 namespace rll {
 
 namespace {
-constexpr int kMaxDepth = 256;
+constexpr int kMaxDepth = kMaxTreeDepth;
 
 // Probability of the first child of an inner node, in proportion to importance. Where both
 // children have zero importance (the parent's looser bounds admitted a subtree whose own bounds
@@ -27,21 +27,33 @@ inline float first_child_probability(const LightTree& tree, const LightTreeNode&
 }
 }  // namespace
 
-SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, const Vec3& n, double u) {
+SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, const Vec3& n, double u,
+                          DescentPath* path) {
   uint32_t index = from;
   float pmf = 1;
+  if (path) {
+    path->length = 1;
+    path->node[0] = from;
+    path->step[0] = 1;
+  }
   for (;;) {
     const LightTreeNode& node = tree.node(index);
     if (node.is_leaf()) return {node.begin, pmf};
     float p0 = first_child_probability(tree, node, p, n);
+    float step;
     if (u < p0) {
       u = std::min(u / p0, 0x1.fffffffffffffp-1);
-      pmf *= p0;
+      step = p0;
       index = node.child;
     } else {
       u = std::min((u - p0) / (1 - p0), 0x1.fffffffffffffp-1);
-      pmf *= 1 - p0;
+      step = 1 - p0;
       index = node.child + 1;
+    }
+    pmf *= step;
+    if (path) {
+      path->node[path->length] = index;
+      path->step[path->length++] = step;
     }
   }
 }

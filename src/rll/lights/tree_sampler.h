@@ -8,10 +8,34 @@
 
 namespace rll {
 
+inline constexpr int kMaxTreeDepth = 256;
+
+// The nodes a descent went through and the probability of each step, so that callers can
+// form the probability of any part of the path without evaluating importances again. The
+// products are formed top-down from 1, exactly as tree_descend_pmf and tree_reach_pmf do, so
+// they agree with them to the bit.
+struct DescentPath {
+  uint32_t node[kMaxTreeDepth];
+  float step[kMaxTreeDepth];  // step[i]: probability of going from node[i-1] to node[i]
+  int length = 0;             // node[0] is the start (step[0] = 1), node[length-1] the leaf
+  int index_of(uint32_t n) const {
+    for (int i = 0; i < length; ++i)
+      if (node[i] == n) return i;
+    return -1;
+  }
+  // Product of the steps after index `a` up to and including `b`.
+  float product(int a, int b) const {
+    float p = 1;
+    for (int i = a + 1; i <= b; ++i) p *= step[i];
+    return p;
+  }
+};
+
 // Descends the subtree under `from`, returning a light under it and the probability of that
 // choice given that the descent starts at `from`. A child with zero importance is never chosen
 // over a sibling with positive importance; the pmfs of the lights under `from` sum to one.
-SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, const Vec3& n, double u);
+SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, const Vec3& n, double u,
+                          DescentPath* path = nullptr);
 // The probability that tree_descend(tree, from, p, n, .) returns `light`: the same products in
 // the same order, so the two agree exactly. 0 if `light` is not under `from`.
 float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, const Vec3& p, const Vec3& n);

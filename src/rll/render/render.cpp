@@ -21,6 +21,7 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
                       const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
   if (settings.spp < 1) fail("--spp must be at least 1 (got {})", settings.spp);
   if (settings.pass_spp < 1) fail("pass size must be at least 1 sample per pixel");
+  const int max_pass = std::max(settings.pass_spp, settings.max_pass_spp);
   if (film.width() != scene.width || film.height() != scene.height) fail("film size does not match the scene");
   const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
   const int tiles_x = (w + ts - 1) / ts, tiles_y = (h + ts - 1) / ts;
@@ -36,7 +37,8 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
 
   while (progress.spp_done < settings.spp && !stop.load()) {
     const int first = progress.spp_done;
-    const int count = std::min(settings.pass_spp, settings.spp - first);
+    const int size = std::min(max_pass, settings.pass_spp << std::min(20, progress.passes / 2));
+    const int count = std::min(size, settings.spp - first);
     parallel_for_each(size_t(tiles_x) * tiles_y, [&](size_t tile) {
       if (stop.load(std::memory_order_relaxed)) return;
       if ((cancel && cancel->load(std::memory_order_relaxed)) ||

@@ -16,7 +16,11 @@ struct RenderSettings {
   int spp = 16;               // samples per pixel to reach (upper limit)
   double time_limit = 0;      // seconds; 0 = none
   uint64_t seed = 1;
-  int pass_spp = 1;           // samples per pixel in one pass
+  // Pass sizes in samples per pixel: pass_spp for the first two passes, then doubling every
+  // two passes up to max_pass_spp (learning samplers adapt fast at first, then the end-of-pass
+  // work is spread over more samples).
+  int pass_spp = 1;
+  int max_pass_spp = 8;
   int tile_size = 16;
   int frame = 0;              // animation frame (enters the random seed)
 };

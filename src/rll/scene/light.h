@@ -43,10 +43,11 @@ Light make_directional_light(const Vec3& direction_to_light, const Rgb& irradian
 
 // Solid angle of a triangle seen from p (Van Oosterom & Strackee).
 float triangle_solid_angle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
-// Triangle lights are sampled uniformly in the solid angle they subtend (Arvo 1995) where it
-// is well conditioned, by area elsewhere (tiny or nearly flat-on-the-horizon triangles); both
-// sample_li and pdf_li apply the same rule.
-inline constexpr float kMinSphericalSolidAngle = 3e-4f, kMaxSphericalSolidAngle = 6.2f;
+// Triangle lights are sampled uniformly in the solid angle they subtend (Arvo 1995) where that
+// pays, by area elsewhere (small or far triangles); sample_li and pdf_li apply the same rule.
+// Below 0.01 sr the pdf of area sampling varies little over the triangle, and the spherical
+// warp's trigonometry is not worth its cost (a sky dome's triangles are ~3e-3 sr).
+inline constexpr float kMinSphericalSolidAngle = 1e-2f, kMaxSphericalSolidAngle = 6.2f;
 
 // Samples a point on the light as seen from p; pdf 0 when nothing is emitted towards p.
 LightLiSample sample_li(const Light& light, const Vec3& p, Vec2 u);
