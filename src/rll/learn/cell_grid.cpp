@@ -55,8 +55,12 @@ CellCoord CellKeyer::locate(const Vec3& p, const Vec3& n, float footprint, float
   // footprint on average.
   float lf = std::log2(cell_size(footprint)) - m_log2_extent;
   float lo = std::floor(lf);
+  return locate_at_level(p, n, int(lo) + (u < lf - lo ? 1 : 0));
+}
+
+CellCoord CellKeyer::locate_at_level(const Vec3& p, const Vec3& n, int level) const {
   CellCoord c;
-  c.level = int(lo) + (u < lf - lo ? 1 : 0);
+  c.level = level;
   const int bins = m_s.normal_bins;
   Vec2 o = octahedral_encode(n);
   c.nu = clamp(int(std::floor(o.x * bins + m_jitter_normal.x)), 0, bins - 1);
@@ -83,6 +87,7 @@ uint64_t CellKeyer::key(const CellCoord& c) const {
 CellAnchor CellKeyer::anchor(const CellCoord& c) const {
   const int bins = m_s.normal_bins;
   CellAnchor a;
+  a.level = c.level;
   a.n = octahedral_decode({(c.nu + 0.5f - m_jitter_normal.x) / bins, (c.nv + 0.5f - m_jitter_normal.y) / bins});
   float size = std::ldexp(m_extent, c.level);
   Frame f(a.n);

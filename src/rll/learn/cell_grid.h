@@ -15,10 +15,13 @@
 namespace rll {
 
 struct CellGridSettings {
-  float footprint_scale = 4;   // cell radius = footprint_scale * ray footprint ...
+  float footprint_scale = 2;   // cell radius = footprint_scale * ray footprint ...
   float max_cell = 0.05f;      // ... at most max_cell * scene diameter
   int normal_bins = 4;         // bins per axis of the octahedral normal map
-  float jitter = 1;            // jitter amplitude in cell units (0: none)
+  // Jitter amplitude in cell units (0: none). Renewing the jitter every pass blends cell
+  // boundaries but applies each cell's learnt state to a region it did not learn: on
+  // cornell-boxes-room it doubled RLL's error, so it is off by default (bench/RESULTS.md).
+  float jitter = 0;
 };
 
 // The integer coordinates of a cell in the 5D grid.
@@ -31,6 +34,7 @@ struct CellCoord {
 // A representative point of a cell: the centre of its box and of its normal bin.
 struct CellAnchor {
   Vec3 p, n;
+  int level = 0;
 };
 
 // Maps shading points to cells and cells to 64-bit keys (never 0).
@@ -42,6 +46,8 @@ class CellKeyer {
   // Cell of point p with unit normal n and ray footprint radius `footprint`; u drives the
   // stochastic rounding of the level of detail.
   CellCoord locate(const Vec3& p, const Vec3& n, float footprint, float u) const;
+  // The cell of p, n at a given level of detail.
+  CellCoord locate_at_level(const Vec3& p, const Vec3& n, int level) const;
   uint64_t key(const CellCoord& c) const;
   uint64_t key(const Vec3& p, const Vec3& n, float footprint, float u) const { return key(locate(p, n, footprint, u)); }
   // The cell's centre under this pass's jitter (a function of the coordinates alone).

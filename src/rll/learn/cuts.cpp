@@ -105,10 +105,12 @@ int SplitCollapse::step(Cut& cut, std::vector<float>& qe, const WeightOf& weight
     bool unvisited = cut.q[pmin] < 0 && cut.q[pmin + 1] < 0;
     qe[pmin] += qe[pmin + 1];
     cut.q[pmin] = unvisited ? -1.0f : qe[pmin];
+    cut.n[pmin] += cut.n[pmin + 1];
     cut.nodes[pmin] = parent;
     cut.weight[pmin] = weight_of(parent);
     cut.nodes.erase(cut.nodes.begin() + pmin + 1);
     cut.q.erase(cut.q.begin() + pmin + 1);
+    cut.n.erase(cut.n.begin() + pmin + 1);
     cut.weight.erase(cut.weight.begin() + pmin + 1);
     qe.erase(qe.begin() + pmin + 1);
     if (best > pmin) --best;
@@ -118,7 +120,11 @@ int SplitCollapse::step(Cut& cut, std::vector<float>& qe, const WeightOf& weight
   float s0 = share_of(nd.child), s1 = share_of(nd.child + 1);
   float f0 = s0 + s1 > 0 ? s0 / (s0 + s1) : 0.5f;
   float q = cut.q[best], e = qe[best];
+  // The split of Q is a guess: each child keeps half the evidence behind it.
+  float n = 0.5f * cut.n[best];
   cut.nodes[best] = nd.child;
+  cut.n[best] = n;
+  cut.n.insert(cut.n.begin() + best + 1, n);
   cut.q[best] = q >= 0 ? q * f0 : -1.0f;
   qe[best] = e * f0;
   cut.weight[best] = weight_of(nd.child);
@@ -150,10 +156,13 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   m_node.assign(n, 0);
   m_end.assign(n, 0);
   m_q.assign(n, 0.0f);
+  m_n.assign(n, 0.0f);
   m_weight.assign(n, 0.0f);
   m_cdf.assign(n, 0.0f);
   m_total.assign(cells, -1.0f);
   m_learnt.assign(cells, 0);
+  m_seen.assign(cells, 0.0f);
+  m_eps.assign(cells, 1.0f);
   m_anchor.assign(cells, CellAnchor{});
   m_sum = std::make_unique<std::atomic<int64_t>[]>(n);
   m_count = std::make_unique<std::atomic<uint32_t>[]>(n);
@@ -167,7 +176,7 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
 
 size_t CutStore::bytes() const {
   const size_t n = m_node.size();
-  return n * (2 * sizeof(uint32_t) + 3 * sizeof(float) + sizeof(int64_t) + sizeof(uint32_t)) +
+  return n * (2 * sizeof(uint32_t) + 4 * sizeof(float) + sizeof(int64_t) + sizeof(uint32_t)) +
          m_size.size() * (sizeof(uint32_t) + sizeof(float) + sizeof(int64_t) + sizeof(CellAnchor));
 }
 
@@ -199,6 +208,7 @@ void CutStore::load(uint32_t cell, Cut& cut) const {
   const size_t base = size_t(cell) * m_m, K = m_size[cell];
   cut.nodes.assign(m_node.begin() + long(base), m_node.begin() + long(base + K));
   cut.q.assign(m_q.begin() + long(base), m_q.begin() + long(base + K));
+  cut.n.assign(m_n.begin() + long(base), m_n.begin() + long(base + K));
   cut.weight.assign(m_weight.begin() + long(base), m_weight.begin() + long(base + K));
 }
 
@@ -214,6 +224,7 @@ void CutStore::store(uint32_t cell, const Cut& cut) {
   auto q_eff = [&](size_t k) { return cut.q[k] >= 0 ? double(cut.q[k]) : total * pri[k]; };
   for (size_t k = 0; k < K; ++k) q_sum += q_eff(k);
   m_learnt[cell] = q_sum > 0;
+  m_eps[cell] = q_sum > 0 ? m_s.epsilon + (1 - m_s.epsilon) * m_s.trust / (m_s.trust + m_seen[cell]) : 1.0f;
   const double eps = q_sum > 0 ? (m_s.prior_in_cdf ? m_s.epsilon : 0.0) : 1.0;
   double acc = 0;
   for (size_t k = 0; k < K; ++k) {
@@ -222,6 +233,7 @@ void CutStore::store(uint32_t cell, const Cut& cut) {
     m_end[base + k] = m_tree.node(cut.nodes[k]).end;
     m_node[base + k] = cut.nodes[k];
     m_q[base + k] = cut.q[k];
+    m_n[base + k] = cut.n[k];
     m_weight[base + k] = cut.weight[k];
   }
   for (size_t k = 0; k < K; ++k) m_cdf[base + k] = float(std::min(1.0, double(m_cdf[base + k]) / acc));
@@ -233,6 +245,8 @@ void CutStore::clear(uint32_t cell) {
   m_size[cell] = 0;
   m_total[cell] = -1;
   m_learnt[cell] = 0;
+  m_seen[cell] = 0;
+  m_eps[cell] = 1;
   for (int k = 0; k < m_m; ++k) {
     m_sum[base + k].store(0, std::memory_order_relaxed);
     m_count[base + k].store(0, std::memory_order_relaxed);
@@ -244,6 +258,7 @@ void CutStore::assign(uint32_t cell, const std::vector<uint32_t>& nodes, const s
   Cut cut;
   cut.nodes = nodes;
   cut.q = q;
+  cut.n.assign(nodes.size(), 1.0f / m_s.alpha);
   cut.weight.resize(nodes.size());
   double total = 0;
   for (size_t k = 0; k < nodes.size(); ++k) {
@@ -251,6 +266,7 @@ void CutStore::assign(uint32_t cell, const std::vector<uint32_t>& nodes, const s
     total += std::max(0.0f, q[k]);
   }
   m_total[cell] = float(total);
+  m_seen[cell] = 1e30f;  // known exactly: only the configured defensive weight
   store(cell, cut);
 }
 
@@ -262,7 +278,7 @@ void CutStore::refresh(uint32_t cell) {
   store(cell, cut);
 }
 
-CutStore::PassStats CutStore::end_pass(uint32_t cell) {
+CutStore::PassStats CutStore::end_pass(uint32_t cell, uint32_t parent) {
   PassStats st;
   thread_local Cut cut;
   const size_t base = size_t(cell) * m_m;
@@ -272,9 +288,17 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
   if (active(cell) && n_total == 0) return st;  // nothing new: the cut and CDF stand
   if (active(cell)) {
     load(cell, cut);
+  } else if (parent != ~0u && active(parent) && m_learnt[parent]) {
+    // Coarse to fine: a new cell inherits what the coarser cell around it has learnt (its Q
+    // are averages over a region that contains this cell), with its own prior weights.
+    load(parent, cut);
+    for (size_t k = 0; k < cut.nodes.size(); ++k) cut.weight[k] = weight_of(cell, cut.nodes[k]);
+    m_total[cell] = m_total[parent];
+    m_seen[cell] = m_seen[parent];
   } else {
     cut.nodes = m_initial;
     cut.q.assign(m_initial.size(), -1.0f);
+    cut.n.assign(m_initial.size(), 0.0f);
     cut.weight.resize(m_initial.size());
     for (size_t k = 0; k < m_initial.size(); ++k) cut.weight[k] = weight_of(cell, m_initial[k]);
   }
@@ -286,6 +310,7 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
   // and lost 3x: the rule's long memory of the prior estimate is a useful shrinkage.)
   if (n_total > 0) {
     st.touched = true;
+    m_seen[cell] += float(n_total);
     double estimate = double(m_cell_sum[cell].load(std::memory_order_relaxed)) * m_scale / double(n_total);
     double b = std::exp(double(n_total) * m_log_keep);
     m_total[cell] = m_total[cell] < 0 ? float(estimate) : float(b * m_total[cell] + (1 - b) * estimate);
@@ -295,9 +320,15 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
       uint32_t n = m_count[base + k].load(std::memory_order_relaxed);
       if (n == 0) continue;
       double mean = double(m_sum[base + k].load(std::memory_order_relaxed)) * m_scale / n;
-      double bk = std::exp(double(n) * m_log_keep);
       double old = cut.q[k] >= 0 ? cut.q[k] : m_total[cell] * pri[k];
-      cut.q[k] = float(bk * old + (1 - bk) * mean);
+      if (m_s.rule == LearningRule::Exponential) {
+        double bk = std::exp(double(n) * m_log_keep);
+        cut.q[k] = float(bk * old + (1 - bk) * mean);
+      } else {
+        double w = cut.q[k] >= 0 ? std::min(double(cut.n[k]), 1.0 / m_s.alpha) : double(m_s.prior_samples);
+        cut.q[k] = float((w * old + n * mean) / (w + n));
+        cut.n[k] = float(std::min(w + n, 1.0 / m_s.alpha));
+      }
     }
     for (size_t k = 0; k < K; ++k) {
       m_sum[base + k].store(0, std::memory_order_relaxed);

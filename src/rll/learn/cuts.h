@@ -15,6 +15,12 @@
 
 namespace rll {
 
+// How Q follows the rewards. Exponential: the paper's Q := (1-a) Q + a r per reward. Shrinkage:
+// a mean of the rewards and of the prior estimate counted as `prior_samples` rewards, over at
+// most the last ~1/a rewards; an occluded cluster's Q then halves after prior_samples zero
+// rewards instead of after ~0.7/a of them.
+enum class LearningRule { Shrinkage, Exponential };
+
 // How a cluster's prior weight and a split's share of Q are estimated: from the light tree's
 // importance of the node at the cell's anchor (spatial, visibility-blind), or from the node's
 // power alone (the paper).
@@ -30,6 +36,12 @@ struct CutSettings {
   // True: the CDF is (1-eps) Q/sum Q + eps prior (the defensive prior per cell). False: the CDF
   // holds the learnt distribution alone, the sampler mixing in its own defensive term.
   bool prior_in_cdf = false;
+  LearningRule rule = LearningRule::Shrinkage;
+  float prior_samples = 4;  // n0 of the shrinkage rule
+  // Rewards a cell must have seen before its learnt distribution gets half the weight the
+  // defensive term does not take: the cell's defensive weight is
+  // eps + (1 - eps) * trust / (trust + rewards seen).
+  float trust = 256;
   ClusterWeight split = ClusterWeight::Importance;
 };
 
@@ -37,6 +49,7 @@ struct CutSettings {
 struct Cut {
   std::vector<uint32_t> nodes;  // tree nodes sorted by range
   std::vector<float> q;         // learnt value; < 0: never visited (the prior estimate applies)
+  std::vector<float> n;         // shrinkage rule: rewards (and prior) behind q
   std::vector<float> weight;    // prior weight of each cluster (importance or power)
 };
 
@@ -84,6 +97,8 @@ class CutStore {
   const float* q(uint32_t cell) const { return &m_q[size_t(cell) * m_m]; }
   // False while the cell has learnt nothing (every Q zero): its CDF is then the prior's.
   bool learnt(uint32_t cell) const { return m_learnt[cell] != 0; }
+  // The weight of the defensive term for this cell during this pass (1 before it learnt).
+  float defensive_weight(uint32_t cell) const { return m_eps[cell]; }
 
   // Called when a cell is created, from any thread: its anchor for prior weights.
   void set_anchor(uint32_t cell, const CellAnchor& a) { m_anchor[cell] = a; }
@@ -99,7 +114,10 @@ class CutStore {
   };
   // End of pass for one cell (cells are independent: call in parallel). A cell without a cut
   // gets the initial one; rewards are folded into Q, split-collapse runs, the CDF is rebuilt.
-  PassStats end_pass(uint32_t cell);
+  // `parent`: a coarser cell around this one whose learnt state a new cell starts from (kNone:
+  // the initial cut with the prior).
+  PassStats end_pass(uint32_t cell, uint32_t parent = ~0u);
+  const CellAnchor& anchor(uint32_t cell) const { return m_anchor[cell]; }
   // Light powers or positions changed: recompute prior weights and the CDF of a cell.
   void refresh(uint32_t cell);
   // Forgets a cell (eviction).
@@ -127,8 +145,10 @@ class CutStore {
 
   std::vector<uint32_t> m_size;  // K per cell; 0: no cut yet
   std::vector<uint32_t> m_node, m_end;
-  std::vector<float> m_q, m_weight, m_cdf;
+  std::vector<float> m_q, m_n, m_weight, m_cdf;
   std::vector<uint8_t> m_learnt;  // per cell: sum of Q > 0
+  std::vector<float> m_seen;      // per cell: rewards received so far
+  std::vector<float> m_eps;       // per cell: defensive weight, frozen during a pass
   std::vector<float> m_total;  // per cell: learnt estimate of the total contribution (< 0: none)
   std::vector<CellAnchor> m_anchor;
   std::unique_ptr<std::atomic<int64_t>[]> m_sum;       // per cluster: fixed-point reward sum

@@ -37,6 +37,14 @@ RllSettings rll_settings_from(const Params& p) {
   s.grid.max_cell = p.get_float("rll.max_cell", s.grid.max_cell);
   s.grid.normal_bins = int(p.get_int("rll.normal_bins", s.grid.normal_bins));
   s.grid.jitter = p.get_float("rll.jitter", s.grid.jitter);
+  s.inherit = p.get_bool("rll.inherit", s.inherit);
+  s.cut.rule = p.get_choice("rll.learning", "shrinkage", {"shrinkage", "exponential"}) == "shrinkage"
+                   ? LearningRule::Shrinkage
+                   : LearningRule::Exponential;
+  s.cut.prior_samples = p.get_float("rll.prior_samples", s.cut.prior_samples);
+  s.cut.trust = p.get_float("rll.trust", s.cut.trust);
+  if (!(s.cut.trust >= 0)) fail("--set rll.trust must not be negative");
+  if (!(s.cut.prior_samples > 0)) fail("--set rll.prior_samples must be positive");
   if (!(s.grid.footprint_scale > 0)) fail("--set rll.footprint_scale must be positive");
   if (!(s.grid.max_cell > 0 && s.grid.max_cell <= 1)) fail("--set rll.max_cell must be in (0, 1]");
   if (s.grid.normal_bins < 1 || s.grid.normal_bins > 64) fail("--set rll.normal_bins must be in [1, 64]");
@@ -151,7 +159,7 @@ float RllLightSampler::mixture_pmf(const LightContext& ctx, const View& v, uint3
   // P(l|x) = [(1 - eps) Q(s)/sum Q + eps reach(s|x)] P(l|s): the defensive prior of DESIGN 2 is
   // the tree's probability of the cluster at x. Before the cell has learnt anything, the tree
   // alone. A descent from the root that went through the cluster (`path`) already holds reach.
-  const float eps = learnt(ctx.cell) ? m_s.cut.epsilon : 1.0f;
+  const float eps = m_cuts->defensive_weight(ctx.cell);
   const uint32_t node = v.nodes[k];
   int at = path ? path->index_of(node) : -1;
   float reach = at >= 0 ? path->product(0, at) : tree_reach_pmf(m_tree, node, ctx.p, ctx.n);
@@ -183,7 +191,7 @@ SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
     s.cluster_pmf = within > 0 ? s.pmf / within : s.pmf;
     return s;
   }
-  const float eps = m_s.defensive == Defensive::Tree ? (learnt(ctx.cell) ? m_s.cut.epsilon : 1.0f) : 0.0f;
+  const float eps = m_s.defensive == Defensive::Tree ? m_cuts->defensive_weight(ctx.cell) : 0.0f;
   uint32_t k, l;
   float within;
   const DescentPath* descent = nullptr;
@@ -251,19 +259,43 @@ void RllLightSampler::end_pass() {
   if (m_frozen) return;
   const uint32_t cap = m_s.capacity;
   std::atomic<uint32_t> splits{0}, collapses{0}, touched{0};
-  parallel_for(cap, 256, [&](size_t b, size_t e) {
-    uint32_t sp = 0, co = 0, to = 0;
-    for (size_t c = b; c < e; ++c) {
-      if (!m_table->in_use(uint32_t(c))) continue;
-      CutStore::PassStats st = m_cuts->end_pass(uint32_t(c));
-      sp += st.splits;
-      co += st.collapses;
-      to += st.touched;
+  auto run = [&](const std::vector<uint32_t>& cells, bool with_parent) {
+    parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
+      uint32_t sp = 0, co = 0, to = 0;
+      for (size_t i = b; i < e; ++i) {
+        uint32_t c = cells[i];
+        uint32_t parent = ~0u;
+        if (with_parent) {
+          const CellAnchor& a = m_cuts->anchor(c);
+          parent = m_table->find(m_keyer.key(m_keyer.locate_at_level(a.p, a.n, a.level + 1)));
+          if (parent != CellTable::kNone && !m_was_active[parent]) parent = ~0u;
+        }
+        CutStore::PassStats st = m_cuts->end_pass(c, parent);
+        sp += st.splits;
+        co += st.collapses;
+        to += st.touched;
+      }
+      splits += sp;
+      collapses += co;
+      touched += to;
+    });
+  };
+  // Cells with a cut first; then the cells new in this pass, which may start from a coarser
+  // cell's state: only from one that had its cut before this pass (no cell is read while
+  // another thread writes it).
+  std::vector<uint32_t> old_cells, new_cells;
+  m_was_active.assign(cap, 0);
+  for (uint32_t c = 0; c < cap; ++c) {
+    if (!m_table->in_use(c)) continue;
+    if (m_cuts->active(c)) {
+      old_cells.push_back(c);
+      m_was_active[c] = 1;
+    } else {
+      new_cells.push_back(c);
     }
-    splits += sp;
-    collapses += co;
-    touched += to;
-  });
+  }
+  run(old_cells, false);
+  run(new_cells, m_s.inherit);
   m_splits_per_pass.push_back(splits);
   m_collapses_per_pass.push_back(collapses);
   m_touched_per_pass.push_back(touched);
@@ -328,7 +360,11 @@ nlohmann::json RllLightSampler::describe() const {
         {"footprint_scale", m_s.grid.footprint_scale},
         {"max_cell", m_s.grid.max_cell},
         {"normal_bins", m_s.grid.normal_bins},
-        {"jitter", m_s.grid.jitter}}},
+        {"jitter", m_s.grid.jitter},
+        {"inherit", m_s.inherit},
+        {"learning", m_s.cut.rule == LearningRule::Shrinkage ? "shrinkage" : "exponential"},
+        {"prior_samples", m_s.cut.prior_samples},
+        {"trust", m_s.cut.trust}}},
       {"passes", m_pass},
       {"cells_used", m_table->used()},
       {"cells_capacity", m_s.capacity},

@@ -29,6 +29,7 @@ struct RllSettings {
   WithinCluster within = WithinCluster::Tree;
   RewardKind reward = RewardKind::Cluster;
   Defensive defensive = Defensive::Tree;
+  bool inherit = true;  // new cells start from the learnt state of the coarser cell around them
 };
 
 // Reads rll.* parameters (see docs/rll.md for each).
@@ -86,6 +87,7 @@ class RllLightSampler final : public LightSampler {
   std::unique_ptr<CutStore> m_cuts;
   std::unique_ptr<std::atomic<uint32_t>[]> m_last_used;  // pass of last lookup, per cell
   std::vector<double> m_power_prefix;                    // per light, tree order
+  std::vector<uint8_t> m_was_active;  // end_pass scratch: cells that had a cut before the pass
   uint64_t m_pass = 0;
   bool m_frozen = false;
   // Statistics.
