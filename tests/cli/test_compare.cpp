@@ -62,7 +62,8 @@ TEST_F(CompareOutput, SummaryHasEveryFieldPerSampler) {
   EXPECT_EQ(j["samplers"][0]["name"], "power");
   EXPECT_EQ(j["samplers"][1]["name"], "uniform");
   for (const auto& s : j["samplers"]) {
-    for (const char* k : {"spp", "seconds", "relmse", "mse", "efficiency", "relmse_ratio"}) {
+    for (const char* k :
+         {"spp", "seconds", "setup_seconds", "relmse", "mse", "efficiency", "relmse_ratio"}) {
       ASSERT_TRUE(s.contains(k) && s[k].is_object()) << k;
       EXPECT_EQ(s[k]["values"].size(), 2u) << k;
       EXPECT_LE(s[k]["min"].get<double>(), s[k]["median"].get<double>()) << k;
@@ -202,6 +203,43 @@ TEST(Reference, CacheIsReusedAndInvalidatedWhenTheSceneChanges) {
   EXPECT_TRUE(contains(reference({"--max-depth", "2"}).output, "rendered"));
   EXPECT_TRUE(contains(reference({}, "16x16", "32").output, "rendered 32 spp"));
   EXPECT_TRUE(contains(reference({"--force"}).output, "rendered"));
+}
+
+TEST(Reference, EditingTheSceneFileInvalidatesItsReference) {
+  test::TempDir tmp;
+  const std::string cache = (tmp / "cache").string();
+  // A lit floor: an emissive quad above a diffuse one.
+  const std::string geometry =
+      "mtllib m.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -0.2 1 -0.2\nv 0.2 1 -0.2\n"
+      "v 0.2 1 0.2\nv -0.2 1 0.2\nusemtl floor\nf 1 4 3\nf 1 3 2\nusemtl lamp\nf 5 6 7\nf 5 7 8\n";
+  tmp.write("m.mtl", "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl lamp\nKe 4 4 4\n");
+  const fs::path scene = tmp.write("room.obj", geometry);
+  auto reference = [&] {
+    return run_rll({"reference", scene.string(), "--res", "8x8", "--spp", "4", "--cache-dir", cache,
+                    "--quiet"});
+  };
+  auto cached_entries = [&] {
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(cache)) n += e.path().extension() == ".exr";
+    return n;
+  };
+  auto first = reference();
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_TRUE(contains(first.output, "rendered")) << first.output;
+  EXPECT_TRUE(contains(reference().output, "reused"));
+
+  // A brighter lamp, in the material file the scene refers to: the old reference is stale.
+  tmp.write("m.mtl", "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl lamp\nKe 8 8 8\n");
+  auto edited = reference();
+  EXPECT_TRUE(contains(edited.output, "rendered")) << edited.output;
+  EXPECT_TRUE(contains(reference().output, "reused"));
+  EXPECT_EQ(cached_entries(), 1);  // the stale entry of this scene file was deleted
+
+  // Moving a vertex is a change too.
+  std::string moved = geometry;
+  moved.replace(moved.find("v -1 0 -1\n"), 10, "v -1 0 -1.5\n");
+  tmp.write("room.obj", moved);
+  EXPECT_TRUE(contains(reference().output, "rendered"));
 }
 
 TEST(Compare, BadFlagsGiveClearErrors) {
