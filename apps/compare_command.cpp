@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -160,7 +161,10 @@ ChosenReference choose_reference(const CompareOptions& o, const RenderSession& s
 RunResult run_once(const CompareOptions& o, const RenderSession& session, const std::string& name,
                    int repeat, const Image& reference, Image& image) {
   reset_peak_rss();
+  const auto t0 = std::chrono::steady_clock::now();
   auto sampler = session.make_sampler(name);
+  const double setup_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Film film(session.scene().width, session.scene().height);
   RenderSettings rs;
   rs.spp = o.time > 0 ? kUnlimitedSpp : o.spp;
@@ -184,6 +188,7 @@ RunResult run_once(const CompareOptions& o, const RenderSession& session, const 
   run.seed = rs.seed;
   run.spp = p.spp_done;
   run.seconds = p.seconds;
+  run.setup_seconds = setup_seconds;
   run.checkpoints = recorder.checkpoints();
   run.relmse = run.checkpoints.back().relmse;
   run.mse = run.checkpoints.back().mse;

@@ -72,7 +72,8 @@ TEST(CompareSummary, JsonHasEveryField) {
   runs[0].checkpoints = {{0.5, 2, 0.8, 0.08}, {2, 10, 0.2, 0.02}};
   auto s = summarize({"a"}, runs);
   nlohmann::json j = sampler_summary_json(s[0]);
-  for (const char* k : {"spp", "seconds", "relmse", "mse", "efficiency", "relmse_ratio"}) {
+  for (const char* k :
+       {"spp", "seconds", "setup_seconds", "relmse", "mse", "efficiency", "relmse_ratio"}) {
     ASSERT_TRUE(j.contains(k)) << k;
     for (const char* f : {"median", "min", "max", "values"})
       EXPECT_TRUE(j[k].contains(f)) << k << "." << f;

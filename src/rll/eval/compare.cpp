@@ -67,11 +67,12 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
       fail("sampler '{}' was not run for the same repeats as '{}'", name, samplers[0]);
     SamplerSummary s;
     s.name = name;
-    std::vector<double> spp, seconds, rel, mse_v, eff, ratio;
+    std::vector<double> spp, seconds, setup, rel, mse_v, eff, ratio;
     for (const auto& [repeat, run] : mine) {
       s.runs.push_back(run);
       spp.push_back(run->spp);
       seconds.push_back(run->seconds);
+      setup.push_back(run->setup_seconds);
       rel.push_back(run->relmse);
       mse_v.push_back(run->mse);
       if (auto e = efficiency(run->relmse, run->seconds)) eff.push_back(*e);
@@ -84,6 +85,7 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
     }
     s.spp = spread_of(spp);
     s.seconds = spread_of(seconds);
+    s.setup_seconds = spread_of(setup);
     s.relmse = spread_of(rel);
     s.mse = spread_of(mse_v);
     s.efficiency = spread_of(eff);
@@ -118,6 +120,7 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
   j["sampler"] = s.describe;
   j["spp"] = spread_json(s.spp);
   j["seconds"] = spread_json(s.seconds);
+  j["setup_seconds"] = spread_json(s.setup_seconds);
   j["relmse"] = spread_json(s.relmse);
   j["mse"] = spread_json(s.mse);
   j["efficiency"] = spread_json(s.efficiency);
@@ -133,6 +136,7 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
                     {"seed", r->seed},
                     {"spp", r->spp},
                     {"seconds", r->seconds},
+                    {"setup_seconds", r->setup_seconds},
                     {"relmse", r->relmse},
                     {"mse", r->mse},
                     {"checkpoints", std::move(cps)}});

@@ -45,7 +45,8 @@ struct RunResult {
   int repeat = 0;
   uint64_t seed = 0;
   int spp = 0;
-  double seconds = 0;
+  double seconds = 0;        // rendering, learning included
+  double setup_seconds = 0;  // making the sampler (e.g. an oracle's estimates), not in `seconds`
   double relmse = 0, mse = 0;
   std::optional<double> sampler_bytes;  // the sampler's describe()["bytes"], when it reports one
   size_t peak_rss_bytes = 0;            // of the whole process, after this run
@@ -66,7 +67,7 @@ Spread spread_of(std::vector<double> values);
 
 struct SamplerSummary {
   std::string name;
-  Spread spp, seconds, relmse, mse, efficiency;
+  Spread spp, seconds, setup_seconds, relmse, mse, efficiency;
   // Per repeat, relMSE over the first sampler's relMSE in the same repeat: ratios taken within
   // one repeat cancel machine noise that hits all samplers of that repeat alike.
   Spread relmse_ratio;
