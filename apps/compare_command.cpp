@@ -32,6 +32,7 @@ struct CompareOptions {
   int spp = 0;
   int repeats = 1;
   int pass_spp = 1;
+  int max_pass_spp = 8;
   uint64_t seed = 1;
   int threads = 0;
   std::string reference;
@@ -95,6 +96,7 @@ std::vector<std::string> check_flags(const CompareOptions& o) {
     fail("give exactly one budget: --time SECONDS or --spp N (positive)");
   if (o.repeats < 1) fail("--repeats must be at least 1");
   if (o.pass_spp < 1) fail("--pass-spp must be at least 1");
+  if (o.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
   if (o.reference.empty() && o.reference_request.spp < 1)
     fail("--reference-spp must be at least 1");
   if (o.reference.empty() && is_run_seed(o, o.reference_request.seed))
@@ -139,6 +141,8 @@ ChosenReference choose_reference(const CompareOptions& o, const RenderSession& s
   }
   ReferenceCache cache(o.cache_dir.empty() ? default_cache_dir() : fs::path(o.cache_dir));
   ReferenceRequest request = o.reference_request;
+  request.pass_spp = o.pass_spp;
+  request.max_pass_spp = o.max_pass_spp;
   request.seed_allowed = [&](uint64_t s) { return !is_run_seed(o, s); };
   ObtainedReference got = obtain_reference(session, cache, request, !o.quiet, interrupt_flag());
   if (!got.complete) fail("interrupted while rendering the reference; nothing was written");
@@ -171,6 +175,7 @@ RunResult run_once(const CompareOptions& o, const RenderSession& session, const 
   rs.time_limit = o.time;
   rs.seed = o.seed + uint64_t(repeat);
   rs.pass_spp = o.pass_spp;
+  rs.max_pass_spp = o.max_pass_spp;
   ConvergenceRecorder recorder(reference);
   const std::string label =
       o.repeats > 1 ? fmt::format("{} ({}/{})", name, repeat + 1, o.repeats) : name;
@@ -321,7 +326,7 @@ void run(const CompareOptions& o) {
   j["budget"] = o.time > 0 ? nlohmann::json{{"time", o.time}} : nlohmann::json{{"spp", o.spp}};
   j["repeats"] = o.repeats;
   j["seed"] = o.seed;
-  j["pass_spp"] = o.pass_spp;
+  j["pass_spp"] = {{"first", o.pass_spp}, {"max", o.max_pass_spp}};
   j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
   j["set"] = o.session.set;
   j["reference"] = ref.json;
@@ -363,7 +368,11 @@ void add_compare_command(CLI::App& app) {
   time->excludes(spp);
   cmd->add_option("--repeats", o->repeats, "Runs per sampler; reported as median and range")
       ->capture_default_str();
-  cmd->add_option("--pass-spp", o->pass_spp, "Samples per pixel in one pass")
+  cmd->add_option("--pass-spp", o->pass_spp,
+                  "Samples per pixel of the first passes; passes double every two passes up to "
+                  "--max-pass-spp (learning samplers adapt between passes)")
+      ->capture_default_str();
+  cmd->add_option("--max-pass-spp", o->max_pass_spp, "Largest pass, in samples per pixel")
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the first repeat; repeat r uses seed + r")
       ->capture_default_str();

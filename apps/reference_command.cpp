@@ -27,6 +27,7 @@ void run(const ReferenceOptions& o) {
   ThreadLimit limit(o.threads);
   if (o.request.spp < 1) fail("--spp must be at least 1");
   if (o.request.pass_spp < 1) fail("--pass-spp must be at least 1");
+  if (o.request.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
   if (!o.output.empty()) prepare_output(o.output, "-o", {".exr", ".png"});
 
   RenderSession session(o.session);
@@ -69,7 +70,11 @@ void add_reference_command(CLI::App& app) {
   cmd->add_option("--seed", o->request.seed,
                   "Random seed (keep it apart from the seeds of compared renders)")
       ->capture_default_str();
-  cmd->add_option("--pass-spp", o->request.pass_spp, "Samples per pixel in one pass")
+  cmd->add_option("--pass-spp", o->request.pass_spp,
+                  "Samples per pixel of the first passes; passes double every two passes up to "
+                  "--max-pass-spp")
+      ->capture_default_str();
+  cmd->add_option("--max-pass-spp", o->request.max_pass_spp, "Largest pass, in samples per pixel")
       ->capture_default_str();
   cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
   cmd->add_option("--cache-dir", o->cache_dir,

@@ -262,6 +262,7 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
   rs.spp = request.spp;
   rs.seed = request.seed;
   rs.pass_spp = request.pass_spp;
+  rs.max_pass_spp = request.max_pass_spp;
   const RenderProgress p = session.render(*sampler, film, rs, "reference", show_progress, cancel);
   out.image = film.resolve();
   out.info.scene = canonical_scene_spec(session.settings().scene);

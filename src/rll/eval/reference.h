@@ -82,8 +82,8 @@ struct ReferenceRequest {
   std::string sampler = "power";
   int spp = 1024;  // at least this many samples per pixel
   uint64_t seed = kDefaultReferenceSeed;
-  int pass_spp = 1;
-  bool force = false;  // render and store even when the cache holds one
+  int pass_spp = 1, max_pass_spp = 8;  // as in RenderSettings
+  bool force = false;                  // render and store even when the cache holds one
   // When given, cached references with a seed it rejects are not used.
   std::function<bool(uint64_t)> seed_allowed;
 };
