@@ -5,12 +5,16 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-asan bench fuzz clean format
+.PHONY: all deps test-deps build demo test test-asan bench fuzz clean format
 
 all: build
 
 deps:
 	@scripts/install-deps.sh
+
+# What only the tests need (chromium, to load the HTML reports).
+test-deps:
+	@scripts/install-deps.sh --test
 
 $(BUILD)/build.ninja: CMakeLists.txt | deps
 	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS)
@@ -21,7 +25,7 @@ build: deps $(BUILD)/build.ninja
 demo: build
 	@scripts/demo.sh $(BUILD)
 
-test: build
+test: build test-deps
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 # AddressSanitizer + UndefinedBehaviorSanitizer build of the whole tree, running the fast tests.

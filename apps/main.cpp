@@ -31,6 +31,9 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "rll 0.1");
   rll::cli::add_render_command(app);
   rll::cli::add_scenes_command(app);
+  rll::cli::add_samplers_command(app);
+  rll::cli::add_reference_command(app);
+  rll::cli::add_compare_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -12,8 +12,7 @@
 #include "rll/core/sysinfo.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/render/progress.h"
-#include "rll/render/render.h"
-#include "rll/scene/load.h"
+#include "rll/render/session.h"
 
 namespace rll::cli {
 namespace fs = std::filesystem;
@@ -21,35 +20,20 @@ namespace fs = std::filesystem;
 namespace {
 
 struct RenderOptions {
-  std::string scene;
-  std::string integrator = "path";
+  SessionSettings session;
   std::string sampler = "power";
   int spp = 16;
   double time = 0;
-  std::string res;
   uint64_t seed = 1;
   int threads = 0;
-  int max_depth = 5;
   int pass_spp = 1;
   int max_pass_spp = 8;
   int frames = 1;
   std::string output;
   std::string stats;
-  std::vector<std::string> set;
   float exposure = 0;
   bool quiet = false;
 };
-
-void parse_resolution(const std::string& res, LoadOptions& lo) {
-  if (res.empty()) return;
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(res.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X'))
-    fail("--res '{}': expected WIDTHxHEIGHT, e.g. 640x480", res);
-  if (w <= 0 || h <= 0) fail("--res '{}': width and height must be positive", res);
-  lo.width = w;
-  lo.height = h;
-}
 
 std::string default_output(const std::string& scene) {
   std::string stem = scene.rfind("builtin:", 0) == 0 ? scene.substr(8) : fs::path(scene).stem().string();
@@ -63,37 +47,26 @@ fs::path frame_path(const fs::path& p, int frame, int frames) {
   return q;
 }
 
-// Checks the output name before any work is done, and creates its folder.
-void prepare_output(const fs::path& p, const char* flag, const std::vector<std::string>& extensions) {
-  std::string ext = p.extension().string();
-  if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end())
-    fail("{} {}: the file must end in {}", flag, p.string(), fmt::join(extensions, " or "));
-  std::error_code ec;
-  if (p.has_parent_path() && !fs::exists(p.parent_path()) && !fs::create_directories(p.parent_path(), ec))
-    fail("{} {}: cannot create folder '{}': {}", flag, p.string(), p.parent_path().string(), ec.message());
-}
-
 void run(const RenderOptions& o) {
   install_interrupt_handler();
   ThreadLimit limit(o.threads);
-  LoadOptions lo;
-  parse_resolution(o.res, lo);
+  // Bad flags are reported before the scene (perhaps slow to load) is read.
+  parse_resolution(o.session.resolution);
   if (o.spp < 1) fail("--spp must be at least 1");
   if (o.time < 0) fail("--time must not be negative");
   if (o.frames < 1) fail("--frames must be at least 1");
   if (o.pass_spp < 1) fail("--pass-spp must be at least 1");
   if (o.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
-  Params params = Params::parse(o.set);
-  fs::path output = o.output.empty() ? fs::path(default_output(o.scene)) : fs::path(o.output);
+  Params::parse(o.session.set);
+  fs::path output = o.output.empty() ? fs::path(default_output(o.session.scene)) : fs::path(o.output);
   prepare_output(output, "-o", {".exr", ".png"});
   if (!o.stats.empty()) prepare_output(o.stats, "--stats", {".json"});
 
-  Scene scene = load_scene(o.scene, lo);
-  IntegratorSettings is = make_integrator_settings(o.integrator, o.max_depth, params);
-  Accel accel(scene.mesh);
-  auto sampler = make_light_sampler(o.sampler, scene, params, &accel);
-  params.check_all_used();
-  Integrator integrator(scene, accel, *sampler, is);
+  RenderSession session(o.session);
+  Scene& scene = session.scene();
+  const IntegratorSettings& is = session.integrator();
+  auto sampler = session.make_sampler(o.sampler);
+  session.check_params_used();
 
   RenderSettings rs;
   rs.spp = o.spp;
@@ -109,17 +82,14 @@ void run(const RenderOptions& o) {
       if (scene.animate) {
         scene.animate(scene, f);
         scene.refresh_lights_from_mesh();
-        accel.update_vertices(scene.mesh);
+        session.accel().update_vertices(scene.mesh);
         sampler->lights_changed(scene);
       }
     }
     rs.frame = f;
     Film film(scene.width, scene.height);
     std::string label = frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
-    ProgressBar bar(label, !o.quiet);
-    RenderProgress p = render(scene, integrator, *sampler, film, rs, interrupt_flag(),
-                              [&](const RenderProgress& pr, const Film&) { bar.update(pr); });
-    bar.finish();
+    RenderProgress p = session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag());
     fs::path out = frame_path(output, f, frames);
     write_image(out, film.resolve(), o.exposure);
     if (p.cancelled) fmt::print(stderr, "rll: interrupted after {} spp; ", p.spp_done);
@@ -136,7 +106,7 @@ void run(const RenderOptions& o) {
 
   if (!o.stats.empty()) {
     nlohmann::json j;
-    j["scene"] = o.scene;
+    j["scene"] = o.session.scene;
     j["resolution"] = {scene.width, scene.height};
     j["integrator"] = {{"name", integrator_name(is.type)}, {"max_depth", is.max_depth},
                        {"strategy", strategy_name(is.strategy)}};
@@ -165,19 +135,13 @@ void run(const RenderOptions& o) {
 void add_render_command(CLI::App& app) {
   auto o = std::make_shared<RenderOptions>();
   auto* cmd = app.add_subcommand("render", "Render a scene to an image");
-  cmd->add_option("scene", o->scene, "Scene: a .json or .obj file, or builtin:NAME (see `rll scenes`)")
-      ->required();
-  cmd->add_option("--integrator", o->integrator, "Light transport: direct (next-event estimation) or path")
-      ->capture_default_str();
+  add_session_options(cmd, o->session);
   cmd->add_option("--sampler", o->sampler, "Light sampler: uniform, power, tree, rll, oracle")->capture_default_str();
   cmd->add_option("--spp", o->spp, "Samples per pixel (an upper limit when --time is given)")->capture_default_str();
   cmd->add_option("--time", o->time, "Time budget in seconds; stops at whichever of --spp and --time comes first");
-  cmd->add_option("--res", o->res, "Film resolution WIDTHxHEIGHT (default: the scene's)");
   cmd->add_option("--seed", o->seed, "Random seed; the same seed gives the same image with any --threads")
       ->capture_default_str();
   cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
-  cmd->add_option("--max-depth", o->max_depth, "Path length limit (path integrator; 1 = direct light)")
-      ->capture_default_str();
   cmd->add_option("--pass-spp", o->pass_spp,
                   "Samples per pixel of the first passes; passes double every two passes up to --max-pass-spp "
                   "(learning samplers adapt between passes)")
@@ -187,8 +151,6 @@ void add_render_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("-o,--output", o->output, "Output image, .exr (linear) or .png (sRGB); default out/<scene>.png");
   cmd->add_option("--stats", o->stats, "Write render statistics to this JSON file");
-  cmd->add_option("--set", o->set, "Sampler/integrator parameter key=value (repeatable), e.g. rll.alpha=0.1")
-      ->take_all();
   cmd->add_option("--exposure", o->exposure, "Exposure in stops for .png output")->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "No progress bar");
   cmd->callback([o] { run(*o); });

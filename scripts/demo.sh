@@ -1,8 +1,33 @@
 #!/usr/bin/env bash
-# `make demo`: renders the paper's many-light scene and says where the image is.
+# `make demo`: compares light samplers on the paper's many-light scene at equal time, prints the
+# table and says where the HTML report is. RLL_DEMO_SAMPLERS picks the samplers (default
+# power,tree,rll; names this build does not have are skipped, and other samplers fill in so that
+# at least two are compared), RLL_DEMO_SECONDS the time per sampler.
 set -euo pipefail
 build=${1:-build}
-mkdir -p out
-"$build/rll" render builtin:cornell-boxes-room --integrator path --sampler power --spp 64 --time 60 \
-  -o out/demo-cornell-boxes-room.png --stats out/demo-cornell-boxes-room.json
-echo "demo: image at out/demo-cornell-boxes-room.png, statistics at out/demo-cornell-boxes-room.json"
+rll="$build/rll"
+wanted=${RLL_DEMO_SAMPLERS:-power,tree,rll}
+seconds=${RLL_DEMO_SECONDS:-20}
+scene=builtin:cornell-boxes-room
+out=out/demo
+
+mapfile -t available < <("$rll" samplers)
+has() { local n; for n in "${available[@]}"; do [ "$n" = "$1" ] && return 0; done; return 1; }
+picked=()
+IFS=',' read -ra names <<< "$wanted"
+for s in "${names[@]}"; do
+  if has "$s"; then picked+=("$s"); else echo "demo: sampler '$s' is not in this build; skipped"; fi
+done
+for s in "${available[@]}"; do
+  [ ${#picked[@]} -ge 2 ] && break
+  [[ " ${picked[*]} " == *" $s "* ]] || picked+=("$s")
+done
+samplers=$(IFS=,; echo "${picked[*]}")
+
+# The reference: power sampling, the fastest per unit of error on this scene; rendered once (a
+# few minutes) and then reused from out/cache.
+echo "demo: comparing $samplers on $scene, $seconds s each (the first demo also renders a 2048 spp"
+echo "      reference, a few minutes; later ones reuse it from out/cache)"
+"$rll" compare "$scene" --integrator path --samplers "$samplers" --time "$seconds" \
+  --reference-spp 2048 --reference-sampler power --out "$out"
+echo "demo: report at $out/report.html"

@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Installs the Debian packages rll builds and tests with, only those that are missing.
+# With --test, also what only the tests need (chromium, which loads the HTML reports).
 set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config libembree-dev libtbb-dev libopenexr-dev libstb-dev
       libtinyobjloader-dev libtinygltf-dev libcli11-dev nlohmann-json3-dev libfmt-dev libgtest-dev
       libbenchmark-dev python3)
+if [ "${1:-}" = "--test" ]; then pkgs+=(chromium); fi
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

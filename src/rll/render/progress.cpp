@@ -31,8 +31,10 @@ void ProgressBar::update(const RenderProgress& p) {
   bar.resize(width, '.');
   double rate = p.seconds > 0 ? p.samples / p.seconds : 0;
   double left = frac > 0 ? p.seconds * (1 - frac) / frac : NAN;
-  fmt::print(stderr, "\r{} [{}] {}/{} spp  {:.2f} M samples/s  {} elapsed, {} left   ", m_label, bar,
-             p.spp_done, p.spp_target, rate * 1e-6, format_duration(p.seconds), format_duration(left));
+  std::string spp = p.spp_target >= kUnlimitedSpp ? fmt::format("{} spp", p.spp_done)
+                                                   : fmt::format("{}/{} spp", p.spp_done, p.spp_target);
+  fmt::print(stderr, "\r{} [{}] {}  {:.2f} M samples/s  {} elapsed, {} left   ", m_label, bar, spp,
+             rate * 1e-6, format_duration(p.seconds), format_duration(left));
   std::fflush(stderr);
   m_drawn = true;
 }

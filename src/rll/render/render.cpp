@@ -31,7 +31,7 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
   progress.spp_target = settings.spp;
   progress.time_limit = settings.time_limit;
   progress.spp_done = int(film.min_count());
-  const auto t0 = Clock::now();
+  auto t0 = Clock::now();
   std::atomic<bool> stop{false};
   std::mutex merge_mutex;
 
@@ -76,7 +76,13 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
       progress.cancelled = cancel && cancel->load();
       progress.out_of_time = !progress.cancelled;
     }
-    if (after_pass) after_pass(progress, film);
+    if (after_pass) {
+      // The caller's time between passes (progress output, error metrics at checkpoints) is
+      // not render time: it neither counts in `seconds` nor uses up the time budget.
+      const auto c0 = Clock::now();
+      after_pass(progress, film);
+      t0 += Clock::now() - c0;
+    }
   }
   progress.seconds = seconds_since(t0);
   progress.out_of_time = progress.out_of_time ||

@@ -12,8 +12,11 @@
 
 namespace rll {
 
+// An spp target that is never reached: renders that only a time budget stops.
+inline constexpr int kUnlimitedSpp = 1 << 30;
+
 struct RenderSettings {
-  int spp = 16;               // samples per pixel to reach (upper limit)
+  int spp = 16;               // samples per pixel to reach (upper limit), or kUnlimitedSpp
   double time_limit = 0;      // seconds; 0 = none
   uint64_t seed = 1;
   // Pass sizes in samples per pixel: pass_spp for the first two passes, then doubling every
@@ -39,7 +42,8 @@ struct RenderProgress {
 };
 
 // Renders into `film` (which may already hold samples of this frame). `after_pass` is called
-// after every pass with the film, between passes, and may not touch the sampler.
+// after every pass with the film, between passes, and may not touch the sampler; the time it
+// takes is excluded from the render's seconds and time budget.
 RenderProgress render(const Scene& scene, const Integrator& integrator, LightSampler& sampler, Film& film,
                       const RenderSettings& settings, const std::atomic<bool>* cancel = nullptr,
                       const std::function<void(const RenderProgress&, const Film&)>& after_pass = {});

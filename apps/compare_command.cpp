@@ -1,0 +1,403 @@
+// `rll compare`: renders a scene with several light samplers under one budget (equal time or
+// equal spp), interleaving their runs, and measures each against a reference: summary.json,
+// report.html, convergence.png, every image as .exr, and a table on stdout.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "rll/core/error.h"
+#include "rll/core/parallel.h"
+#include "rll/core/sysinfo.h"
+#include "rll/eval/compare.h"
+#include "rll/eval/metrics.h"
+#include "rll/eval/plot.h"
+#include "rll/eval/reference.h"
+#include "rll/eval/report.h"
+#include "rll/lights/light_sampler.h"
+#include "rll/render/progress.h"
+
+namespace rll::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CompareOptions {
+  SessionSettings session;
+  std::string samplers;
+  double time = 0;
+  int spp = 0;
+  int repeats = 1;
+  int pass_spp = 1;
+  int max_pass_spp = 8;
+  uint64_t seed = 1;
+  int threads = 0;
+  std::string reference;
+  ReferenceRequest reference_request;
+  std::string cache_dir;
+  std::string out;
+  float exposure = 0;
+  bool quiet = false;
+};
+
+// A reference should have many more samples than the runs: its own noise adds to every
+// sampler's measured error alike and squeezes the ratios towards 1.
+constexpr double kReferenceSppFactor = 8;
+
+std::vector<std::string> parse_sampler_list(const std::string& list) {
+  std::vector<std::string> names;
+  size_t start = 0;
+  while (start <= list.size()) {
+    size_t end = list.find(',', start);
+    if (end == std::string::npos) end = list.size();
+    std::string name = list.substr(start, end - start);
+    name.erase(0, name.find_first_not_of(" \t"));
+    name.erase(name.find_last_not_of(" \t") + 1);
+    if (name.empty()) fail("--samplers '{}': empty sampler name", list);
+    if (std::find(names.begin(), names.end(), name) != names.end())
+      fail("--samplers '{}': '{}' is listed twice", list, name);
+    names.push_back(name);
+    start = end + 1;
+  }
+  return names;
+}
+
+// A sampler name as part of a file name.
+std::string file_stem(const std::string& name) {
+  std::string s = name;
+  for (char& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
+  return s;
+}
+
+std::string image_name(const std::string& sampler, int repeat) {
+  return repeat == 0 ? file_stem(sampler) + ".exr"
+                     : fmt::format("{}.repeat{}.exr", file_stem(sampler), repeat + 1);
+}
+
+std::string budget_text(const CompareOptions& o) {
+  return o.time > 0 ? fmt::format("equal time, {} s per run", o.time)
+                    : fmt::format("equal samples, {} spp per run", o.spp);
+}
+
+bool is_run_seed(const CompareOptions& o, uint64_t s) {
+  return s >= o.seed && s - o.seed < uint64_t(o.repeats);
+}
+
+// Checks every flag that can be checked before the scene (perhaps slow to load) is read.
+std::vector<std::string> check_flags(const CompareOptions& o) {
+  parse_resolution(o.session.resolution);
+  Params::parse(o.session.set);
+  std::vector<std::string> samplers = parse_sampler_list(o.samplers);
+  if ((o.time > 0) == (o.spp > 0))
+    fail("give exactly one budget: --time SECONDS or --spp N (positive)");
+  if (o.repeats < 1) fail("--repeats must be at least 1");
+  if (o.pass_spp < 1) fail("--pass-spp must be at least 1");
+  if (o.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
+  if (o.reference.empty() && o.reference_request.spp < 1)
+    fail("--reference-spp must be at least 1");
+  if (o.reference.empty() && is_run_seed(o, o.reference_request.seed))
+    fail(
+        "--reference-seed {} is also the seed of a run (--seed {} with {} repeats): the reference "
+        "would share their noise",
+        o.reference_request.seed, o.seed, o.repeats);
+  if (o.out.empty()) fail("--out DIR is required");
+  return samplers;
+}
+
+// Unknown sampler names and --set keys fail before any rendering. Samplers read their keys when
+// made, so with --set each is made once here (a cost only then: an oracle's may be high).
+void check_samplers(const CompareOptions& o, const RenderSession& session,
+                    std::vector<std::string> needed) {
+  if (o.reference.empty()) needed.push_back(o.reference_request.sampler);
+  const auto& known = light_sampler_names();
+  for (const auto& name : needed)
+    if (std::find(known.begin(), known.end(), name) == known.end() || !o.session.set.empty())
+      session.make_sampler(name);  // throws rll::Error listing the valid names for an unknown one
+  session.check_params_used();
+}
+
+struct ChosenReference {
+  Image image;
+  nlohmann::json json;  // for summary.json
+  std::string caption;
+};
+
+// --reference, or the cache's reference, or a new one rendered into the cache.
+ChosenReference choose_reference(const CompareOptions& o, const RenderSession& session) {
+  ChosenReference ref;
+  const Scene& scene = session.scene();
+  if (!o.reference.empty()) {
+    ref.image = read_image(o.reference);
+    if (ref.image.width() != scene.width || ref.image.height() != scene.height)
+      fail("--reference {}: the image is {}x{} but the scene renders at {}x{}", o.reference,
+           ref.image.width(), ref.image.height(), scene.width, scene.height);
+    ref.json = {{"source", "file"}, {"path", o.reference}};
+    ref.caption = o.reference;
+    return ref;
+  }
+  ReferenceCache cache(o.cache_dir.empty() ? default_cache_dir() : fs::path(o.cache_dir));
+  ReferenceRequest request = o.reference_request;
+  request.pass_spp = o.pass_spp;
+  request.max_pass_spp = o.max_pass_spp;
+  request.seed_allowed = [&](uint64_t s) { return !is_run_seed(o, s); };
+  ObtainedReference got = obtain_reference(session, cache, request, !o.quiet, interrupt_flag());
+  if (!got.complete) fail("interrupted while rendering the reference; nothing was written");
+  fmt::print(stderr, "reference: {} {} ({} spp, sampler {})\n",
+             got.from_cache ? "reused" : "rendered and cached", got.info.image.string(),
+             got.info.spp, got.info.sampler);
+  ref.image = std::move(got.image);
+  ref.json = {{"source", got.from_cache ? "cache" : "rendered"},
+              {"cache_entry", got.info.image.string()},
+              {"sampler", got.info.sampler},
+              {"spp", got.info.spp},
+              {"seed", got.info.seed},
+              {"seconds", got.info.seconds}};
+  ref.caption = fmt::format("{} spp, {}", got.info.spp, got.info.sampler);
+  return ref;
+}
+
+// One render of one sampler, fresh (a learning sampler starts cold every run), with relMSE
+// checkpoints; the image is returned in `image`.
+RunResult run_once(const CompareOptions& o, const RenderSession& session, const std::string& name,
+                   int repeat, const Image& reference, Image& image) {
+  reset_peak_rss();
+  const auto t0 = std::chrono::steady_clock::now();
+  auto sampler = session.make_sampler(name);
+  const double setup_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  Film film(session.scene().width, session.scene().height);
+  RenderSettings rs;
+  rs.spp = o.time > 0 ? kUnlimitedSpp : o.spp;
+  rs.time_limit = o.time;
+  rs.seed = o.seed + uint64_t(repeat);
+  rs.pass_spp = o.pass_spp;
+  rs.max_pass_spp = o.max_pass_spp;
+  ConvergenceRecorder recorder(reference);
+  const std::string label =
+      o.repeats > 1 ? fmt::format("{} ({}/{})", name, repeat + 1, o.repeats) : name;
+  const RenderProgress p =
+      session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag(),
+                     [&](const RenderProgress& pr, const Film& f) { recorder.after_pass(pr, f); });
+  if (p.cancelled)
+    fail("interrupted during the run of '{}'; the summary and report were not written", name);
+  image = film.resolve();
+  recorder.finish(p, image);
+
+  RunResult run;
+  run.sampler = name;
+  run.repeat = repeat;
+  run.seed = rs.seed;
+  run.spp = p.spp_done;
+  run.seconds = p.seconds;
+  run.setup_seconds = setup_seconds;
+  run.checkpoints = recorder.checkpoints();
+  run.relmse = run.checkpoints.back().relmse;
+  run.mse = run.checkpoints.back().mse;
+  run.describe = sampler->describe();
+  if (run.describe.is_object() && run.describe.contains("bytes") &&
+      run.describe["bytes"].is_number())
+    run.sampler_bytes = run.describe["bytes"].get<double>();
+  run.peak_rss_bytes = peak_rss_bytes();
+  if (p.nonfinite)
+    fmt::print(stderr, "rll: warning: {}: {} non-finite samples were dropped\n", name, p.nonfinite);
+  if (!o.quiet)
+    fmt::print(stderr, "{}: {} spp in {}, relMSE {:.4e}\n", label, run.spp,
+               format_duration(run.seconds), run.relmse);
+  return run;
+}
+
+LogLogPlot convergence_plot(const Scene& scene, const std::vector<SamplerSummary>& summaries) {
+  LogLogPlot plot;
+  plot.title = fmt::format("relMSE against render time ({})", scene.source);
+  plot.x_label = "render time (s)";
+  plot.y_label = "relMSE";
+  for (size_t i = 0; i < summaries.size(); ++i) {
+    PlotSeries series{summaries[i].name, series_colour(i), {}};
+    for (const RunResult* r : summaries[i].runs) {
+      std::vector<std::pair<double, double>> curve;
+      for (const auto& c : r->checkpoints) curve.emplace_back(c.seconds, c.relmse);
+      series.curves.push_back(std::move(curve));
+    }
+    plot.series.push_back(std::move(series));
+  }
+  return plot;
+}
+
+std::string integrator_text(const IntegratorSettings& is) {
+  return fmt::format("{} (max depth {}, {})", integrator_name(is.type), is.max_depth,
+                     strategy_name(is.strategy));
+}
+
+void run(const CompareOptions& o) {
+  install_interrupt_handler();
+  ThreadLimit limit(o.threads);
+  const std::vector<std::string> samplers = check_flags(o);
+  prepare_output_dir(o.out, "--out");
+  const fs::path out(o.out);
+  RenderSession session(o.session);
+  const Scene& scene = session.scene();
+  check_samplers(o, session, samplers);
+
+  const ChosenReference ref = choose_reference(o, session);
+  write_image(out / "reference.exr", ref.image);
+
+  // Repeat by repeat, every sampler once, starting one further along each repeat so that no
+  // sampler always runs first (on a cold cache) or last (on a machine warmed by the others).
+  std::vector<RunResult> runs;
+  std::map<std::string, Image> first_images;  // repeat 0's, shown in the report
+  nlohmann::json order = nlohmann::json::array();
+  const int n = int(samplers.size());
+  for (int r = 0; r < o.repeats; ++r) {
+    order.push_back(nlohmann::json::array());
+    for (int k = 0; k < n; ++k) {
+      const std::string& name = samplers[size_t((k + r) % n)];
+      order.back().push_back(name);
+      Image image;
+      runs.push_back(run_once(o, session, name, r, ref.image, image));
+      write_image(out / image_name(name, r), image);
+      if (r == 0) first_images.emplace(name, std::move(image));
+    }
+  }
+  const std::vector<SamplerSummary> summaries = summarize(samplers, runs);
+
+  std::vector<std::string> warnings;
+  if (ref.json.contains("spp")) {
+    double most = 0;
+    for (const auto& s : summaries) most = std::max(most, s.spp.max);
+    if (ref.json["spp"].get<double>() < kReferenceSppFactor * most)
+      warnings.push_back(fmt::format(
+          "The reference has {} spp, fewer than {}x the {} spp of the longest run: its noise "
+          "inflates every error alike and pulls the ratios towards 1 (use --reference-spp).",
+          ref.json["spp"].get<int>(), kReferenceSppFactor, most));
+  }
+  for (const auto& w : warnings) fmt::print(stderr, "rll: warning: {}\n", w);
+
+  std::map<std::string, std::vector<float>> errors;
+  for (const auto& name : samplers) {
+    errors[name] = relative_error_map(first_images.at(name), ref.image);
+    write_image(out / (file_stem(name) + ".error.exr"),
+                grey_image(errors[name], scene.width, scene.height));
+  }
+  LogLogPlot plot = convergence_plot(scene, summaries);
+  write_file_atomic(out / "convergence.png", plot_png(plot));
+
+  Report report;
+  report.title = fmt::format("rll compare: {}", scene.source);
+  report.facts = {
+      {"scene", fmt::format("{} ({}x{}, {} lights)", scene.source, scene.width, scene.height,
+                            scene.lights.size())},
+      {"integrator", integrator_text(session.integrator())},
+      {"budget", budget_text(o)},
+      {"repeats", o.repeats == 1 ? fmt::format("1 (seed {})", o.seed)
+                                 : fmt::format("{} (seeds {}..{}), runs interleaved", o.repeats,
+                                               o.seed, o.seed + o.repeats - 1)},
+      {"threads", fmt::format("{}", o.threads > 0 ? o.threads : hardware_threads())},
+      {"reference", ref.caption},
+      {"metrics",
+       "relMSE = mean of (x - ref)^2 / (ref^2 + 0.01) over pixels and channels; efficiency = 1 / "
+       "(relMSE x seconds); ratio = relMSE / first sampler's, per repeat"}};
+  report.warnings = warnings;
+  report.reference = &ref.image;
+  report.reference_caption = ref.caption;
+  for (size_t i = 0; i < summaries.size(); ++i) {
+    const auto& s = summaries[i];
+    const RunResult& first = *s.runs.front();
+    report.entries.push_back({s.name,
+                              fmt::format("relMSE {:.3e}, {} spp, {}", first.relmse, first.spp,
+                                          format_duration(first.seconds)),
+                              series_colour(i), &first_images.at(s.name), &errors.at(s.name)});
+  }
+  report.table = table_cells(summaries);
+  report.exposure = o.exposure;
+  report.plot_svg = plot_svg(plot);
+  write_file_atomic(out / "report.html", report_html(report));
+
+  nlohmann::json j;
+  j["scene"] = o.session.scene;
+  j["resolution"] = {scene.width, scene.height};
+  j["lights"] = scene.lights.size();
+  j["integrator"] = {{"name", integrator_name(session.integrator().type)},
+                     {"max_depth", session.integrator().max_depth},
+                     {"strategy", strategy_name(session.integrator().strategy)}};
+  j["budget"] = o.time > 0 ? nlohmann::json{{"time", o.time}} : nlohmann::json{{"spp", o.spp}};
+  j["repeats"] = o.repeats;
+  j["seed"] = o.seed;
+  j["pass_spp"] = {{"first", o.pass_spp}, {"max", o.max_pass_spp}};
+  j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
+  j["set"] = o.session.set;
+  j["reference"] = ref.json;
+  j["reference"]["image"] = "reference.exr";
+  j["order"] = order;
+  j["warnings"] = warnings;
+  j["samplers"] = nlohmann::json::array();
+  for (const auto& s : summaries) {
+    nlohmann::json sj = sampler_summary_json(s);
+    sj["image"] = image_name(s.name, 0);
+    sj["error_image"] = file_stem(s.name) + ".error.exr";
+    j["samplers"].push_back(std::move(sj));
+  }
+  j["files"] = {{"report", "report.html"}, {"convergence", "convergence.png"}};
+  write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+
+  fmt::print("{}", format_table(summaries));
+  fmt::print("report: {}\n", (out / "report.html").string());
+}
+
+}  // namespace
+
+void add_compare_command(CLI::App& app) {
+  auto o = std::make_shared<CompareOptions>();
+  auto* cmd =
+      app.add_subcommand("compare",
+                         "Render a scene with several light samplers under the same budget and "
+                         "measure them against a reference (writes summary.json, report.html, "
+                         "convergence.png and every image as .exr into --out)");
+  add_session_options(cmd, o->session);
+  std::string all;
+  for (const auto& n : light_sampler_names()) all += (all.empty() ? "" : ",") + n;
+  o->samplers = all;
+  cmd->add_option("--samplers", o->samplers,
+                  "Comma-separated light samplers; ratios are to the first")
+      ->capture_default_str();
+  auto* time = cmd->add_option("--time", o->time, "Equal time: seconds per run");
+  auto* spp = cmd->add_option("--spp", o->spp, "Equal samples: samples per pixel per run");
+  time->excludes(spp);
+  cmd->add_option("--repeats", o->repeats, "Runs per sampler; reported as median and range")
+      ->capture_default_str();
+  cmd->add_option("--pass-spp", o->pass_spp,
+                  "Samples per pixel of the first passes; passes double every two passes up to "
+                  "--max-pass-spp (learning samplers adapt between passes)")
+      ->capture_default_str();
+  cmd->add_option("--max-pass-spp", o->max_pass_spp, "Largest pass, in samples per pixel")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->seed, "Seed of the first repeat; repeat r uses seed + r")
+      ->capture_default_str();
+  cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
+  auto* ref =
+      cmd->add_option("--reference", o->reference, "Reference image (.exr) instead of the cache");
+  cmd->add_option("--reference-spp", o->reference_request.spp,
+                  "Samples per pixel of the reference: a cached one with at least as many is "
+                  "reused, otherwise one is rendered and cached")
+      ->capture_default_str()
+      ->excludes(ref);
+  cmd->add_option("--reference-sampler", o->reference_request.sampler,
+                  "Light sampler that renders the reference")
+      ->capture_default_str()
+      ->excludes(ref);
+  cmd->add_option("--reference-seed", o->reference_request.seed, "Seed of the reference render")
+      ->capture_default_str()
+      ->excludes(ref);
+  cmd->add_option("--cache-dir", o->cache_dir,
+                  "Reference cache folder (default: $RLL_CACHE_DIR, else out/cache)");
+  cmd->add_option("--out", o->out, "Output folder")->required();
+  cmd->add_option("--exposure", o->exposure, "Initial exposure of the report's images, in stops")
+      ->capture_default_str();
+  cmd->add_flag("--quiet", o->quiet, "No progress output");
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace rll::cli

@@ -1,0 +1,89 @@
+// `rll reference`: a high-sample reference image, cached by scene content and settings, that
+// `rll compare` reuses.
+#include <fmt/format.h>
+
+#include "commands.h"
+#include "rll/core/error.h"
+#include "rll/core/parallel.h"
+#include "rll/eval/reference.h"
+#include "rll/render/progress.h"
+
+namespace rll::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct ReferenceOptions {
+  SessionSettings session;
+  ReferenceRequest request;
+  int threads = 0;
+  std::string cache_dir;
+  std::string output;
+  bool quiet = false;
+};
+
+void run(const ReferenceOptions& o) {
+  install_interrupt_handler();
+  ThreadLimit limit(o.threads);
+  if (o.request.spp < 1) fail("--spp must be at least 1");
+  if (o.request.pass_spp < 1) fail("--pass-spp must be at least 1");
+  if (o.request.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
+  if (!o.output.empty()) prepare_output(o.output, "-o", {".exr", ".png"});
+
+  RenderSession session(o.session);
+  session.make_sampler(o.request.sampler);  // an unknown name or parameter fails before rendering
+  session.check_params_used();
+  ReferenceCache cache(o.cache_dir.empty() ? default_cache_dir() : fs::path(o.cache_dir));
+  ObtainedReference ref = obtain_reference(session, cache, o.request, !o.quiet, interrupt_flag());
+  if (!ref.complete) {
+    fmt::print(stderr, "rll: interrupted after {} spp; the reference was not cached\n",
+               ref.info.spp);
+    if (!o.output.empty()) write_image(o.output, ref.image);
+    return;
+  }
+  if (ref.from_cache)
+    fmt::print(stderr, "reference: reused the cached {} ({} spp, sampler {}, seed {})\n",
+               ref.info.image.string(), ref.info.spp, ref.info.sampler, ref.info.seed);
+  else
+    fmt::print(stderr, "reference: rendered {} spp in {}, cached as {}\n", ref.info.spp,
+               format_duration(ref.info.seconds), ref.info.image.string());
+  if (!o.output.empty()) {
+    write_image(o.output, ref.image);
+    fmt::print(stderr, "wrote {}\n", o.output);
+  }
+}
+
+}  // namespace
+
+void add_reference_command(CLI::App& app) {
+  auto o = std::make_shared<ReferenceOptions>();
+  auto* cmd = app.add_subcommand("reference",
+                                 "Render a high-sample reference image, or reuse the cached one: "
+                                 "the cache is keyed by the scene's content and the integrator "
+                                 "settings, and holds references with at least --spp samples");
+  add_session_options(cmd, o->session);
+  cmd->add_option("--spp", o->request.spp,
+                  "Samples per pixel (a cached reference with at least as many is reused)")
+      ->capture_default_str();
+  cmd->add_option("--sampler", o->request.sampler, "Light sampler to render it with")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->request.seed,
+                  "Random seed (keep it apart from the seeds of compared renders)")
+      ->capture_default_str();
+  cmd->add_option("--pass-spp", o->request.pass_spp,
+                  "Samples per pixel of the first passes; passes double every two passes up to "
+                  "--max-pass-spp")
+      ->capture_default_str();
+  cmd->add_option("--max-pass-spp", o->request.max_pass_spp, "Largest pass, in samples per pixel")
+      ->capture_default_str();
+  cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
+  cmd->add_option("--cache-dir", o->cache_dir,
+                  "Reference cache folder (default: $RLL_CACHE_DIR, else out/cache)");
+  cmd->add_flag("--force", o->request.force, "Render even when the cache holds a reference");
+  cmd->add_option("-o,--output", o->output,
+                  "Also write the reference here, .exr (linear) or .png (sRGB)");
+  cmd->add_flag("--quiet", o->quiet, "No progress bar");
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace rll::cli

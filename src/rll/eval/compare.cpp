@@ -1,0 +1,181 @@
+#include "rll/eval/compare.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "rll/core/error.h"
+#include "rll/eval/metrics.h"
+
+namespace rll {
+
+ConvergenceRecorder::ConvergenceRecorder(const Image& reference, int per_decade)
+    : m_reference(reference), m_step(std::pow(10.0, 1.0 / std::max(1, per_decade))) {}
+
+void ConvergenceRecorder::after_pass(const RenderProgress& p, const Film& film) {
+  if (p.seconds < m_next || p.spp_done < 1) return;
+  const Image image = film.resolve();
+  m_checkpoints.push_back(
+      {p.seconds, p.spp_done, relmse(image, m_reference), mse(image, m_reference)});
+  m_last_pass = p.passes;
+  m_next = p.seconds * m_step;
+}
+
+void ConvergenceRecorder::finish(const RenderProgress& p, const Image& image) {
+  if (m_last_pass == p.passes && !m_checkpoints.empty()) m_checkpoints.pop_back();
+  m_checkpoints.push_back(
+      {p.seconds, p.spp_done, relmse(image, m_reference), mse(image, m_reference)});
+  m_last_pass = p.passes;
+}
+
+std::optional<double> efficiency(double relmse, double seconds) {
+  if (!(relmse > 0) || !(seconds > 0) || !std::isfinite(relmse)) return std::nullopt;
+  return 1.0 / (relmse * seconds);
+}
+
+Spread spread_of(std::vector<double> values) {
+  Spread s;
+  s.values = values;
+  if (values.empty()) return s;
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  s.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  s.min = values.front();
+  s.max = values.back();
+  return s;
+}
+
+std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
+                                      const std::vector<RunResult>& runs) {
+  if (samplers.empty()) fail("no samplers to summarize");
+  std::map<std::string, std::map<int, const RunResult*>> by_sampler;
+  for (const auto& r : runs) {
+    if (std::find(samplers.begin(), samplers.end(), r.sampler) == samplers.end())
+      fail("a run of sampler '{}', which is not among those compared", r.sampler);
+    if (!by_sampler[r.sampler].emplace(r.repeat, &r).second)
+      fail("sampler '{}' has two runs for repeat {}", r.sampler, r.repeat);
+  }
+  const auto& first = by_sampler[samplers[0]];
+  std::vector<SamplerSummary> out;
+  for (const auto& name : samplers) {
+    const auto& mine = by_sampler[name];
+    if (mine.size() != first.size() || mine.empty() ||
+        !std::equal(mine.begin(), mine.end(), first.begin(),
+                    [](const auto& a, const auto& b) { return a.first == b.first; }))
+      fail("sampler '{}' was not run for the same repeats as '{}'", name, samplers[0]);
+    SamplerSummary s;
+    s.name = name;
+    std::vector<double> spp, seconds, setup, rel, mse_v, eff, ratio;
+    for (const auto& [repeat, run] : mine) {
+      s.runs.push_back(run);
+      spp.push_back(run->spp);
+      seconds.push_back(run->seconds);
+      setup.push_back(run->setup_seconds);
+      rel.push_back(run->relmse);
+      mse_v.push_back(run->mse);
+      if (auto e = efficiency(run->relmse, run->seconds)) eff.push_back(*e);
+      const double base = first.at(repeat)->relmse;
+      if (base > 0) ratio.push_back(run->relmse / base);
+      if (run->sampler_bytes)
+        s.sampler_bytes = std::max(s.sampler_bytes.value_or(0.0), *run->sampler_bytes);
+      s.peak_rss_bytes = std::max(s.peak_rss_bytes, run->peak_rss_bytes);
+      if (s.describe.is_null()) s.describe = run->describe;
+    }
+    s.spp = spread_of(spp);
+    s.seconds = spread_of(seconds);
+    s.setup_seconds = spread_of(setup);
+    s.relmse = spread_of(rel);
+    s.mse = spread_of(mse_v);
+    s.efficiency = spread_of(eff);
+    s.relmse_ratio = spread_of(ratio);
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+namespace {
+
+nlohmann::json spread_json(const Spread& s) {
+  if (s.values.empty()) return nullptr;  // undefined in every repeat (e.g. zero error)
+  return {{"median", s.median}, {"min", s.min}, {"max", s.max}, {"values", s.values}};
+}
+
+std::string sci(double v) {
+  return fmt::format("{:.3e}", v);
+}
+
+std::string with_range(const Spread& s, std::string (*f)(double)) {
+  if (s.values.empty()) return "-";
+  if (s.values.size() == 1) return f(s.median);
+  return fmt::format("{} [{}, {}]", f(s.median), f(s.min), f(s.max));
+}
+
+}  // namespace
+
+nlohmann::json sampler_summary_json(const SamplerSummary& s) {
+  nlohmann::json j;
+  j["name"] = s.name;
+  j["sampler"] = s.describe;
+  j["spp"] = spread_json(s.spp);
+  j["seconds"] = spread_json(s.seconds);
+  j["setup_seconds"] = spread_json(s.setup_seconds);
+  j["relmse"] = spread_json(s.relmse);
+  j["mse"] = spread_json(s.mse);
+  j["efficiency"] = spread_json(s.efficiency);
+  j["relmse_ratio"] = spread_json(s.relmse_ratio);
+  j["memory"] = {{"sampler_bytes",
+                  s.sampler_bytes ? nlohmann::json(*s.sampler_bytes) : nlohmann::json(nullptr)},
+                 {"peak_rss_bytes", s.peak_rss_bytes}};
+  nlohmann::json runs = nlohmann::json::array();
+  for (const RunResult* r : s.runs) {
+    nlohmann::json cps = nlohmann::json::array();
+    for (const auto& c : r->checkpoints) cps.push_back({c.seconds, c.spp, c.relmse, c.mse});
+    runs.push_back({{"repeat", r->repeat},
+                    {"seed", r->seed},
+                    {"spp", r->spp},
+                    {"seconds", r->seconds},
+                    {"setup_seconds", r->setup_seconds},
+                    {"relmse", r->relmse},
+                    {"mse", r->mse},
+                    {"checkpoints", std::move(cps)}});
+  }
+  j["runs"] = std::move(runs);
+  j["checkpoint_fields"] = {"seconds", "spp", "relmse", "mse"};
+  return j;
+}
+
+std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSummary>& summaries) {
+  std::vector<std::vector<std::string>> rows;
+  rows.push_back({"sampler", "spp", "seconds", "relMSE median [min, max]", "ratio", "efficiency"});
+  for (const auto& s : summaries) {
+    rows.push_back(
+        {s.name, fmt::format("{:g}", s.spp.median), fmt::format("{:.2f}", s.seconds.median),
+         with_range(s.relmse, sci),
+         s.relmse_ratio.values.empty() ? "-" : fmt::format("{:.3f}", s.relmse_ratio.median),
+         s.efficiency.values.empty() ? "-" : fmt::format("{:.4g}", s.efficiency.median)});
+  }
+  return rows;
+}
+
+std::string format_table(const std::vector<SamplerSummary>& summaries) {
+  const auto rows = table_cells(summaries);
+  std::vector<size_t> width(rows[0].size(), 0);
+  for (const auto& row : rows)
+    for (size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
+  std::string out;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    std::string line;
+    for (size_t c = 0; c < rows[r].size(); ++c) {
+      // The name left-aligned, numbers right-aligned.
+      line += c == 0 ? fmt::format("{:<{}}", rows[r][c], width[c])
+                     : fmt::format("  {:>{}}", rows[r][c], width[c]);
+    }
+    out += line + "\n";
+    if (r == 0) out += std::string(line.size(), '-') + "\n";
+  }
+  return out;
+}
+
+}  // namespace rll

@@ -1,0 +1,94 @@
+// The measuring side of `rll compare`: relMSE checkpoints while a render runs, per-run results,
+// their median and spread over repeats, summary.json and the printed table.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rll/core/image.h"
+#include "rll/render/film.h"
+#include "rll/render/render.h"
+
+namespace rll {
+
+struct Checkpoint {
+  double seconds = 0;  // render time so far, metric time excluded
+  int spp = 0;
+  double relmse = 0, mse = 0;
+};
+
+// Takes checkpoints of the error of a film against a reference at render times spaced
+// logarithmically (a fixed number per decade), for the convergence curve.
+class ConvergenceRecorder {
+ public:
+  ConvergenceRecorder(const Image& reference, int per_decade = 6);
+  // To be called after every pass (render()'s after_pass): takes a checkpoint when due.
+  void after_pass(const RenderProgress& progress, const Film& film);
+  // The final state, always recorded (replaces a checkpoint taken at the same pass).
+  void finish(const RenderProgress& progress, const Image& image);
+  const std::vector<Checkpoint>& checkpoints() const { return m_checkpoints; }
+
+ private:
+  const Image& m_reference;
+  double m_step;  // ratio between successive checkpoint times
+  double m_next = 0;
+  int m_last_pass = -1;
+  std::vector<Checkpoint> m_checkpoints;
+};
+
+// One render of one sampler.
+struct RunResult {
+  std::string sampler;
+  int repeat = 0;
+  uint64_t seed = 0;
+  int spp = 0;
+  double seconds = 0;        // rendering, learning included
+  double setup_seconds = 0;  // making the sampler (e.g. an oracle's estimates), not in `seconds`
+  double relmse = 0, mse = 0;
+  std::optional<double> sampler_bytes;  // the sampler's describe()["bytes"], when it reports one
+  size_t peak_rss_bytes = 0;            // of the whole process, after this run
+  nlohmann::json describe;              // the sampler's describe()
+  std::vector<Checkpoint> checkpoints;
+};
+
+// 1 / (relMSE x seconds); nullopt where undefined (zero error or zero time).
+std::optional<double> efficiency(double relmse, double seconds);
+
+// Median and range of one quantity over repeats.
+struct Spread {
+  double median = 0, min = 0, max = 0;
+  std::vector<double> values;  // in repeat order
+};
+// Median (mean of the middle two for an even count), min and max; all 0 for no values.
+Spread spread_of(std::vector<double> values);
+
+struct SamplerSummary {
+  std::string name;
+  Spread spp, seconds, setup_seconds, relmse, mse, efficiency;
+  // Per repeat, relMSE over the first sampler's relMSE in the same repeat: ratios taken within
+  // one repeat cancel machine noise that hits all samplers of that repeat alike.
+  Spread relmse_ratio;
+  std::optional<double> sampler_bytes;  // largest over repeats
+  size_t peak_rss_bytes = 0;            // largest over repeats
+  nlohmann::json describe;
+  std::vector<const RunResult*> runs;  // in repeat order, pointing into the results given
+};
+
+// Groups runs by sampler (in `samplers` order) and reduces them over repeats. Every sampler
+// must have the same repeats; throws rll::Error otherwise.
+std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
+                                      const std::vector<RunResult>& runs);
+
+// The per-sampler part of summary.json.
+nlohmann::json sampler_summary_json(const SamplerSummary& s);
+
+// The table printed at the end of a compare: sampler, spp, seconds, relMSE median [min-max],
+// ratio to the first sampler, efficiency.
+std::string format_table(const std::vector<SamplerSummary>& summaries);
+// The same table as rows of cells (header first), for the HTML report.
+std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSummary>& summaries);
+
+}  // namespace rll

@@ -1,0 +1,104 @@
+// High-sample reference images, cached on disk and keyed by a hash of the finalized scene's
+// content and of the integrator settings, so that `rll compare` reuses what `rll reference`
+// (or an earlier compare) rendered, and a changed scene never meets a stale reference.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "rll/core/image.h"
+#include "rll/render/integrator.h"
+#include "rll/scene/scene.h"
+
+namespace rll {
+
+// Bump when a change of the renderer changes the expected value of an image (a fixed BSDF, a new
+// integrator setting with a non-neutral default): every cached reference becomes stale.
+inline constexpr int kReferenceCacheVersion = 1;
+
+// Hash of everything in a finalized scene that the expected image depends on: mesh positions,
+// normals, uvs, triangles, per-triangle materials and lights, materials (not their names),
+// textures, lights, camera, sky and film size.
+uint64_t scene_content_hash(const Scene& scene);
+// Hash of the integrator settings (and kReferenceCacheVersion).
+uint64_t integrator_settings_hash(const IntegratorSettings& settings);
+
+struct ReferenceKey {
+  uint64_t scene = 0;       // scene_content_hash
+  uint64_t settings = 0;    // integrator_settings_hash
+  std::string hex() const;  // 32 hex digits, the prefix of the cache entry's file names
+  bool operator==(const ReferenceKey&) const = default;
+};
+ReferenceKey reference_key(const Scene& scene, const IntegratorSettings& settings);
+
+// $RLL_CACHE_DIR when set and not empty, otherwise out/cache.
+std::filesystem::path default_cache_dir();
+
+// One cached reference: the image and what it was rendered with.
+struct ReferenceInfo {
+  std::filesystem::path image;  // the .exr in the cache
+  std::string scene;            // the scene spec it was loaded from (absolute path for files)
+  int width = 0, height = 0;
+  std::string sampler;
+  int spp = 0;
+  uint64_t seed = 0;
+  double seconds = 0;
+};
+
+// A folder of references: for key K, K-<spp>spp-seed<seed>.exr and a .json beside it.
+class ReferenceCache {
+ public:
+  explicit ReferenceCache(std::filesystem::path dir) : m_dir(std::move(dir)) {}
+  const std::filesystem::path& dir() const { return m_dir; }
+
+  // The entry for `key` with the most samples among those with at least `min_spp` (and, when
+  // `seed_allowed` is given, a seed it accepts); nullopt if there is none. Unreadable entries
+  // are ignored.
+  std::optional<ReferenceInfo> find(const ReferenceKey& key, int min_spp,
+                                    const std::function<bool(uint64_t)>& seed_allowed = {}) const;
+  // Stores `image` under `key` (creating the folder) and returns the stored entry. Entries of the
+  // same scene spec, resolution and settings whose scene content differs are deleted: the scene
+  // changed since they were rendered.
+  ReferenceInfo store(const ReferenceKey& key, const Image& image, ReferenceInfo info) const;
+
+ private:
+  std::filesystem::path m_dir;
+};
+
+// The scene spec as stored in the cache: files by absolute path, builtin:NAME as is.
+std::string canonical_scene_spec(const std::string& spec);
+
+class RenderSession;
+
+// Far from the small seeds that comparisons use, so that a reference never shares its random
+// numbers (and hence its noise) with a render it is compared with.
+inline constexpr uint64_t kDefaultReferenceSeed = 1000003;
+
+struct ReferenceRequest {
+  std::string sampler = "power";
+  int spp = 1024;  // at least this many samples per pixel
+  uint64_t seed = kDefaultReferenceSeed;
+  int pass_spp = 1, max_pass_spp = 8;  // as in RenderSettings
+  bool force = false;                  // render and store even when the cache holds one
+  // When given, cached references with a seed it rejects are not used.
+  std::function<bool(uint64_t)> seed_allowed;
+};
+
+struct ObtainedReference {
+  Image image;
+  ReferenceInfo info;
+  bool from_cache = false;
+  bool complete = true;  // false: the render was cancelled; it was not stored
+};
+
+// The cached reference for the session's scene and integrator with at least request.spp, or a
+// new one rendered (progress bar labelled "reference") and stored in the cache.
+ObtainedReference obtain_reference(const RenderSession& session, const ReferenceCache& cache,
+                                   const ReferenceRequest& request, bool show_progress,
+                                   const std::atomic<bool>* cancel = nullptr);
+
+}  // namespace rll

@@ -1,0 +1,50 @@
+// The HTML report of a comparison: one self-contained file (images embedded as data URIs, inline
+// CSS, JS and SVG) with the images side by side under an exposure slider, synchronized zoom and
+// pan, false-colour relative-error maps, the table and the convergence plot.
+//
+// Exposure: each image is embedded losslessly as RGBE (Ward's shared-exponent format) split into
+// two PNGs, one RGB with the mantissas and one grey with the exponents, which the page decodes
+// into floats once and tone-maps again whenever the slider moves. That keeps highlights beyond
+// the initial exposure recoverable at 4 bytes a pixel. (One RGBA PNG would not do: canvases
+// premultiply alpha, which destroys the mantissas.)
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "rll/core/image.h"
+
+namespace rll {
+
+struct ReportEntry {
+  std::string name;     // sampler name
+  std::string caption;  // e.g. "relMSE 1.2e-02, 64 spp, 1.0 s"
+  uint32_t colour = 0;  // 0xRRGGBB, as in the plot
+  const Image* image = nullptr;
+  const std::vector<float>* error = nullptr;  // relative_error_map of the image, or null
+};
+
+struct Report {
+  std::string title;
+  std::vector<std::pair<std::string, std::string>> facts;  // label, value: scene, budget...
+  std::vector<std::string> warnings;
+  const Image* reference = nullptr;
+  std::string reference_caption;
+  std::vector<ReportEntry> entries;
+  std::vector<std::vector<std::string>> table;  // header row first
+  std::string plot_svg;                         // an <svg> element, or empty
+  float exposure = 0;                           // initial exposure, stops
+};
+
+// The report as one HTML document. Throws rll::Error if an image's size differs from the
+// reference's.
+std::string report_html(const Report& report);
+
+// RGBE encoding of an image: mantissas (RGB, 3 bytes a pixel) and exponents (1 byte a pixel,
+// 0 for black); a channel decodes as (m + 0.5) * 2^(e - 136). Negative and non-finite values
+// encode as 0.
+void encode_rgbe(const Image& image, std::vector<uint8_t>& mantissas,
+                 std::vector<uint8_t>& exponents);
+
+}  // namespace rll

@@ -1,0 +1,65 @@
+// What every render of one scene shares (the loaded scene, its ray-tracing structure, the
+// integrator settings and the `--set` parameters), and rendering it with any light sampler:
+// the common ground of `rll render`, `rll reference` and `rll compare`.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rll/accel/accel.h"
+#include "rll/core/params.h"
+#include "rll/render/integrator.h"
+#include "rll/render/render.h"
+#include "rll/scene/load.h"
+#include "rll/scene/scene.h"
+
+namespace rll {
+
+struct SessionSettings {
+  std::string scene;       // a scene file or builtin:NAME
+  std::string resolution;  // "WIDTHxHEIGHT", or empty for the scene's own
+  std::string integrator = "path";
+  int max_depth = 5;
+  std::vector<std::string> set;  // key=value parameters for samplers and the integrator
+};
+
+// Parses --res WIDTHxHEIGHT (empty: keep the scene's); throws rll::Error naming the flag.
+LoadOptions parse_resolution(const std::string& resolution);
+
+class RenderSession {
+ public:
+  // Parses the parameters, loads and finalizes the scene, builds its acceleration structure.
+  explicit RenderSession(const SessionSettings& settings);
+
+  Scene& scene() { return m_scene; }
+  const Scene& scene() const { return m_scene; }
+  Accel& accel() { return *m_accel; }
+  const IntegratorSettings& integrator() const { return m_integrator; }
+  const SessionSettings& settings() const { return m_settings; }
+
+  // A fresh sampler (no learnt state) by name, its parameters from --set.
+  std::unique_ptr<LightSampler> make_sampler(const std::string& name) const;
+  // Throws rll::Error naming every --set key that no sampler or integrator asked for; call it
+  // once every sampler the command needs has been made.
+  void check_params_used() const { m_params.check_all_used(); }
+
+  using AfterPass = std::function<void(const RenderProgress&, const Film&)>;
+  // Renders the current frame into `film` with `sampler`, showing a progress bar labelled
+  // `label` on a terminal when `show_progress`; `after_pass` as in render().
+  RenderProgress render(LightSampler& sampler, Film& film, const RenderSettings& settings,
+                        const std::string& label, bool show_progress,
+                        const std::atomic<bool>* cancel = nullptr,
+                        const AfterPass& after_pass = {}) const;
+
+ private:
+  SessionSettings m_settings;
+  Params m_params;
+  Scene m_scene;
+  IntegratorSettings m_integrator;
+  std::unique_ptr<Accel> m_accel;
+};
+
+}  // namespace rll

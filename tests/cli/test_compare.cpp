@@ -1,0 +1,288 @@
+// `rll compare` and `rll reference` end to end: the files a compare writes, the reference cache,
+// the HTML report in a headless browser, and bad flags.
+#include <gtest/gtest.h>
+#include <stb/stb_image.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "rll/eval/metrics.h"
+#include "support/test_support.h"
+
+using namespace rll;
+using test::run_rll;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string read_text(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// One small comparison shared by the tests that only read its output: power and uniform on a
+// 24x24 Cornell box, 4 spp, 2 repeats.
+class CompareOutput : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    s_dir = new test::TempDir();
+    s_result = new test::CommandResult(
+        run_rll({"compare", "builtin:cornell-box", "--res", "24x24", "--samplers", "power,uniform",
+                 "--spp", "4", "--repeats", "2", "--reference-spp", "64", "--cache-dir",
+                 (*s_dir / "cache").string(), "--out", (*s_dir / "out").string(), "--quiet"}));
+  }
+  static void TearDownTestSuite() {
+    delete s_result;
+    delete s_dir;
+  }
+  void SetUp() override { ASSERT_EQ(s_result->exit_code, 0) << s_result->output; }
+  static fs::path out(const std::string& name) { return *s_dir / "out" / name; }
+  static nlohmann::json summary() { return nlohmann::json::parse(read_text(out("summary.json"))); }
+
+  static test::TempDir* s_dir;
+  static test::CommandResult* s_result;
+};
+test::TempDir* CompareOutput::s_dir = nullptr;
+test::CommandResult* CompareOutput::s_result = nullptr;
+
+}  // namespace
+
+TEST_F(CompareOutput, SummaryHasEveryFieldPerSampler) {
+  const nlohmann::json j = summary();
+  ASSERT_EQ(j["samplers"].size(), 2u);
+  EXPECT_EQ(j["samplers"][0]["name"], "power");
+  EXPECT_EQ(j["samplers"][1]["name"], "uniform");
+  for (const auto& s : j["samplers"]) {
+    for (const char* k :
+         {"spp", "seconds", "setup_seconds", "relmse", "mse", "efficiency", "relmse_ratio"}) {
+      ASSERT_TRUE(s.contains(k) && s[k].is_object()) << k;
+      EXPECT_EQ(s[k]["values"].size(), 2u) << k;
+      EXPECT_LE(s[k]["min"].get<double>(), s[k]["median"].get<double>()) << k;
+      EXPECT_LE(s[k]["median"].get<double>(), s[k]["max"].get<double>()) << k;
+    }
+    EXPECT_EQ(s["spp"]["median"], 4);
+    EXPECT_GT(s["relmse"]["min"].get<double>(), 0);
+    EXPECT_GT(s["seconds"]["min"].get<double>(), 0);
+    EXPECT_TRUE(s["memory"].contains("sampler_bytes"));
+    EXPECT_GT(s["memory"]["peak_rss_bytes"].get<double>(), 1e6);
+    EXPECT_EQ(s["runs"].size(), 2u);
+    EXPECT_FALSE(s["runs"][0]["checkpoints"].empty());
+    const double relmse = s["relmse"]["values"][0], seconds = s["seconds"]["values"][0];
+    EXPECT_NEAR(s["efficiency"]["values"][0].get<double>(), 1 / (relmse * seconds),
+                1e-9 / (relmse * seconds));
+  }
+  EXPECT_EQ(j["samplers"][0]["relmse_ratio"]["median"], 1.0);
+  // Interleaved, the starting sampler rotating per repeat; each repeat its own seed.
+  EXPECT_EQ(j["order"], nlohmann::json::parse(R"([["power","uniform"],["uniform","power"]])"));
+  EXPECT_EQ(j["samplers"][0]["runs"][1]["seed"], 2);
+  EXPECT_EQ(j["reference"]["spp"], 64);
+  EXPECT_EQ(j["budget"]["spp"], 4);
+}
+
+TEST_F(CompareOutput, ErrorsRecomputedFromTheWrittenImagesMatch) {
+  const Image ref = read_image(out("reference.exr"));
+  const nlohmann::json j = summary();
+  for (const auto& s : j["samplers"]) {
+    const std::string name = s["name"];
+    const Image first = read_image(out(name + ".exr"));
+    const Image second = read_image(out(name + ".repeat2.exr"));
+    EXPECT_NEAR(relmse(first, ref), s["relmse"]["values"][0].get<double>(), 1e-9);
+    EXPECT_NEAR(mse(second, ref), s["mse"]["values"][1].get<double>(), 1e-12);
+    const Image err = read_image(out(name + ".error.exr"));
+    const auto map = relative_error_map(first, ref);
+    EXPECT_NEAR(err[7].x, map[7], 1e-6);
+  }
+}
+
+TEST_F(CompareOutput, ConvergencePlotIsAPng) {
+  int w = 0, h = 0, n = 0;
+  ASSERT_TRUE(stbi_info(out("convergence.png").c_str(), &w, &h, &n));
+  EXPECT_GT(w, 300);
+  EXPECT_GT(h, 200);
+}
+
+TEST_F(CompareOutput, PrintsTheTableAndTheReportPath) {
+  EXPECT_TRUE(contains(s_result->output, "relMSE median [min, max]")) << s_result->output;
+  EXPECT_TRUE(contains(s_result->output, "efficiency"));
+  EXPECT_TRUE(contains(s_result->output, "report: " + out("report.html").string()))
+      << s_result->output;
+}
+
+TEST_F(CompareOutput, ReportLoadsInChromiumWithoutScriptErrors) {
+  const fs::path chromium = "/usr/bin/chromium";
+  if (!fs::exists(chromium))
+    GTEST_SKIP() << "chromium is not installed (make test installs it): report not loaded";
+  // A copy of the report with a script that uses its controls (exposure, zoom, reset).
+  std::string html = read_text(out("report.html"));
+  const std::string selftest = read_text(fs::path(RLL_SOURCE_DIR) / "tests/cli/report_selftest.js");
+  ASSERT_FALSE(selftest.empty());
+  const size_t body = html.rfind("</body>");
+  ASSERT_NE(body, std::string::npos);
+  html.insert(body, "<script>" + selftest + "</script>\n");
+  const fs::path page = *s_dir / "selftest.html";
+  std::ofstream(page) << html;
+  const fs::path dom = *s_dir / "dom.html", log = *s_dir / "chromium.log";
+  const std::string cmd =
+      "timeout 120 " + chromium.string() +
+      " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
+      " --disable-background-networking --disable-component-update --disable-sync"
+      " --user-data-dir=" +
+      (*s_dir / "chromium-profile").string() +
+      " --enable-logging=stderr --v=0 --virtual-time-budget=20000 --dump-dom 'file://" +
+      page.string() + "' > '" + dom.string() + "' 2> '" + log.string() + "'";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << read_text(log);
+  const std::string d = read_text(dom), l = read_text(log);
+  EXPECT_FALSE(contains(l, "Uncaught")) << l;
+  EXPECT_TRUE(contains(d, "<table id=\"summary\">")) << d.substr(0, 2000);
+  EXPECT_TRUE(contains(d, "data-ready=\"1\"")) << "the report's script did not finish";
+  EXPECT_TRUE(contains(d, "<body data-selftest=\"ok\"")) << d.substr(0, 2000);
+  EXPECT_TRUE(
+      contains(d, "<td><span class=\"swatch\" style=\"background:#1f77b4\"></span>power</td>"));
+}
+
+TEST(Compare, EqualTimeStopsAtTheBudget) {
+  test::TempDir tmp;
+  auto r = run_rll({"compare", "builtin:cornell-box", "--res", "16x16", "--samplers", "power",
+                    "--time", "0.3", "--reference-spp", "16", "--cache-dir",
+                    (tmp / "cache").string(), "--out", (tmp / "out").string(), "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(read_text(tmp / "out" / "summary.json"));
+  const auto& s = j["samplers"][0];
+  EXPECT_EQ(j["budget"]["time"], 0.3);
+  EXPECT_GE(s["seconds"]["median"].get<double>(), 0.3);
+  EXPECT_LT(s["seconds"]["median"].get<double>(), 2.0);
+  EXPECT_GT(s["spp"]["median"].get<double>(), 4);
+  // Checkpoints: increasing in time, the last one the final image.
+  const auto& cps = s["runs"][0]["checkpoints"];
+  ASSERT_GE(cps.size(), 3u);
+  for (size_t i = 1; i < cps.size(); ++i)
+    EXPECT_GT(cps[i][0].get<double>(), cps[i - 1][0].get<double>());
+  EXPECT_EQ(cps.back()[2], s["relmse"]["values"][0]);
+  EXPECT_EQ(cps.back()[1], s["spp"]["values"][0]);
+}
+
+TEST(Reference, CacheIsReusedAndInvalidatedWhenTheSceneChanges) {
+  test::TempDir tmp;
+  const std::string cache = (tmp / "cache").string();
+  auto reference = [&](std::vector<std::string> extra, const std::string& res = "16x16",
+                       const std::string& spp = "16") {
+    std::vector<std::string> args = {"reference", "builtin:cornell-box", "--res", res,      "--spp",
+                                     spp,         "--cache-dir",         cache,   "--quiet"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_rll(args);
+  };
+  auto first = reference({"-o", (tmp / "ref.exr").string()});
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_TRUE(contains(first.output, "rendered 16 spp")) << first.output;
+  EXPECT_TRUE(fs::exists(tmp / "ref.exr"));
+
+  auto again = reference({});
+  EXPECT_TRUE(contains(again.output, "reused")) << again.output;
+  auto fewer = reference({}, "16x16", "8");  // --spp is a minimum: 16 will do
+  EXPECT_TRUE(contains(fewer.output, "reused")) << fewer.output;
+
+  // compare finds it too (its runs use seeds 1.., the reference 1000003).
+  auto cmp = run_rll({"compare", "builtin:cornell-box", "--res", "16x16", "--samplers", "power",
+                      "--spp", "1", "--reference-spp", "16", "--cache-dir", cache, "--out",
+                      (tmp / "out").string(), "--quiet"});
+  ASSERT_EQ(cmp.exit_code, 0) << cmp.output;
+  EXPECT_TRUE(contains(cmp.output, "reference: reused")) << cmp.output;
+  EXPECT_EQ(read_image(tmp / "out" / "reference.exr")[100].y, read_image(tmp / "ref.exr")[100].y);
+
+  // Another film size or integrator is another scene or setting: rendered afresh.
+  EXPECT_TRUE(contains(reference({}, "16x12").output, "rendered"));
+  EXPECT_TRUE(contains(reference({"--max-depth", "2"}).output, "rendered"));
+  EXPECT_TRUE(contains(reference({}, "16x16", "32").output, "rendered 32 spp"));
+  EXPECT_TRUE(contains(reference({"--force"}).output, "rendered"));
+}
+
+TEST(Reference, EditingTheSceneFileInvalidatesItsReference) {
+  test::TempDir tmp;
+  const std::string cache = (tmp / "cache").string();
+  // A lit floor: an emissive quad above a diffuse one.
+  const std::string geometry =
+      "mtllib m.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -0.2 1 -0.2\nv 0.2 1 -0.2\n"
+      "v 0.2 1 0.2\nv -0.2 1 0.2\nusemtl floor\nf 1 4 3\nf 1 3 2\nusemtl lamp\nf 5 6 7\nf 5 7 8\n";
+  tmp.write("m.mtl", "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl lamp\nKe 4 4 4\n");
+  const fs::path scene = tmp.write("room.obj", geometry);
+  auto reference = [&] {
+    return run_rll({"reference", scene.string(), "--res", "8x8", "--spp", "4", "--cache-dir", cache,
+                    "--quiet"});
+  };
+  auto cached_entries = [&] {
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(cache)) n += e.path().extension() == ".exr";
+    return n;
+  };
+  auto first = reference();
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_TRUE(contains(first.output, "rendered")) << first.output;
+  EXPECT_TRUE(contains(reference().output, "reused"));
+
+  // A brighter lamp, in the material file the scene refers to: the old reference is stale.
+  tmp.write("m.mtl", "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl lamp\nKe 8 8 8\n");
+  auto edited = reference();
+  EXPECT_TRUE(contains(edited.output, "rendered")) << edited.output;
+  EXPECT_TRUE(contains(reference().output, "reused"));
+  EXPECT_EQ(cached_entries(), 1);  // the stale entry of this scene file was deleted
+
+  // Moving a vertex is a change too.
+  std::string moved = geometry;
+  moved.replace(moved.find("v -1 0 -1\n"), 10, "v -1 0 -1.5\n");
+  tmp.write("room.obj", moved);
+  EXPECT_TRUE(contains(reference().output, "rendered"));
+}
+
+TEST(Compare, BadFlagsGiveClearErrors) {
+  test::TempDir tmp;
+  const std::string out = (tmp / "out").string(), cache = (tmp / "cache").string();
+  auto compare = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = {
+        "compare", "builtin:cornell-box", "--res", "8x8", "--cache-dir", cache, "--out", out,
+        "--quiet"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_rll(args);
+  };
+  auto expect_error = [](const test::CommandResult& r, const std::string& message) {
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, message)) << "expected '" << message << "' in: " << r.output;
+  };
+  expect_error(compare({"--samplers", "power,nope", "--spp", "1"}), "unknown light sampler 'nope'");
+  expect_error(compare({"--samplers", "power,power", "--spp", "1"}), "'power' is listed twice");
+  expect_error(compare({"--samplers", "power,", "--spp", "1"}), "empty sampler name");
+  expect_error(compare({"--samplers", "power"}), "give exactly one budget");
+  expect_error(compare({"--samplers", "power", "--spp", "1", "--time", "1"}), "excludes");
+  expect_error(compare({"--samplers", "power", "--spp", "1", "--repeats", "0"}), "--repeats");
+  expect_error(compare({"--samplers", "power", "--spp", "1", "--set", "power.nope=1"}),
+               "power.nope");
+  expect_error(compare({"--samplers", "power", "--spp", "1", "--seed", "5", "--repeats", "3",
+                        "--reference-seed", "7"}),
+               "--reference-seed 7");
+  auto wrong_size = run_rll({"reference", "builtin:cornell-box", "--res", "4x4", "--spp", "1",
+                             "--cache-dir", cache, "-o", (tmp / "small.exr").string(), "--quiet"});
+  ASSERT_EQ(wrong_size.exit_code, 0) << wrong_size.output;
+  expect_error(
+      compare({"--samplers", "power", "--spp", "1", "--reference", (tmp / "small.exr").string()}),
+      "the image is 4x4 but the scene renders at 8x8");
+  expect_error(
+      compare({"--samplers", "power", "--spp", "1", "--reference", (tmp / "missing.exr").string()}),
+      "not found");
+  expect_error(run_rll({"reference", "builtin:cornell-box", "--spp", "0", "--cache-dir", cache}),
+               "--spp");
+}
+
+TEST(Samplers, ListsTheRegisteredSamplers) {
+  auto r = run_rll({"samplers"});
+  ASSERT_EQ(r.exit_code, 0);
+  EXPECT_TRUE(contains(r.output, "power\n")) << r.output;
+  EXPECT_TRUE(contains(r.output, "uniform\n")) << r.output;
+}

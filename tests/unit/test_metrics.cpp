@@ -1,0 +1,93 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "rll/core/error.h"
+#include "rll/eval/metrics.h"
+
+using namespace rll;
+
+namespace {
+// x = [(1,2,3), (0,0,0)], ref = [(1,1,1), (0.1,0,0.2)]: squared errors 0,1,4 and .01,0,.04.
+Image two_pixels(Rgb a, Rgb b) {
+  Image img(2, 1);
+  img[0] = a;
+  img[1] = b;
+  return img;
+}
+const Image kImage = two_pixels({1, 2, 3}, {0, 0, 0});
+const Image kReference = two_pixels({1, 1, 1}, {0.1f, 0, 0.2f});
+}  // namespace
+
+TEST(Metrics, MseByHand) {
+  EXPECT_NEAR(mse(kImage, kReference), 5.05 / 6.0, 1e-7);
+  EXPECT_EQ(mse(kReference, kReference), 0.0);
+}
+
+TEST(Metrics, RelMseByHand) {
+  // Pixel 0: (0 + 1 + 4) / (1 + 0.01); pixel 1: .01/.02 + 0/.01 + .04/.05 = 1.3.
+  EXPECT_NEAR(relmse(kImage, kReference), (5.0 / 1.01 + 1.3) / 6.0, 1e-6);
+  EXPECT_EQ(relmse(kReference, kReference), 0.0);
+}
+
+TEST(Metrics, RelMseOfBlackReferenceUsesEpsilon) {
+  const Image black(1, 1, Rgb(0));
+  const Image grey(1, 1, Rgb(0.1f));
+  EXPECT_NEAR(relmse(grey, black), 0.01 / kRelMseEpsilon, 1e-6);
+}
+
+TEST(Metrics, ErrorMapAveragesChannelsAndMeansToRelMse) {
+  const auto map = relative_error_map(kImage, kReference);
+  ASSERT_EQ(map.size(), 2u);
+  EXPECT_NEAR(map[0], 5.0 / 1.01 / 3.0, 1e-6);
+  EXPECT_NEAR(map[1], 1.3 / 3.0, 1e-6);
+  EXPECT_NEAR((map[0] + map[1]) / 2.0, relmse(kImage, kReference), 1e-6);
+}
+
+TEST(Metrics, SizeMismatchIsAnError) {
+  EXPECT_THROW(mse(Image(2, 1), Image(1, 2)), Error);
+  EXPECT_THROW(relmse(Image(2, 2), Image(2, 1)), Error);
+  EXPECT_THROW(relative_error_map(Image(3, 1), Image(2, 1)), Error);
+  EXPECT_THROW(mse(Image(), Image()), Error);
+}
+
+TEST(Metrics, FalseColourEndsAndClamping) {
+  // Log scale from 1e-3 to 1e1: 1e-1 is half way.
+  const auto rgb = false_colour({1e-3f, 1e1f, 1e-1f, 0.0f, 1e5f, NAN, INFINITY}, 1e-3f, 1e1f);
+  ASSERT_EQ(rgb.size(), 21u);
+  auto at = [&](int i) { return Rgb8{rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]}; };
+  auto same = [](Rgb8 a, Rgb8 b) { return a.r == b.r && a.g == b.g && a.b == b.b; };
+  EXPECT_TRUE(same(at(0), colour_scale(0)));
+  EXPECT_TRUE(same(at(1), colour_scale(1)));
+  EXPECT_TRUE(same(at(2), colour_scale(0.5f)));
+  EXPECT_TRUE(same(at(3), colour_scale(0)));  // zero error: the low end
+  EXPECT_TRUE(same(at(4), colour_scale(1)));  // clamped
+  EXPECT_TRUE(same(at(5), colour_scale(0)));  // NaN
+  EXPECT_TRUE(same(at(6), colour_scale(1)));  // +inf
+  EXPECT_THROW(false_colour({1.0f}, 0.0f, 1.0f), Error);
+}
+
+TEST(Metrics, ColourScaleIsOrderedDarkToBright) {
+  float prev = -1;
+  for (int i = 0; i <= 20; ++i) {
+    const Rgb8 c = colour_scale(i / 20.0f);
+    const float lum = 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b;
+    EXPECT_GT(lum, prev) << "at t = " << i / 20.0f;
+    prev = lum;
+  }
+}
+
+TEST(Metrics, Quantile) {
+  EXPECT_EQ(quantile({5, 1, 4, 2, 3}, 0.5), 3);
+  EXPECT_EQ(quantile({5, 1, 4, 2, 3}, 0.0), 1);
+  EXPECT_EQ(quantile({5, 1, 4, 2, 3}, 1.0), 5);
+  EXPECT_EQ(quantile({NAN, 2, INFINITY}, 0.5), 2);
+  EXPECT_EQ(quantile({}, 0.5), 0);
+}
+
+TEST(Metrics, GreyImage) {
+  const Image g = grey_image({0.5f, 2.0f}, 2, 1);
+  EXPECT_EQ(g[1].x, 2.0f);
+  EXPECT_EQ(g[1].z, 2.0f);
+  EXPECT_THROW(grey_image({1.0f}, 2, 1), Error);
+}

@@ -1,0 +1,137 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "rll/eval/reference.h"
+#include "rll/render/session.h"
+#include "rll/scene/load.h"
+#include "support/test_support.h"
+
+using namespace rll;
+namespace fs = std::filesystem;
+
+namespace {
+Scene small_box() {
+  return load_scene("builtin:cornell-box", {8, 8});
+}
+}  // namespace
+
+TEST(ReferenceCache, SceneHashIsStableAndSeesEveryChange) {
+  const Scene base = small_box();
+  const uint64_t h = scene_content_hash(base);
+  EXPECT_EQ(scene_content_hash(small_box()), h);
+
+  Scene moved = small_box();
+  moved.mesh.positions[0].x += 1e-3f;
+  EXPECT_NE(scene_content_hash(moved), h);
+
+  Scene brighter = small_box();
+  bool changed = false;
+  for (auto& m : brighter.materials)
+    if (m.is_emissive()) m.emission = m.emission * 2.0f, changed = true;
+  ASSERT_TRUE(changed);
+  EXPECT_NE(scene_content_hash(brighter), h);
+
+  Scene rougher = small_box();
+  rougher.materials[0].roughness += 0.1f;
+  EXPECT_NE(scene_content_hash(rougher), h);
+
+  Scene camera = small_box();
+  camera.camera.fov += 1;
+  EXPECT_NE(scene_content_hash(camera), h);
+
+  EXPECT_NE(scene_content_hash(load_scene("builtin:cornell-box", {8, 6})), h);
+
+  Scene renamed = small_box();
+  renamed.materials[0].name += "-renamed";  // names do not change the image
+  EXPECT_EQ(scene_content_hash(renamed), h);
+}
+
+TEST(ReferenceCache, SettingsHashSeesIntegratorChanges) {
+  IntegratorSettings a;
+  IntegratorSettings b = a;
+  b.max_depth += 1;
+  IntegratorSettings c = a;
+  c.type = IntegratorType::Direct;
+  IntegratorSettings d = a;
+  d.strategy = LightStrategy::Nee;
+  EXPECT_EQ(integrator_settings_hash(a), integrator_settings_hash(IntegratorSettings{}));
+  EXPECT_NE(integrator_settings_hash(a), integrator_settings_hash(b));
+  EXPECT_NE(integrator_settings_hash(a), integrator_settings_hash(c));
+  EXPECT_NE(integrator_settings_hash(a), integrator_settings_hash(d));
+}
+
+TEST(ReferenceCache, FindsTheEntryWithMostSamplesAboveTheMinimum) {
+  test::TempDir tmp;
+  ReferenceCache cache(tmp / "cache");
+  const ReferenceKey key{1, 2}, other{3, 2};
+  EXPECT_FALSE(cache.find(key, 1).has_value());  // no folder yet
+  auto store = [&](const ReferenceKey& k, int spp, uint64_t seed, float value) {
+    ReferenceInfo info;
+    info.scene = k == key ? "builtin:x" : "builtin:y";  // one scene would replace the other
+    info.sampler = "power";
+    info.spp = spp;
+    info.seed = seed;
+    return cache.store(k, Image(2, 2, Rgb(value)), info);
+  };
+  store(key, 64, 7, 1.0f);
+  store(key, 256, 8, 2.0f);
+  store(other, 1024, 7, 3.0f);
+
+  auto hit = cache.find(key, 100);
+  ASSERT_TRUE(hit.has_value());
+  EXPECT_EQ(hit->spp, 256);
+  EXPECT_EQ(read_image(hit->image)[0].x, 2.0f);
+  EXPECT_EQ(cache.find(key, 10)->spp, 256);  // the best one, not just any
+  EXPECT_FALSE(cache.find(key, 257).has_value());
+  EXPECT_EQ(cache.find(key, 10, [](uint64_t s) { return s != 8; })->spp, 64);
+  EXPECT_EQ(cache.find(other, 1)->spp, 1024);
+
+  // A damaged entry is skipped, not an error.
+  std::ofstream(cache.dir() / (key.hex() + "-512spp-seed9.json")) << "{ not json";
+  std::ofstream(cache.dir() / (key.hex() + "-512spp-seed9.exr")) << "nope";
+  EXPECT_EQ(cache.find(key, 10)->spp, 256);
+}
+
+TEST(ReferenceCache, StoringANewVersionOfASceneDropsTheOldOnes) {
+  test::TempDir tmp;
+  ReferenceCache cache(tmp.path());
+  ReferenceInfo info;
+  info.scene = "/scenes/room.obj";
+  info.spp = 16;
+  const ReferenceKey v1{1, 9}, v2{2, 9}, other_settings{1, 5};
+  cache.store(v1, Image(2, 2), info);
+  cache.store(other_settings, Image(2, 2), info);
+  ReferenceInfo other_scene = info;
+  other_scene.scene = "/scenes/hall.obj";
+  cache.store(ReferenceKey{7, 9}, Image(2, 2), other_scene);
+  cache.store(v2, Image(2, 2), info);
+  EXPECT_FALSE(cache.find(v1, 1).has_value());
+  EXPECT_FALSE(fs::exists(tmp / (v1.hex() + "-16spp-seed0.exr")));
+  EXPECT_TRUE(cache.find(v2, 1).has_value());
+  EXPECT_TRUE(cache.find(other_settings, 1).has_value());  // another integrator: still valid
+  EXPECT_TRUE(cache.find(ReferenceKey{7, 9}, 1).has_value());
+}
+
+TEST(ReferenceCache, ObtainRendersOnceThenReuses) {
+  test::TempDir tmp;
+  ReferenceCache cache(tmp.path());
+  SessionSettings ss;
+  ss.scene = "builtin:cornell-box";
+  ss.resolution = "8x8";
+  ss.integrator = "direct";
+  RenderSession session(ss);
+  ReferenceRequest req;
+  req.spp = 4;
+  ObtainedReference first = obtain_reference(session, cache, req, false);
+  EXPECT_FALSE(first.from_cache);
+  EXPECT_TRUE(first.complete);
+  EXPECT_EQ(first.info.spp, 4);
+  ObtainedReference second = obtain_reference(session, cache, req, false);
+  EXPECT_TRUE(second.from_cache);
+  EXPECT_EQ(second.info.image, first.info.image);
+  for (size_t i = 0; i < first.image.pixel_count(); ++i)
+    ASSERT_EQ(first.image[i].y, second.image[i].y);
+  req.force = true;
+  EXPECT_FALSE(obtain_reference(session, cache, req, false).from_cache);
+}
