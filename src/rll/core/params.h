@@ -28,6 +28,8 @@ class Params {
                          const std::vector<std::string>& choices) const;
   // Throws rll::Error listing every key that no getter asked for.
   void check_all_used() const;
+  // Marks as used every key that `other` (a copy with overrides) had asked for.
+  void merge_used(const Params& other) const { m_used.insert(other.m_used.begin(), other.m_used.end()); }
   const std::map<std::string, std::string>& values() const { return m_values; }
 
  private:

@@ -28,8 +28,26 @@ RenderSession::RenderSession(const SessionSettings& settings)
   m_accel = std::make_unique<Accel>(m_scene.mesh);
 }
 
-std::unique_ptr<LightSampler> RenderSession::make_sampler(const std::string& name) const {
-  return make_light_sampler(name, m_scene, m_params, m_accel.get());
+std::unique_ptr<LightSampler> RenderSession::make_sampler(const std::string& spec) const {
+  size_t colon = spec.find(':');
+  if (colon == std::string::npos) return make_light_sampler(spec, m_scene, m_params, m_accel.get());
+  const std::string name = spec.substr(0, colon);
+  Params params = m_params;
+  for (size_t start = colon + 1; start <= spec.size();) {
+    size_t end = std::min(spec.find(':', start), spec.size());
+    std::string kv = spec.substr(start, end - start);
+    size_t eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == kv.size())
+      fail("sampler '{}': '{}' is not key=value", spec, kv);
+    std::string key = kv.substr(0, eq);
+    if (key.find('.') == std::string::npos) key = name + "." + key;
+    params.set(key, kv.substr(eq + 1));
+    start = end + 1;
+  }
+  auto sampler = make_light_sampler(name, m_scene, params, m_accel.get());
+  params.check_all_used();  // a variant's own keys must all be known
+  m_params.merge_used(params);
+  return sampler;
 }
 
 RenderProgress RenderSession::render(LightSampler& sampler, Film& film,

@@ -40,8 +40,10 @@ class RenderSession {
   const IntegratorSettings& integrator() const { return m_integrator; }
   const SessionSettings& settings() const { return m_settings; }
 
-  // A fresh sampler (no learnt state) by name, its parameters from --set.
-  std::unique_ptr<LightSampler> make_sampler(const std::string& name) const;
+  // A fresh sampler (no learnt state) by name, its parameters from --set. A variant may carry
+  // its own parameters after colons, keys prefixed with the sampler's name unless they hold a
+  // dot: "rll:within=uniform:reward=fullpdf" is rll with rll.within and rll.reward set.
+  std::unique_ptr<LightSampler> make_sampler(const std::string& spec) const;
   // Throws rll::Error naming every --set key that no sampler or integrator asked for; call it
   // once every sampler the command needs has been made.
   void check_params_used() const { m_params.check_all_used(); }
