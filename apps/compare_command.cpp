@@ -31,6 +31,7 @@ struct CompareOptions {
   double time = 0;
   int spp = 0;
   int repeats = 1;
+  int frames = 1;
   int pass_spp = 1;
   int max_pass_spp = 8;
   uint64_t seed = 1;
@@ -95,6 +96,7 @@ std::vector<std::string> check_flags(const CompareOptions& o) {
   if ((o.time > 0) == (o.spp > 0))
     fail("give exactly one budget: --time SECONDS or --spp N (positive)");
   if (o.repeats < 1) fail("--repeats must be at least 1");
+  if (o.frames < 1) fail("--frames must be at least 1");
   if (o.pass_spp < 1) fail("--pass-spp must be at least 1");
   if (o.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
   if (o.reference.empty() && o.reference_request.spp < 1)
@@ -162,7 +164,7 @@ ChosenReference choose_reference(const CompareOptions& o, const RenderSession& s
 
 // One render of one sampler, fresh (a learning sampler starts cold every run), with relMSE
 // checkpoints; the image is returned in `image`.
-RunResult run_once(const CompareOptions& o, const RenderSession& session, const std::string& name,
+RunResult run_once(const CompareOptions& o, RenderSession& session, const std::string& name,
                    int repeat, const Image& reference, Image& image) {
   reset_peak_rss();
   const auto t0 = std::chrono::steady_clock::now();
@@ -176,9 +178,21 @@ RunResult run_once(const CompareOptions& o, const RenderSession& session, const 
   rs.seed = o.seed + uint64_t(repeat);
   rs.pass_spp = o.pass_spp;
   rs.max_pass_spp = o.max_pass_spp;
-  ConvergenceRecorder recorder(reference);
   const std::string label =
       o.repeats > 1 ? fmt::format("{} ({}/{})", name, repeat + 1, o.repeats) : name;
+  // Animated scenes: the frames before the last are rendered with the same budget, so that a
+  // learning sampler carries what it learnt into the measured last frame.
+  for (int f = 0; f + 1 < o.frames; ++f) {
+    session.set_frame(f, sampler.get());
+    Film earlier(session.scene().width, session.scene().height);
+    RenderSettings rf = rs;
+    rf.frame = f;
+    session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1), !o.quiet, interrupt_flag());
+    if (interrupted()) fail("interrupted during the run of '{}'; the summary and report were not written", name);
+  }
+  session.set_frame(o.frames - 1, sampler.get());
+  rs.frame = o.frames - 1;
+  ConvergenceRecorder recorder(reference);
   const RenderProgress p =
       session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag(),
                      [&](const RenderProgress& pr, const Film& f) { recorder.after_pass(pr, f); });
@@ -241,6 +255,7 @@ void run(const CompareOptions& o) {
   RenderSession session(o.session);
   const Scene& scene = session.scene();
   check_samplers(o, session, samplers);
+  session.set_frame(o.frames - 1, nullptr);  // the measured frame, for the reference
 
   const ChosenReference ref = choose_reference(o, session);
   write_image(out / "reference.exr", ref.image);
@@ -324,6 +339,7 @@ void run(const CompareOptions& o) {
                      {"max_depth", session.integrator().max_depth},
                      {"strategy", strategy_name(session.integrator().strategy)}};
   j["budget"] = o.time > 0 ? nlohmann::json{{"time", o.time}} : nlohmann::json{{"spp", o.spp}};
+  j["frames"] = o.frames;
   j["repeats"] = o.repeats;
   j["seed"] = o.seed;
   j["pass_spp"] = {{"first", o.pass_spp}, {"max", o.max_pass_spp}};
@@ -366,6 +382,10 @@ void add_compare_command(CLI::App& app) {
   auto* time = cmd->add_option("--time", o->time, "Equal time: seconds per run");
   auto* spp = cmd->add_option("--spp", o->spp, "Equal samples: samples per pixel per run");
   time->excludes(spp);
+  cmd->add_option("--frames", o->frames,
+                  "Frames per run (animated scenes): each frame gets the budget, learning carries over, "
+                  "the last frame is measured")
+      ->capture_default_str();
   cmd->add_option("--repeats", o->repeats, "Runs per sampler; reported as median and range")
       ->capture_default_str();
   cmd->add_option("--pass-spp", o->pass_spp,

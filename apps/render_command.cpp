@@ -78,14 +78,7 @@ void run(const RenderOptions& o) {
   nlohmann::json frame_stats = nlohmann::json::array();
   RenderProgress total;
   for (int f = 0; f < frames && !interrupted(); ++f) {
-    if (f > 0 || scene.animate) {
-      if (scene.animate) {
-        scene.animate(scene, f);
-        scene.refresh_lights_from_mesh();
-        session.accel().update_vertices(scene.mesh);
-        sampler->lights_changed(scene);
-      }
-    }
+    session.set_frame(f, sampler.get());
     rs.frame = f;
     Film film(scene.width, scene.height);
     std::string label = frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");

@@ -67,7 +67,16 @@ double estimate(const Scene& scene, const Accel& accel, uint32_t node, const std
 
 OracleLightSampler::OracleLightSampler(const Scene& scene, const Accel& accel, const RllSettings& rll,
                                        const OracleSettings& s)
-    : m_s(s) {
+    : m_s(s), m_accel(accel), m_rll_settings(rll) {
+  precompute(scene);
+}
+
+void OracleLightSampler::lights_changed(const Scene& scene) { precompute(scene); }
+
+void OracleLightSampler::precompute(const Scene& scene) {
+  const OracleSettings& s = m_s;
+  const Accel& accel = m_accel;
+  const RllSettings& rll = m_rll_settings;
   auto t0 = std::chrono::steady_clock::now();
   RllSettings fixed = rll;
   fixed.grid.jitter = 0;  // one fixed grid: the oracle's cells never move

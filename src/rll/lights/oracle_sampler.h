@@ -31,12 +31,17 @@ class OracleLightSampler final : public LightSampler {
   void prepare(LightContext& ctx, float u) const override { m_rll->prepare(ctx, u); }
   SampledLight sample(const LightContext& ctx, double u) const override { return m_rll->sample(ctx, u); }
   float pmf(const LightContext& ctx, uint32_t light) const override { return m_rll->pmf(ctx, light); }
+  // Lights moved or switched: the knowledge is computed again (outside render time too).
+  void lights_changed(const Scene& scene) override;
   nlohmann::json describe() const override;
   double precompute_seconds() const { return m_seconds; }
 
  private:
-  std::unique_ptr<RllLightSampler> m_rll;
+  void precompute(const Scene& scene);
   OracleSettings m_s;
+  const Accel& m_accel;
+  RllSettings m_rll_settings;
+  std::unique_ptr<RllLightSampler> m_rll;
   double m_seconds = 0;
   uint64_t m_rays = 0;
   uint32_t m_cells = 0;

@@ -50,6 +50,14 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler(const std::string& spe
   return sampler;
 }
 
+void RenderSession::set_frame(int frame, LightSampler* sampler) {
+  if (!m_scene.animate) return;
+  m_scene.animate(m_scene, frame);
+  m_scene.refresh_lights_from_mesh();
+  m_accel->update_vertices(m_scene.mesh);
+  if (sampler) sampler->lights_changed(m_scene);
+}
+
 RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
                                      const RenderSettings& settings, const std::string& label,
                                      bool show_progress, const std::atomic<bool>* cancel,

@@ -48,6 +48,10 @@ class RenderSession {
   // once every sampler the command needs has been made.
   void check_params_used() const { m_params.check_all_used(); }
 
+  // Moves an animated scene to `frame` (lights switch and move), refits the ray tracer and the
+  // light tree, and tells `sampler` (which keeps what it learnt). No-op for static scenes.
+  void set_frame(int frame, LightSampler* sampler);
+
   using AfterPass = std::function<void(const RenderProgress&, const Film&)>;
   // Renders the current frame into `film` with `sampler`, showing a progress bar labelled
   // `label` on a terminal when `show_progress`; `after_pass` as in render().

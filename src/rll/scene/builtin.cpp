@@ -1,6 +1,9 @@
 #include "rll/scene/builtin.h"
 
+#include <fmt/format.h>
+
 #include <functional>
+#include <memory>
 
 #include "rll/core/error.h"
 #include "rll/core/rng.h"
@@ -63,7 +66,13 @@ Scene cornell_box_scene() {
   return s;
 }
 
-Scene cornell_boxes_room_scene() {
+// The room of the paper's Fig. 1. `lamps` (optional) receives, per Cornell box, the index of
+// its lamp's first vertex (4 vertices) and its material, each lamp then getting its own.
+struct LampInfo {
+  uint32_t first_vertex, material;
+};
+
+Scene cornell_boxes_room_scene(std::vector<LampInfo>* lamps = nullptr) {
   Scene s;
   s.width = 400;
   s.height = 300;
@@ -99,7 +108,15 @@ Scene cornell_boxes_room_scene() {
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c) {
       Vec3 lo(x_margin + c * pitch_x, 0.15f + r * pitch_y, 0.05f);
-      cornell_box(b, lo, lo + Vec3(bw, bh, bd), white, red, green, lamp, 0.3f);
+      uint32_t own_lamp = lamp;
+      if (lamps) {
+        own_lamp = b.emitter(Rgb(12, 10, 7), false, fmt::format("lamp-{}-{}", r, c));
+        // The lamp quad is the last thing cornell_box adds: its 4 vertices end the array.
+        cornell_box(b, lo, lo + Vec3(bw, bh, bd), white, red, green, own_lamp, 0.3f);
+        lamps->push_back({uint32_t(s.mesh.positions.size() - 4), own_lamp});
+        continue;
+      }
+      cornell_box(b, lo, lo + Vec3(bw, bh, bd), white, red, green, own_lamp, 0.3f);
     }
   b.sphere(Vec3(4.5f, 0.9f, 6.5f), 0.9f, 3, plastic);
   b.box(Vec3(8.8f, 0, 5.5f), Vec3(10.3f, 1.2f, 7.0f), metal);
@@ -112,6 +129,32 @@ Scene cornell_boxes_room_scene() {
   s.camera.target = Vec3(W * 0.5f, 2.7f, 0);
   s.camera.fov = 52;
   s.has_camera = true;
+  return s;
+}
+
+// cornell-boxes-room animated: between frames, about a fifth of the lamps switch off or back
+// on and the lamps of every other column slide sideways inside their boxes. Every lamp is on
+// when the scene is built, so that each of its triangles is a light at every frame.
+Scene cornell_boxes_dynamic_scene() {
+  auto lamps = std::make_shared<std::vector<LampInfo>>();
+  Scene s = cornell_boxes_room_scene(lamps.get());
+  auto base = std::make_shared<std::vector<Vec3>>();
+  for (const auto& l : *lamps)
+    for (uint32_t v = 0; v < 4; ++v) base->push_back(s.mesh.positions[l.first_vertex + v]);
+  const Rgb on(12, 10, 7);
+  s.frame_count = 8;
+  s.animate = [lamps, base, on](Scene& scene, int frame) {
+    for (size_t i = 0; i < lamps->size(); ++i) {
+      const LampInfo& l = (*lamps)[i];
+      bool lit = (i * 7 + size_t(frame) * 3) % 5 != 0 || frame == 0;
+      scene.materials[l.material].emission = lit ? on : Rgb(0);
+      // Columns alternate: even ones slide by up to 0.45 (the box is 1.4 wide, the lamp 0.42).
+      float shift = (i % 2 == 0) ? 0.45f * std::sin(0.9f * float(frame) + float(i)) : 0.0f;
+      if (frame == 0) shift = 0;
+      for (uint32_t v = 0; v < 4; ++v)
+        scene.mesh.positions[l.first_vertex + v] = (*base)[4 * i + v] + Vec3(shift, 0, 0);
+    }
+  };
   return s;
 }
 
@@ -263,7 +306,11 @@ const std::vector<Entry>& entries() {
       {{"cornell-boxes-room",
         "the paper's Fig. 1/3: 42 Cornell boxes, each lit by its own 2-triangle lamp, in a room lit "
         "by a 2048-triangle sky dome through skylights and windows"},
-       cornell_boxes_room_scene},
+       [] { return cornell_boxes_room_scene(); }},
+      {{"cornell-boxes-dynamic",
+        "cornell-boxes-room animated over 8 frames (--frames): lamps switch on and off and slide inside "
+        "their boxes; learning carries over between frames"},
+       cornell_boxes_dynamic_scene},
       {{"arch-interior",
         "the paper's Fig. 4: a room lit only by a 2048-triangle sky dome and a sun through 44 small windows"},
        arch_interior_scene},
