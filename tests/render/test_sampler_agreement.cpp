@@ -39,20 +39,20 @@ void expect_samplers_agree(const Scene& scene, IntegratorType type, int spp, con
 }
 
 TEST(SamplerAgreement, CornellBoxDirect) {
-  expect_samplers_agree(small_scene("cornell-box", 32, 32), IntegratorType::Direct, 64, {"power", "uniform", "tree"});
+  expect_samplers_agree(small_scene("cornell-box", 32, 32), IntegratorType::Direct, 64, {"power", "uniform", "tree", "rll"});
 }
 
 TEST(SamplerAgreement, CornellBoxPath) {
-  expect_samplers_agree(small_scene("cornell-box", 24, 24), IntegratorType::Path, 64, {"power", "uniform", "tree"});
+  expect_samplers_agree(small_scene("cornell-box", 24, 24), IntegratorType::Path, 64, {"power", "uniform", "tree", "rll"});
 }
 
 TEST(SamplerAgreement, ManyLightsOpenDirect) {
   expect_samplers_agree(small_scene("many-lights-open", 32, 24), IntegratorType::Direct, 64,
-                        {"tree", "power", "uniform"});
+                        {"tree", "power", "uniform", "rll"});
 }
 
 TEST(SamplerAgreement, ManyLightsOpenPath) {
-  expect_samplers_agree(small_scene("many-lights-open", 24, 18), IntegratorType::Path, 32, {"tree", "power"});
+  expect_samplers_agree(small_scene("many-lights-open", 24, 18), IntegratorType::Path, 32, {"tree", "power", "rll"});
 }
 
 }  // namespace

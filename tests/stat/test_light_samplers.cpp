@@ -63,7 +63,7 @@ Fixture make_fixture(const SamplerCase& c, const std::string& scene_name) {
   Params params = Params::parse(c.set);
   f.sampler = make_light_sampler(c.sampler, f.scene, params);
   params.check_all_used();
-  train_sampler(f.scene, *f.accel, *f.sampler, 8);
+  train_sampler(f.scene, *f.accel, *f.sampler, 32);  // RLL: strongly non-uniform cells (test_rll_learning)
   f.contexts = make_contexts(f.scene, *f.accel, kContexts, 1234);
   for (size_t i = 0; i < f.contexts.size(); ++i) f.sampler->prepare(f.contexts[i], float(i % 97) / 97.0f);
   return f;

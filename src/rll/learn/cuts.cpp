@@ -78,63 +78,6 @@ bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes) {
   return next == tree.light_count() && !nodes.empty();
 }
 
-template <typename WeightOf, typename ShareOf>
-int SplitCollapse::step(Cut& cut, std::vector<float>& qe, const WeightOf& weight_of, const ShareOf& share_of) const {
-  const size_t K = cut.nodes.size();
-  // l_max: the splittable cluster (more than one light) with the largest Q.
-  long best = -1;
-  for (size_t k = 0; k < K; ++k)
-    if (!m_tree.node(cut.nodes[k]).is_leaf() && (best < 0 || qe[k] > qe[best])) best = long(k);
-  if (best < 0) return 0;
-  // p_min: among parents whose two children are both in the cut (the minimum of Q over all
-  // nodes above the cut is always attained at such a parent), the one with the smallest Q,
-  // not the parent of l_max.
-  long pmin = -1;
-  if (int(K) >= m_max) {
-    for (size_t k = 0; k + 1 < K; ++k) {
-      if (long(k) == best || long(k + 1) == best) continue;
-      const LightTreeNode& a = m_tree.node(cut.nodes[k]);
-      if (a.parent == LightTree::kNone || m_tree.node(a.parent).child != cut.nodes[k] ||
-          cut.nodes[k + 1] != cut.nodes[k] + 1)
-        continue;
-      if (pmin < 0 || qe[k] + qe[k + 1] < qe[pmin] + qe[pmin + 1]) pmin = long(k);
-    }
-    if (pmin < 0 || !(qe[best] > m_t * (qe[pmin] + qe[pmin + 1]))) return 0;
-    // Collapse: the parent replaces its two children, Q summed.
-    uint32_t parent = m_tree.node(cut.nodes[pmin]).parent;
-    bool unvisited = cut.q[pmin] < 0 && cut.q[pmin + 1] < 0;
-    qe[pmin] += qe[pmin + 1];
-    cut.q[pmin] = unvisited ? -1.0f : qe[pmin];
-    cut.n[pmin] += cut.n[pmin + 1];
-    cut.nodes[pmin] = parent;
-    cut.weight[pmin] = weight_of(parent);
-    cut.nodes.erase(cut.nodes.begin() + pmin + 1);
-    cut.q.erase(cut.q.begin() + pmin + 1);
-    cut.n.erase(cut.n.begin() + pmin + 1);
-    cut.weight.erase(cut.weight.begin() + pmin + 1);
-    qe.erase(qe.begin() + pmin + 1);
-    if (best > pmin) --best;
-  }
-  // Split: l_max's two children replace it, Q shared in proportion to share_of.
-  const LightTreeNode& nd = m_tree.node(cut.nodes[best]);
-  float s0 = share_of(nd.child), s1 = share_of(nd.child + 1);
-  float f0 = s0 + s1 > 0 ? s0 / (s0 + s1) : 0.5f;
-  float q = cut.q[best], e = qe[best];
-  // The split of Q is a guess: each child keeps half the evidence behind it.
-  float n = 0.5f * cut.n[best];
-  cut.nodes[best] = nd.child;
-  cut.n[best] = n;
-  cut.n.insert(cut.n.begin() + best + 1, n);
-  cut.q[best] = q >= 0 ? q * f0 : -1.0f;
-  qe[best] = e * f0;
-  cut.weight[best] = weight_of(nd.child);
-  cut.nodes.insert(cut.nodes.begin() + best + 1, nd.child + 1);
-  cut.q.insert(cut.q.begin() + best + 1, q >= 0 ? q * (1 - f0) : -1.0f);
-  qe.insert(qe.begin() + best + 1, e * (1 - f0));
-  cut.weight.insert(cut.weight.begin() + best + 1, weight_of(nd.child + 1));
-  return pmin < 0 ? 2 : 1;
-}
-
 // --- CutStore -----------------------------------------------------------------------------------
 
 CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, double reward_scale)
