@@ -1,0 +1,236 @@
+#!/usr/bin/env python3
+"""Writes bench/RESULTS.md from the outputs of scripts/bench.sh (summary.json files and the
+micro-benchmarks). Sections of RESULTS.md that this script does not write (such as Loading)
+are kept as they are."""
+import json
+import os
+import re
+import subprocess
+import sys
+from datetime import date
+
+out_dir, results, settings = sys.argv[1], sys.argv[2], sys.argv[3]
+OWN = ["Headline", "Goals", "Equal time", "Equal samples per pixel", "Ablation", "Renderer ray rate",
+       "Sampler costs", "How these figures were made"]
+
+
+def load(name):
+    path = os.path.join(out_dir, name, "summary.json")
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
+
+
+def med(s, key):
+    return s[key]["median"]
+
+
+def by_name(summary):
+    return {s["name"]: s for s in summary["samplers"]}
+
+
+def fmt(x):
+    return "—" if x is None else (f"{x:.3g}" if abs(x) >= 1e-3 else f"{x:.2e}")
+
+
+def pixels(summary):
+    w, h = summary["resolution"]
+    return w * h
+
+
+def rate(summary, s):
+    return med(s, "spp") * pixels(summary) / med(s, "seconds")
+
+
+lines = []
+P = lines.append
+commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+cpu = "unknown CPU"
+try:
+    with open("/proc/cpuinfo") as f:
+        for line in f:
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+except OSError:
+    pass
+P("# Benchmark results\n")
+P(f"Measured on {date.today().isoformat()}, commit `{commit}`, {os.cpu_count()} cores ({cpu}), a shared "
+  f"machine: figures are medians of interleaved repeats, and ratios within one run are the signal. "
+  f"Settings: `{settings}`. Regenerate with `make bench` (about an hour); every report (HTML, images, "
+  f"`summary.json`) is under `out/bench/`.\n")
+
+scenes = ["cornell-boxes-room", "arch-interior", "many-lights-open", "cornell-boxes-dynamic"]
+integrators = ["direct", "path"]
+order = ["power", "tree", "rll", "oracle"]
+
+# --- Headline and goals ------------------------------------------------------------------------
+P("## Headline\n")
+P("relMSE at equal time (lower is better), median of the repeats, and rll's ratio to the others:\n")
+P("| scene | integrator | power | tree | rll | oracle | rll / power | rll / tree |")
+P("|---|---|---|---|---|---|---|---|")
+goal_rows = []
+for scene in scenes:
+    for integ in integrators:
+        s = load(f"{scene}-{integ}")
+        if not s:
+            continue
+        b = by_name(s)
+        r = {n: med(b[n], "relmse") if n in b else None for n in order}
+        rp = r["rll"] / r["power"] if r["rll"] and r["power"] else None
+        rt = r["rll"] / r["tree"] if r["rll"] and r["tree"] else None
+        P(f"| {scene} | {integ} | {fmt(r['power'])} | {fmt(r['tree'])} | {fmt(r['rll'])} | {fmt(r['oracle'])} | "
+          f"{fmt(rp)} | {fmt(rt)} |")
+        goal_rows.append((scene, integ, s, b, r))
+P("")
+
+P("## Goals\n")
+P("| goal | measured | |")
+P("|---|---|---|")
+
+
+def goal(text, value, ok):
+    P(f"| {text} | {value} | {'met' if ok else '**missed**'} |")
+
+
+for scene, integ, s, b, r in goal_rows:
+    if scene in ("arch-interior", "cornell-boxes-room") and integ == "direct":
+        goal(f"{scene}, direct: rll relMSE >= 10x lower than power", f"{r['power'] / r['rll']:.1f}x",
+             r["power"] / r["rll"] >= 10)
+        goal(f"{scene}, direct: rll relMSE >= 3x lower than tree", f"{r['tree'] / r['rll']:.2f}x",
+             r["tree"] / r["rll"] >= 3)
+    if scene in ("arch-interior", "cornell-boxes-room") and integ == "path":
+        goal(f"{scene}, path: rll relMSE >= 3x lower than power", f"{r['power'] / r['rll']:.1f}x",
+             r["power"] / r["rll"] >= 3)
+    if scene == "many-lights-open":
+        goal(f"many-lights-open, {integ}: rll relMSE at most 1.1x tree's", f"{r['rll'] / r['tree']:.2f}x",
+             r["rll"] / r["tree"] <= 1.1)
+        goal(f"many-lights-open, {integ}: tree beats power at equal time", f"{r['power'] / r['tree']:.1f}x lower",
+             r["tree"] < r["power"])
+    if integ == "direct" and scene != "cornell-boxes-dynamic":
+        ratio = rate(s, b["rll"]) / rate(s, b["power"])
+        goal(f"{scene}, direct: rll samples per second >= 85% of power's", f"{100 * ratio:.0f}%", ratio >= 0.85)
+mem = max((med(b["rll"], "seconds") and b["rll"]["memory"]["sampler_bytes"]) for _, _, _, b, _ in goal_rows)
+goal("rll's default memory <= 512 MiB", f"{mem / 2**20:.0f} MiB (sampler state)", mem <= 512 * 2**20)
+P("")
+
+# --- Full tables -------------------------------------------------------------------------------
+P("## Equal time\n")
+for scene, integ, s, b, r in goal_rows:
+    P(f"### {scene}, {integ}\n")
+    budget = f"{s['budget']['time']:g} s per run" if "time" in s["budget"] else f"{s['budget']['spp']} spp per run"
+    P(f"{budget}, {s['repeats']} repeat(s), {s['resolution'][0]}x{s['resolution'][1]}, "
+      f"reference {s['reference'].get('spp', '?')} spp ({s['reference'].get('sampler', '?')})"
+      + (f", {s.get('frames', 1)} frames (the last measured)" if s.get("frames", 1) > 1 else "") + ".\n")
+    P("| sampler | spp | samples/s | relMSE median [min, max] | / power | / tree | / oracle | memory |")
+    P("|---|---|---|---|---|---|---|---|")
+    for n in order:
+        if n not in b:
+            continue
+        x = b[n]
+        rel = x["relmse"]
+        def ratio(other):
+            return fmt(rel["median"] / r[other]) if r.get(other) else "—"
+        P(f"| {n} | {med(x, 'spp'):.0f} | {rate(s, x) / 1e6:.2f} M | {fmt(rel['median'])} [{fmt(rel['min'])}, "
+          f"{fmt(rel['max'])}] | {ratio('power')} | {ratio('tree')} | {ratio('oracle')} | "
+          f"{x['memory']['peak_rss_bytes'] / 2**20:.0f} MiB |")
+    P("")
+
+P("## Equal samples per pixel\n")
+P("The gap to the oracle (exhaustive per-cell knowledge, precomputed outside the timing) at equal spp:\n")
+P("| scene | integrator | spp | oracle | rll | tree | power | rll / oracle |")
+P("|---|---|---|---|---|---|---|---|")
+for scene in scenes:
+    for integ in integrators:
+        s = load(f"{scene}-{integ}-spp")
+        if not s:
+            continue
+        b = by_name(s)
+        r = {n: med(b[n], "relmse") for n in b}
+        P(f"| {scene} | {integ} | {s['budget']['spp']} | {fmt(r.get('oracle'))} | {fmt(r.get('rll'))} | "
+          f"{fmt(r.get('tree'))} | {fmt(r.get('power'))} | {fmt(r['rll'] / r['oracle'])} |")
+P("")
+
+# --- Ablation ----------------------------------------------------------------------------------
+names = {
+    0: "paper: uniform within, full-pdf reward, power prior and split, prior in the cell CDF, exponential Q, jitter, 4-px cells",
+    1: "+ cluster reward (DESIGN 2)",
+    2: "+ tree descent within clusters",
+    3: "+ importance prior and split",
+    4: "+ tree's probability as the defensive term",
+    5: "+ shrinkage Q, trust schedule, coarse-to-fine cells",
+    6: "+ no jitter, 2-px cells = rll's defaults",
+}
+P("## Ablation\n")
+P("Equal time, direct lighting; each row adds one correction to the row above. relMSE median, "
+  "and its ratio to tree's in the same run.\n")
+for scene in ["cornell-boxes-room", "arch-interior"]:
+    s = load(f"ablation-{scene}")
+    if not s:
+        continue
+    b = s["samplers"]
+    tree = med(b[0], "relmse")
+    P(f"### {scene}\n")
+    P("| settings | spp | relMSE | / tree |")
+    P("|---|---|---|---|")
+    P(f"| tree (reference point) | {med(b[0], 'spp'):.0f} | {fmt(tree)} | 1 |")
+    for i, x in enumerate(b[1:]):
+        P(f"| {names.get(i, x['name'])} | {med(x, 'spp'):.0f} | {fmt(med(x, 'relmse'))} | "
+          f"{fmt(med(x, 'relmse') / tree)} |")
+    P("")
+
+# --- Ray rate, sampler costs -------------------------------------------------------------------
+P("## Renderer ray rate\n")
+P("Rays per second of the whole renderer (path tracing, cornell-boxes-room) against a bare loop "
+  "tracing the same recorded rays through Embree (`build/bench/rll_bench_rays SCENE SAMPLER 4`). "
+  "Goal: the renderer keeps at least 50% of the bare rate.\n")
+P("```")
+for f in ["rays-power.txt", "rays-rll.txt"]:
+    p = os.path.join(out_dir, f)
+    if os.path.exists(p):
+        P(open(p).read().strip())
+P("```\n")
+
+P("## Sampler costs\n")
+P("Per call, on open fields of emitters (`build/bench/rll_bench_samplers`, median of 3; rll trained "
+  "for 8 passes first). Tree build and refit in ms.\n")
+p = os.path.join(out_dir, "samplers.json")
+if os.path.exists(p):
+    data = json.load(open(p))
+    rows = {}
+    for bm in data["benchmarks"]:
+        if bm.get("aggregate_name") != "median":
+            continue
+        m = re.match(r"(\w+)/?(\w*)/(\d+)", bm["run_name"])
+        if not m:
+            continue
+        kind, sampler, n = m.group(1), m.group(2), int(m.group(3))
+        unit = bm["time_unit"]
+        value = bm["real_time"] if kind.startswith("tree_") else bm["cpu_time"]
+        rows.setdefault((kind, sampler), {})[n] = f"{value:.3g} {unit}"
+    sizes = sorted({n for r in rows.values() for n in r})
+    P("| measure | " + " | ".join(f"{n:,} lights" for n in sizes) + " |")
+    P("|---|" + "---|" * len(sizes))
+    for (kind, sampler), r in sorted(rows.items()):
+        P(f"| {kind} {sampler} | " + " | ".join(r.get(n, "—") for n in sizes) + " |")
+    P("")
+
+P("## How these figures were made\n")
+P("`make bench` runs `scripts/bench.sh`: for each scene and integrator one `rll compare` at equal time "
+  "(`--samplers power,tree,rll,oracle --repeats 3`, runs interleaved, starting sampler rotated), one at "
+  "equal spp, and for the ablation one compare of rll variants written `rll:key=value:...`. The exact "
+  "command lines and outputs are in `out/bench/*.txt`.\n")
+
+# Keep the sections this script does not write.
+kept = []
+if os.path.exists(results):
+    text = open(results).read()
+    parts = re.split(r"(?m)^## ", text)
+    for part in parts[1:]:
+        title = part.split("\n", 1)[0].strip()
+        if title not in OWN:
+            kept.append("## " + part.rstrip() + "\n")
+with open(results + ".tmp", "w") as f:
+    f.write("\n".join(lines).rstrip() + "\n\n" + "\n".join(kept))
+os.replace(results + ".tmp", results)
