@@ -2,9 +2,13 @@
 // the statistics the tests assert with.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "rll/core/error.h"
 
 #include "rll/core/image.h"
 #include "rll/render/integrator.h"
@@ -25,6 +29,24 @@ class TempDir {
  private:
   std::filesystem::path m_path;
 };
+
+// The message of the rll::Error that `f` throws; a test failure if it throws none.
+template <typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected an rll::Error";
+  return "";
+}
+
+// Expects `message` to contain every one of `parts`.
+inline void expect_mentions(const std::string& message, std::initializer_list<std::string> parts) {
+  for (const auto& p : parts)
+    EXPECT_NE(message.find(p), std::string::npos) << "'" << p << "' not in: " << message;
+}
 
 struct CommandResult {
   int exit_code = -1;

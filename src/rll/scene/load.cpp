@@ -1,5 +1,7 @@
 #include "rll/scene/load.h"
 
+#include <fmt/format.h>
+
 #include "rll/core/error.h"
 #include "rll/scene/builtin.h"
 
@@ -56,12 +58,20 @@ Scene load_scene(const std::string& spec, const LoadOptions& options) {
     std::string ext = lower_extension(path);
     if (ext == ".json") load_json_scene(path, scene);
     else if (ext == ".obj") load_obj(path, scene);
-    else fail("{}: unknown scene format '{}' (rll reads .json, .obj and builtin:NAME)", spec, ext);
+    else if (ext == ".ply") load_ply(path, scene);
+    else if (ext == ".gltf" || ext == ".glb") load_gltf(path, scene);
+    else if (ext == ".pbrt") load_pbrt(path, scene);
+    else
+      fail("{}: unknown scene format '{}' (rll reads .json, .obj, .gltf, .glb, .ply, .pbrt and "
+           "builtin:NAME)",
+           spec, ext);
     drop_unused_materials(scene);
   }
   if (options.width < 0 || options.height < 0) fail("resolution must be positive");
   if (options.width > 0) scene.width = options.width;
   if (options.height > 0) scene.height = options.height;
+  if (options.print_warnings)
+    for (const auto& w : scene.warnings) fmt::print(stderr, "rll: warning: {}\n", w);
   scene.finalize();
   return scene;
 }

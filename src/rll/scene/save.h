@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 
 #include "rll/scene/scene.h"
 
@@ -14,5 +15,10 @@ namespace rll {
 // from their emissive materials. Materials are written exactly in the JSON and approximately in
 // the MTL (for other programs). An animation is not saved: the scene is written as it is now.
 void save_json_scene(const Scene& scene, const std::filesystem::path& json);
+
+enum class PlyEncoding { Ascii, BinaryLittleEndian, BinaryBigEndian };
+// A mesh as the bytes of a PLY file: float positions, normals and uvs when the mesh has them,
+// and triangles as uchar-counted int lists (for tests, benchmarks and other programs).
+std::string ply_bytes(const Mesh& mesh, PlyEncoding encoding);
 
 }  // namespace rll
