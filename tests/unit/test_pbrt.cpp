@@ -363,3 +363,83 @@ TEST(PbrtReader, MissingAndRecursiveIncludesAreErrors) {
       error_of([&] { parse_pbrt("Include \"a.pbrt\"\n", "mem.pbrt", dir.path(), s, closed); }),
       {"mem.pbrt:1:", "turned off"});
 }
+
+TEST(PbrtWriter, RoundTripKeepsMaterialsLightsCameraAndSky) {
+  TempDir dir;
+  Scene a;
+  a.source = "test";
+  Material plastic;
+  plastic.type = MaterialType::Plastic;
+  plastic.albedo = Rgb(0.2f, 0.3f, 0.4f);
+  plastic.roughness = 0.09f;
+  plastic.ior = 1.4f;
+  Material gold;
+  gold.type = MaterialType::Conductor;  // rll's default eta and k
+  gold.roughness = 0.2f;
+  Material textured;
+  textured.albedo = Rgb(0.5f);
+  textured.albedo_texture = 0;
+  a.textures.push_back(Image(2, 2, Rgb(0.7f)));
+  Material lamp;
+  lamp.albedo = Rgb(0);
+  lamp.emission = Rgb(3, 2, 1);
+  for (const Material& m : {plastic, gold, textured, lamp}) a.materials.push_back(m);
+  for (uint32_t k = 0; k < 4; ++k) {
+    const uint32_t v = uint32_t(a.mesh.positions.size());
+    const float x = float(k);
+    a.mesh.positions.insert(a.mesh.positions.end(), {{x, 0, 0}, {x + 1, 0, 0}, {x, 1, 0}});
+    a.mesh.uvs.insert(a.mesh.uvs.end(), {{0, 0}, {1, 0}, {0, 1}});
+    a.mesh.triangles.push_back({v, v + 1, v + 2});
+    a.mesh.material.push_back(k);
+  }
+  a.mesh.light.assign(4, -1);
+  a.lights.push_back(make_point_light(Vec3(1, 2, 3), Rgb(4, 5, 6)));
+  a.lights.push_back(make_directional_light(normalize(Vec3(0, 1, 1)), Rgb(2)));
+  a.camera.position = Vec3(1, 2, 8);
+  a.camera.target = Vec3(1, 0, 0);
+  a.camera.fov = 35;
+  a.has_camera = true;
+  a.width = 30;
+  a.height = 60;
+  SkyDome sky;
+  sky.radiance = Rgb(0.5f, 0.6f, 0.7f);
+  a.sky = sky;
+  const auto lost = save_pbrt_scene(a, dir / "out.pbrt");
+  ASSERT_EQ(lost.size(), 1u);  // the hemisphere, as a map with a black lower half
+  Scene r;
+  load_pbrt(dir / "out.pbrt", r);
+  EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+  ASSERT_EQ(r.mesh.triangle_count(), 4u);
+  for (uint32_t t = 0; t < 4; ++t) {
+    EXPECT_TRUE(near(r.mesh.vertex(t, 1), a.mesh.vertex(t, 1)));
+    EXPECT_GT(r.mesh.face_cross(t).z, 0);
+  }
+  const Material &p = r.materials[r.mesh.material[0]], &g = r.materials[r.mesh.material[1]],
+                 &t = r.materials[r.mesh.material[2]], &l = r.materials[r.mesh.material[3]];
+  EXPECT_EQ(p.type, MaterialType::Plastic);
+  EXPECT_TRUE(near(p.albedo, plastic.albedo));
+  EXPECT_FLOAT_EQ(p.roughness, plastic.roughness);
+  EXPECT_FLOAT_EQ(p.ior, plastic.ior);
+  EXPECT_EQ(g.type, MaterialType::Conductor);
+  EXPECT_TRUE(near(g.eta, gold.eta));
+  EXPECT_TRUE(near(g.k, gold.k));
+  EXPECT_FLOAT_EQ(g.roughness, gold.roughness);
+  ASSERT_GE(t.albedo_texture, 0);
+  EXPECT_TRUE(near(t.albedo, Rgb(0.5f)));
+  EXPECT_FLOAT_EQ(r.textures[size_t(t.albedo_texture)].at(1, 1).y, 0.7f);
+  EXPECT_TRUE(near(l.emission, lamp.emission));
+  EXPECT_FALSE(l.two_sided_emission);
+  ASSERT_EQ(r.lights.size(), 2u);
+  EXPECT_TRUE(near(r.lights[0].p0, Vec3(1, 2, 3)));
+  EXPECT_TRUE(near(r.lights[1].p0, normalize(Vec3(0, 1, 1))));
+  EXPECT_TRUE(near(r.camera.position, a.camera.position, 1e-4f));
+  EXPECT_TRUE(near(normalize(r.camera.target - r.camera.position),
+                   normalize(a.camera.target - a.camera.position), 1e-4f));
+  EXPECT_NEAR(r.camera.fov, 35, 1e-3);
+  EXPECT_EQ(r.width, 30);
+  EXPECT_EQ(r.height, 60);
+  ASSERT_TRUE(r.sky && r.sky->map);
+  EXPECT_TRUE(r.sky->full_sphere);
+  EXPECT_TRUE(near(r.sky->map->lookup(Vec3(0.3f, 1, 0.2f)) * r.sky->radiance, sky.radiance, 1e-3f));
+  EXPECT_TRUE(near(r.sky->map->lookup(Vec3(0.3f, -1, 0.2f)), Rgb(0)));
+}

@@ -17,6 +17,9 @@ struct LoadOptions {
 
 // Loads and finalizes a scene; throws rll::Error naming the file (and line where known).
 Scene load_scene(const std::string& spec, const LoadOptions& options = {});
+// Reads a scene without finalizing it (no light, camera or sky dome is required or added), as
+// `rll convert` writes it back out.
+Scene read_scene(const std::string& spec);
 
 // What a reader may do beyond parsing the bytes it is given. The fuzz targets turn file access
 // off (a reference to another file is then an error) and cap the geometry a small input may

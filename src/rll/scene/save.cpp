@@ -152,10 +152,11 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
   };
 
   json j;
-  j["camera"] = {{"position", vec(scene.camera.position)},
-                 {"target", vec(scene.camera.target)},
-                 {"up", vec(scene.camera.up)},
-                 {"fov", number(scene.camera.fov)}};
+  if (scene.has_camera)  // otherwise the reader fits one to the scene, as it was here
+    j["camera"] = {{"position", vec(scene.camera.position)},
+                   {"target", vec(scene.camera.target)},
+                   {"up", vec(scene.camera.up)},
+                   {"fov", number(scene.camera.fov)}};
   j["film"] = {{"width", scene.width}, {"height", scene.height}};
   json lights = json::array();
   for (const Light& l : scene.lights) {
@@ -324,6 +325,49 @@ std::string ply_bytes(const Mesh& mesh, PlyEncoding encoding) {
   for (const auto& t : mesh.triangles) {
     put(uint8_t(3));
     for (uint32_t v : t) put(int32_t(v));
+  }
+  return out;
+}
+
+std::vector<MaterialMesh> split_by_material(const Scene& scene) {
+  const Mesh& mesh = scene.mesh;
+  const size_t sky_begin = scene.sky_first_triangle, sky_end = sky_begin + scene.sky_triangle_count;
+  std::map<uint32_t, size_t> slot;
+  std::vector<MaterialMesh> out;
+  std::vector<int64_t> remap(mesh.positions.size(), -1);
+  std::vector<std::vector<uint32_t>> triangles;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    if (t >= sky_begin && t < sky_end) continue;
+    auto [it, added] = slot.emplace(mesh.material[t], out.size());
+    if (added) {
+      out.push_back({mesh.material[t], {}});
+      triangles.emplace_back();
+    }
+    triangles[it->second].push_back(uint32_t(t));
+  }
+  for (size_t i = 0; i < out.size(); ++i) {
+    Mesh& m = out[i].mesh;
+    std::vector<uint32_t> used;
+    for (uint32_t t : triangles[i]) {
+      std::array<uint32_t, 3> tri;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = mesh.triangles[t][size_t(k)];
+        if (remap[v] < 0) {
+          remap[v] = int64_t(m.positions.size());
+          used.push_back(v);
+          m.positions.push_back(mesh.positions[v]);
+          if (!mesh.normals.empty()) m.normals.push_back(mesh.normals[v]);
+          if (!mesh.uvs.empty()) m.uvs.push_back(mesh.uvs[v]);
+        }
+        tri[size_t(k)] = uint32_t(remap[v]);
+      }
+      m.triangles.push_back(tri);
+    }
+    for (uint32_t v : used) remap[v] = -1;
+    // A zero normal means "none" in rll; other formats have no such value, so a mesh with any
+    // is written without normals.
+    if (std::any_of(m.normals.begin(), m.normals.end(), [](const Vec3& n) { return n == Vec3(0); }))
+      m.normals.clear();
   }
   return out;
 }

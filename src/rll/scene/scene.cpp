@@ -10,6 +10,35 @@
 
 namespace rll {
 
+Vec2 equal_area_sphere_to_square(const Vec3& d) {
+  // The radius in the square grows as sqrt(1 - |z|) (equal area), the angle within each octant
+  // linearly; the lower hemisphere folds out to the corners.
+  const float ax = std::abs(d.x), ay = std::abs(d.y), az = std::abs(d.z);
+  const float r = safe_sqrt(1 - az);
+  const float big = std::max(ax, ay), small = std::min(ax, ay);
+  float phi = big == 0 ? 0 : std::atan(small / big) * (2 / kPi);  // in [0, 1]
+  if (ay > ax) phi = 1 - phi;
+  float sv = phi * r, su = r - sv;
+  if (d.z < 0) {
+    std::swap(su, sv);
+    su = 1 - su;
+    sv = 1 - sv;
+  }
+  su = std::copysign(su, d.x);
+  sv = std::copysign(sv, d.y);
+  return Vec2{0.5f * (su + 1), 0.5f * (sv + 1)};
+}
+
+Vec3 equal_area_square_to_sphere(Vec2 p) {
+  const float u = 2 * p.x - 1, v = 2 * p.y - 1, au = std::abs(u), av = std::abs(v);
+  const float signed_distance = 1 - (au + av), r = 1 - std::abs(signed_distance);
+  const float phi = (r == 0 ? 1 : (av - au) / r + 1) * (kPi / 4);
+  const float z = std::copysign(1 - r * r, signed_distance);
+  const float cos_phi = std::copysign(std::cos(phi), u), sin_phi = std::copysign(std::sin(phi), v);
+  const float s = r * safe_sqrt(2 - r * r);
+  return Vec3(cos_phi * s, sin_phi * s, z);
+}
+
 Rgb EnvironmentMap::lookup(const Vec3& world_direction) const {
   const float(&m)[3][3] = world_to_map;
   const Vec3& w = world_direction;
@@ -22,23 +51,9 @@ Rgb EnvironmentMap::lookup(const Vec3& world_direction) const {
     u = (phi < 0 ? phi + 2 * kPi : phi) / (2 * kPi);
     v = safe_acos(d.z) / kPi;
   } else {
-    // Clarberg's equal-area octahedral map, as pbrt-v4's EqualAreaSphereToSquare: the radius in
-    // the square grows as sqrt(1 - |z|) (equal area), the angle within each octant linearly.
-    const float ax = std::abs(d.x), ay = std::abs(d.y), az = std::abs(d.z);
-    const float r = safe_sqrt(1 - az);
-    const float big = std::max(ax, ay), small = std::min(ax, ay);
-    float phi = big == 0 ? 0 : std::atan(small / big) * (2 / kPi);  // in [0, 1]
-    if (ay > ax) phi = 1 - phi;
-    float sv = phi * r, su = r - sv;
-    if (d.z < 0) {
-      std::swap(su, sv);
-      su = 1 - su;
-      sv = 1 - sv;
-    }
-    su = std::copysign(su, d.x);
-    sv = std::copysign(sv, d.y);
-    u = 0.5f * (su + 1);
-    v = 0.5f * (sv + 1);
+    const Vec2 p = equal_area_sphere_to_square(d);
+    u = p.x;
+    v = p.y;
   }
   // sample_texture reads v up the image.
   return sample_texture(image, Vec2{u, 1 - v});
