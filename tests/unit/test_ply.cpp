@@ -166,6 +166,14 @@ TEST(PlyReader, BinaryErrorsNameTheByteOffset) {
   std::memcpy(&bad[bad.size() - 4], &big, 4);
   expect_mentions(ply_error(bad),
                   {"bad.ply: byte " + std::to_string(good.size() - 13), "vertex index 99"});
+  // Faces first: their lists take more than the least the header check counts, so the
+  // vertices after them must be checked when they are read (a fuzzer found this overrun).
+  std::string faces_first =
+      "ply\nformat binary_little_endian 1.0\nelement face 1\nproperty list uchar int "
+      "vertex_indices\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "end_header\n";
+  faces_first += std::string("\x03", 1) + std::string(12, '\0') + std::string(30, '\0');
+  expect_mentions(ply_error(faces_first), {"bad.ply: byte 182", "truncated", "'vertex'"});
   // A count that claims more vertices than the bytes could hold.
   std::string lie = good;
   lie.replace(lie.find("vertex 4"), 8, "vertex 400000000");

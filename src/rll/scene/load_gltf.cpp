@@ -116,14 +116,14 @@ class GltfReader {
       if (n.matrix.size() != 16) fail("{}: matrix needs 16 values", where);
       // Column-major.
       for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) x.a[r][c] = float(n.matrix[size_t(c * 4 + r)]);
-      x.t = Vec3(float(n.matrix[12]), float(n.matrix[13]), float(n.matrix[14]));
+        for (int r = 0; r < 3; ++r) x.a[r][c] = to_float(n.matrix[size_t(c * 4 + r)]);
+      x.t = Vec3(to_float(n.matrix[12]), to_float(n.matrix[13]), to_float(n.matrix[14]));
       return x;
     }
     if (!n.scale.empty()) {
       if (n.scale.size() != 3) fail("{}: scale needs 3 values", where);
       const float m[3][3] = {
-          {float(n.scale[0]), 0, 0}, {0, float(n.scale[1]), 0}, {0, 0, float(n.scale[2])}};
+          {to_float(n.scale[0]), 0, 0}, {0, to_float(n.scale[1]), 0}, {0, 0, to_float(n.scale[2])}};
       x.prepend(m);
     }
     if (!n.rotation.empty()) {
@@ -142,7 +142,7 @@ class GltfReader {
     }
     if (!n.translation.empty()) {
       if (n.translation.size() != 3) fail("{}: translation needs 3 values", where);
-      x.t = Vec3(float(n.translation[0]), float(n.translation[1]), float(n.translation[2]));
+      x.t = Vec3(to_float(n.translation[0]), to_float(n.translation[1]), to_float(n.translation[2]));
     }
     return x;
   }
@@ -472,12 +472,12 @@ class GltfReader {
     Rgb base(1);
     if (!pbr.baseColorFactor.empty()) {
       if (pbr.baseColorFactor.size() != 4) fail("{}: baseColorFactor needs 4 values", mw);
-      base = Rgb(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]),
-                 float(pbr.baseColorFactor[2]));
+      base = Rgb(to_float(pbr.baseColorFactor[0]), to_float(pbr.baseColorFactor[1]),
+                 to_float(pbr.baseColorFactor[2]));
     }
     if (!is_finite(base) || min_component(base) < 0)
       fail("{}: baseColorFactor must be finite and >= 0", mw);
-    const float metallic = float(pbr.metallicFactor), rough = float(pbr.roughnessFactor);
+    const float metallic = to_float(pbr.metallicFactor), rough = to_float(pbr.roughnessFactor);
     if (!(metallic >= 0 && metallic <= 1) || !(rough >= 0 && rough <= 1))
       fail("{}: metallicFactor and roughnessFactor must be in [0, 1]", mw);
     m.roughness = rough * rough;  // glTF's perceptual roughness to GGX alpha
@@ -499,13 +499,13 @@ class GltfReader {
       m.albedo = base;
       m.albedo_texture = base_texture;
       const tinygltf::Value* spec = extension(gm, "KHR_materials_specular");
-      const float specular = spec ? float(number_or(*spec, "specularFactor", 1)) : 1.0f;
+      const float specular = spec ? to_float(number_or(*spec, "specularFactor", 1)) : 1.0f;
       Rgb spec_colour(1);
       if (spec && spec->Has("specularColorFactor")) {
         const auto& v = spec->Get("specularColorFactor");
         if (v.IsArray() && v.ArrayLen() == 3)
           for (int i = 0; i < 3; ++i)
-            spec_colour[i] = float(v.Get(i).IsNumber() ? v.Get(i).GetNumberAsDouble() : 1);
+            spec_colour[i] = to_float(v.Get(i).IsNumber() ? v.Get(i).GetNumberAsDouble() : 1);
       }
       if (specular == 0) {
         m.type = MaterialType::Diffuse;  // glTF without its specular layer is Lambertian
@@ -513,7 +513,7 @@ class GltfReader {
         m.type = MaterialType::Plastic;
         m.specular = spec_colour * specular;
         if (const tinygltf::Value* ior = extension(gm, "KHR_materials_ior"))
-          m.ior = std::max(1.0f, float(number_or(*ior, "ior", 1.5)));
+          m.ior = std::max(1.0f, to_float(number_or(*ior, "ior", 1.5)));
         if (!is_finite(m.specular) || min_component(m.specular) < 0 || !std::isfinite(m.ior))
           fail("{}: KHR_materials_specular/ior values must be finite and >= 0", mw);
       }
@@ -521,10 +521,10 @@ class GltfReader {
     Converted c;
     Rgb emission(0);
     if (gm.emissiveFactor.size() == 3)
-      emission = Rgb(float(gm.emissiveFactor[0]), float(gm.emissiveFactor[1]),
-                     float(gm.emissiveFactor[2]));
+      emission = Rgb(to_float(gm.emissiveFactor[0]), to_float(gm.emissiveFactor[1]),
+                     to_float(gm.emissiveFactor[2]));
     if (const tinygltf::Value* strength = extension(gm, "KHR_materials_emissive_strength"))
-      emission = emission * float(number_or(*strength, "emissiveStrength", 1));
+      emission = emission * to_float(number_or(*strength, "emissiveStrength", 1));
     if (!is_finite(emission) || min_component(emission) < 0)
       fail("{}: the emission must be finite and >= 0", mw);
     m.two_sided_emission = gm.doubleSided;
@@ -594,7 +594,7 @@ class GltfReader {
     cam.position = world.t;
     cam.target = world.t + normalize(world.apply_vector(Vec3(0, 0, -1)));
     cam.up = normalize(world.apply_vector(Vec3(0, 1, 0)));
-    cam.fov = float(fov);
+    cam.fov = to_float(fov);
     if (!is_finite(cam.target) || !is_finite(cam.up) ||
         !(length_sq(cross(cam.target - cam.position, cam.up)) > 0))
       fail("{}: the camera transform is degenerate", where);
@@ -618,9 +618,9 @@ class GltfReader {
     Rgb colour(1);
     if (!l.color.empty()) {
       if (l.color.size() != 3) fail("{}: light {} colour needs 3 values", where, index);
-      colour = Rgb(float(l.color[0]), float(l.color[1]), float(l.color[2]));
+      colour = Rgb(to_float(l.color[0]), to_float(l.color[1]), to_float(l.color[2]));
     }
-    const Rgb value = colour * float(l.intensity);
+    const Rgb value = colour * to_float(l.intensity);
     if (!is_finite(value) || min_component(value) < 0)
       fail("{}: light {} colour and intensity must be finite and >= 0", where, index);
     if (l.type == "point") {
@@ -660,12 +660,18 @@ void parse_gltf(std::string_view bytes, const std::string& name, const fs::path&
   const bool binary = bytes.size() >= 4 && bytes.substr(0, 4) == "glTF";
   bool ok = false;
   const std::string dir = base_dir.string();
-  if (binary)
-    ok = loader.LoadBinaryFromMemory(&model, &err, &warn,
-                                     reinterpret_cast<const unsigned char*>(bytes.data()),
-                                     unsigned(bytes.size()), dir);
-  else
-    ok = loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(), unsigned(bytes.size()), dir);
+  try {
+    if (binary)
+      ok = loader.LoadBinaryFromMemory(&model, &err, &warn,
+                                       reinterpret_cast<const unsigned char*>(bytes.data()),
+                                       unsigned(bytes.size()), dir);
+    else
+      ok = loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(), unsigned(bytes.size()),
+                                      dir);
+  } catch (const std::exception& e) {
+    // tinygltf reports errors in `err`; its JSON library may still throw on odd input.
+    fail("{}: {}", name, e.what());
+  }
   if (!ok || !err.empty())
     fail("{}: {}", name, err.empty() ? "cannot parse the file" : one_line(err));
   if (!warn.empty()) scene.warnings.push_back(fmt::format("{}: {}", name, one_line(warn)));

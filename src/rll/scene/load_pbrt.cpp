@@ -85,20 +85,20 @@ Vec3 apply_point(const Mat4& t, const Vec3& p) {
   for (int i = 0; i < 3; ++i)
     v[i] = t.m[i][0] * p.x + t.m[i][1] * p.y + t.m[i][2] * p.z + t.m[i][3];
   const double w = t.m[3][0] * p.x + t.m[3][1] * p.y + t.m[3][2] * p.z + t.m[3][3];
-  return Vec3(float(v[0] / w), float(v[1] / w), float(v[2] / w));
+  return Vec3(to_float(v[0] / w), to_float(v[1] / w), to_float(v[2] / w));
 }
 
 Vec3 apply_vector(const Mat4& t, const Vec3& d) {
-  return Vec3(float(t.m[0][0] * d.x + t.m[0][1] * d.y + t.m[0][2] * d.z),
-              float(t.m[1][0] * d.x + t.m[1][1] * d.y + t.m[1][2] * d.z),
-              float(t.m[2][0] * d.x + t.m[2][1] * d.y + t.m[2][2] * d.z));
+  return Vec3(to_float(t.m[0][0] * d.x + t.m[0][1] * d.y + t.m[0][2] * d.z),
+              to_float(t.m[1][0] * d.x + t.m[1][1] * d.y + t.m[1][2] * d.z),
+              to_float(t.m[2][0] * d.x + t.m[2][1] * d.y + t.m[2][2] * d.z));
 }
 
 Affine to_affine(const Mat4& t) {
   Affine x;
   for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) x.a[i][j] = float(t.m[i][j]);
-    x.t[i] = float(t.m[i][3]);
+    for (int j = 0; j < 3; ++j) x.a[i][j] = to_float(t.m[i][j]);
+    x.t[i] = to_float(t.m[i][3]);
   }
   return x;
 }
@@ -176,8 +176,9 @@ Rgb blackbody_rgb(double kelvin) {
   X /= Y;
   Z /= Y;
   Y = 1;
-  Rgb c(float(3.2406 * X - 1.5372 * Y - 0.4986 * Z), float(-0.9689 * X + 1.8758 * Y + 0.0415 * Z),
-        float(0.0557 * X - 0.2040 * Y + 1.0570 * Z));
+  Rgb c(to_float(3.2406 * X - 1.5372 * Y - 0.4986 * Z),
+        to_float(-0.9689 * X + 1.8758 * Y + 0.0415 * Z),
+        to_float(0.0557 * X - 0.2040 * Y + 1.0570 * Z));
   return max(c, Rgb(0));
 }
 
@@ -634,8 +635,10 @@ class PbrtReader {
       }
       if (p->type == "blackbody") {
         const double t = one_number(*p);
-        if (!(t > 0)) bad(*p, "needs a positive temperature");
-        return blackbody_rgb(t);
+        const Rgb c = t > 0 ? blackbody_rgb(t) : Rgb(0);
+        if (!(t > 0) || !is_finite(c) || !(luminance(c) > 0))
+          bad(*p, "needs a positive temperature at which a blackbody glows");
+        return c;
       }
       if (p->type == "float") {  // pbrt-v4 accepts a float for a spectrum in some places
         const float v = float(one_number(*p));
@@ -662,7 +665,7 @@ class PbrtReader {
         bad(*p, "needs wavelength-value pairs");
       double sum = 0;
       for (size_t i = 1; i < p->numbers.size(); i += 2) sum += p->numbers[i];
-      const float mean = float(sum / double(p->numbers.size() / 2));
+      const float mean = to_float(sum / double(p->numbers.size() / 2));
       return Rgb(std::max(0.0f, mean));
     }
     void warn_unused() const {
@@ -1535,7 +1538,7 @@ class PbrtReader {
         for (int j = 0; j < 3; ++j) {
           double s = 0;
           for (int k = 0; k < 3; ++k) s += lw.m[i][k] * h[k][j];
-          map->world_to_map[i][j] = float(s);
+          map->world_to_map[i][j] = to_float(s);
         }
       m_scene.sky->map = std::move(map);
     }

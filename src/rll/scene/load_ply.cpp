@@ -13,6 +13,7 @@
 #include "rll/core/error.h"
 #include "rll/scene/load.h"
 #include "rll/scene/text_scan.h"
+#include "rll/scene/transform.h"
 
 namespace rll {
 namespace fs = std::filesystem;
@@ -276,8 +277,8 @@ class PlyReader {
 
   // Stores the scalar values of one vertex (in m_values) into the mesh.
   void store_vertex(size_t i, size_t line, size_t offset) {
-    Vec3 p(float(m_values[size_t(m_layout.xyz[0])]), float(m_values[size_t(m_layout.xyz[1])]),
-           float(m_values[size_t(m_layout.xyz[2])]));
+    Vec3 p(to_float(m_values[size_t(m_layout.xyz[0])]), to_float(m_values[size_t(m_layout.xyz[1])]),
+           to_float(m_values[size_t(m_layout.xyz[2])]));
     if (!is_finite(p)) {
       std::string what =
           fmt::format("vertex {} has a non-finite position ({}, {}, {})", i, p.x, p.y, p.z);
@@ -286,13 +287,13 @@ class PlyReader {
     }
     m_mesh.positions[i] = p;
     if (m_layout.normal[0] >= 0) {
-      Vec3 n(float(m_values[size_t(m_layout.normal[0])]),
-             float(m_values[size_t(m_layout.normal[1])]),
-             float(m_values[size_t(m_layout.normal[2])]));
+      Vec3 n(to_float(m_values[size_t(m_layout.normal[0])]),
+             to_float(m_values[size_t(m_layout.normal[1])]),
+             to_float(m_values[size_t(m_layout.normal[2])]));
       m_mesh.normals[i] = is_finite(n) ? n : Vec3(0);  // an unusable normal: "none"
     }
     if (m_layout.uv[0] >= 0) {
-      Vec2 uv{float(m_values[size_t(m_layout.uv[0])]), float(m_values[size_t(m_layout.uv[1])])};
+      Vec2 uv{to_float(m_values[size_t(m_layout.uv[0])]), to_float(m_values[size_t(m_layout.uv[1])])};
       if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {
         std::string what = fmt::format("vertex {} has a non-finite texture coordinate", i);
         if (m_encoding == Encoding::Ascii) fail_line(line, what);
@@ -464,7 +465,12 @@ class PlyReader {
     if (is_face) m_mesh.triangles.reserve(el.count);
     const char* data = m_data.data();
     if (fixed) {
-      // Every entry the same size: the bounds check above covers all of them.
+      // Every entry the same size: one check covers all of them. (The header's check does not:
+      // lists in earlier elements may have taken more than their least.)
+      if (min_size > 0 && el.count > (m_data.size() - m_body) / min_size)
+        fail_at(m_body, fmt::format("the file is truncated: element '{}' needs {} bytes, {} are "
+                                    "left",
+                                    el.name, el.count * min_size, m_data.size() - m_body));
       std::vector<size_t> offsets;
       size_t o = 0;
       for (const auto& p : el.properties) {

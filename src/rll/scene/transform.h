@@ -1,12 +1,22 @@
 // Affine transforms of scene geometry (p -> A p + t), shared by the scene file readers.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
+#include <limits>
 
 #include "rll/core/math.h"
 #include "rll/scene/mesh.h"
 
 namespace rll {
+
+// A double as a float, out-of-range values becoming infinite (a plain conversion of those is
+// undefined behaviour): the readers then reject them as non-finite.
+inline float to_float(double d) {
+  constexpr double kMax = std::numeric_limits<float>::max();
+  if (std::abs(d) <= kMax || std::isnan(d)) return float(d);
+  return d > 0 ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity();
+}
 
 struct Affine {
   float a[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
