@@ -14,21 +14,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Runs rll with `args` and checks a clean failure: exit code in [1, 127], every one of
-// `mentions` in the output.
-void expect_failure(std::vector<std::string> args, std::initializer_list<std::string> mentions) {
-  CommandResult r = run_rll(args);
-  std::string cmd;
-  for (const auto& a : args) cmd += " " + a;
-  SCOPED_TRACE("rll" + cmd + "\n" + r.output);
-  EXPECT_GE(r.exit_code, 1);
-  EXPECT_LT(r.exit_code, 128);  // 128 + signal: a crash
-  for (const auto& m : mentions) EXPECT_NE(r.output.find(m), std::string::npos) << "missing: " << m;
-}
-
 void expect_render_failure(const TempDir& dir, const fs::path& scene,
                            std::initializer_list<std::string> mentions) {
-  expect_failure({"render", scene.string(), "--quiet", "-o", (dir / "out.png").string()}, mentions);
+  expect_clean_failure({"render", scene.string(), "--quiet", "-o", (dir / "out.png").string()},
+                       mentions);
   EXPECT_FALSE(fs::exists(dir / "out.png"));
 }
 
@@ -109,11 +98,12 @@ TEST(FormatsCli, ConvertWritesEachFormatAndTheResultRenders) {
 
 TEST(FormatsCli, ConvertErrors) {
   TempDir dir;
-  expect_failure({"convert", (dir / "none.pbrt").string(), (dir / "x.json").string()},
-                 {"none.pbrt", "not found"});
-  expect_failure({"convert", "builtin:cornell-box", (dir / "x.fbx").string()}, {"x.fbx", ".json"});
-  expect_failure({"convert", "builtin:cornell-box", (dir / "no/such/x.json").string()},
-                 {"does not exist"});
-  expect_failure({"convert", "builtin:cornell-box"}, {"output"});
+  expect_clean_failure({"convert", (dir / "none.pbrt").string(), (dir / "x.json").string()},
+                       {"none.pbrt", "not found"});
+  expect_clean_failure({"convert", "builtin:cornell-box", (dir / "x.fbx").string()},
+                       {"x.fbx", ".json"});
+  expect_clean_failure({"convert", "builtin:cornell-box", (dir / "no/such/x.json").string()},
+                       {"does not exist"});
+  expect_clean_failure({"convert", "builtin:cornell-box"}, {"output"});
   EXPECT_FALSE(fs::exists(dir / "x.json"));
 }

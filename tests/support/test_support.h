@@ -54,6 +54,10 @@ struct CommandResult {
 };
 // Runs the rll program with the given arguments (shell-quoted here).
 CommandResult run_rll(const std::vector<std::string>& args);
+// Runs rll and checks a clean failure: an exit code in [1, 127] (128 + signal is a crash) and
+// every one of `mentions` in the output.
+void expect_clean_failure(const std::vector<std::string>& args,
+                          std::initializer_list<std::string> mentions);
 
 struct RenderRequest {
   std::string sampler = "power";
