@@ -3,6 +3,7 @@
 // format, up to noise, and the per-pixel difference has mean zero.
 #include <gtest/gtest.h>
 
+#include "rll/eval/metrics.h"
 #include "rll/scene/builtin.h"
 #include "rll/scene/load.h"
 #include "rll/scene/save.h"
@@ -10,21 +11,6 @@
 
 using namespace rll;
 using namespace rll::test;
-
-namespace {
-
-// relMSE as DESIGN.md defines it, of `x` against `ref`.
-double rel_mse(const Image& x, const Image& ref) {
-  double s = 0;
-  for (size_t i = 0; i < x.pixel_count(); ++i)
-    for (int c = 0; c < 3; ++c) {
-      const double d = double(x[i][c]) - ref[i][c];
-      s += d * d / (double(ref[i][c]) * ref[i][c] + 0.01);
-    }
-  return s / (3.0 * double(x.pixel_count()));
-}
-
-}  // namespace
 
 TEST(FormatRender, JsonGltfAndPbrtCopiesOfASceneRenderAlike) {
   TempDir dir;
@@ -50,7 +36,7 @@ TEST(FormatRender, JsonGltfAndPbrtCopiesOfASceneRenderAlike) {
   const Image reference = render_scene(load_scene((dir / "box.json").string(), options), request);
   request.seed = 2;
   const Image same = render_scene(load_scene((dir / "box.json").string(), options), request);
-  const double noise = rel_mse(same, reference);
+  const double noise = relmse(same, reference);
   ASSERT_GT(noise, 0);
   for (const char* file : {"box.gltf", "box.pbrt"}) {
     SCOPED_TRACE(file);
@@ -59,7 +45,7 @@ TEST(FormatRender, JsonGltfAndPbrtCopiesOfASceneRenderAlike) {
     EXPECT_EQ(s.lights.size(), original.lights.size());
     request.seed = 3;  // independent of both renders above
     const Image img = render_scene(s, request);
-    const double r = rel_mse(img, reference);
+    const double r = relmse(img, reference);
     // Independent renders of equal scenes: equal expected relMSE. A wrong material, light or
     // camera adds its bias squared on top of the noise.
     EXPECT_LT(r, 1.25 * noise) << "relMSE " << r << " vs noise " << noise;
