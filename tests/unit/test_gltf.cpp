@@ -231,6 +231,25 @@ TEST(GltfReader, EmissiveTextureMakesEachTriangleALightOfItsOwnColour) {
   EXPECT_EQ(s.lights.size(), 1u);
 }
 
+TEST(GltfReader, BaseColourTextureIsDecodedFromSrgb) {
+  TempDir dir;
+  Image tex(2, 2, Rgb(0.5f));  // written as sRGB 188, read back as linear 0.5 (to 8 bits)
+  write_image(dir / "wood.png", tex);
+  Doc d;
+  d.j["images"] = json::array({{{"uri", "wood.png"}}});
+  d.j["textures"] = json::array({{{"source", 0}}});
+  d.j["materials"] = json::array({{{"pbrMetallicRoughness",
+                                    {{"baseColorTexture", {{"index", 0}}},
+                                     {"baseColorFactor", {1, 0.5, 1, 1}},
+                                     {"metallicFactor", 0}}}}});
+  d.scene({d.node({{"mesh", d.mesh(d.positions(kTriangle), -1, 0)}})});
+  Scene s = read(d.write_gltf(dir));
+  const Material& m = s.materials[s.mesh.material[0]];
+  ASSERT_EQ(m.albedo_texture, 0);
+  EXPECT_TRUE(near(m.albedo, Rgb(1, 0.5f, 1)));
+  EXPECT_NEAR(s.textures[0].at(1, 1).y, 0.5f, 0.005f);
+}
+
 TEST(GltfReader, BinaryGlbReadsLikeText) {
   TempDir dir;
   Doc d;
