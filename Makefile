@@ -38,8 +38,19 @@ test-asan: deps
 bench: build
 	@scripts/bench.sh $(BUILD)
 
+# libFuzzer targets for the PLY, glTF and pbrt parsers (clang, ASan + UBSan), each run for
+# FUZZ_SECONDS from a corpus seeded with generated files and the regression inputs in
+# tests/fuzz/. A crash stops the run; its input is left in $(FUZZ_BUILD)/crashes.
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 60
+fuzz: deps
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+		-DRLL_FUZZ=ON -DRLL_TESTS=OFF -DRLL_BENCH=OFF
+	cmake --build $(FUZZ_BUILD) -j $(JOBS)
+	@scripts/fuzz.sh $(FUZZ_BUILD) $(FUZZ_SECONDS)
+
 clean:
-	rm -rf $(BUILD) build-asan
+	rm -rf $(BUILD) build-asan $(FUZZ_BUILD)
 
 format:
 	clang-format -i $$(git ls-files '*.h' '*.cpp')

@@ -15,6 +15,7 @@ void add_scenes_command(CLI::App& app);
 void add_samplers_command(CLI::App& app);
 void add_reference_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
+void add_convert_command(CLI::App& app);
 
 // Set by SIGINT: renders stop at the next tile and still write what they have.
 bool interrupted();

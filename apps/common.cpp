@@ -10,7 +10,7 @@ namespace fs = std::filesystem;
 
 void add_session_options(CLI::App* cmd, SessionSettings& s) {
   cmd->add_option("scene", s.scene,
-                  "Scene: a .json or .obj file, or builtin:NAME (see `rll scenes`)")
+                  "Scene: a .json, .obj, .gltf, .glb, .ply or .pbrt file, or builtin:NAME (see `rll scenes`)")
       ->required();
   cmd->add_option("--integrator", s.integrator,
                   "Light transport: direct (next-event estimation) or path")

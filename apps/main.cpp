@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   rll::cli::add_samplers_command(app);
   rll::cli::add_reference_command(app);
   rll::cli::add_compare_command(app);
+  rll::cli::add_convert_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -21,13 +21,7 @@ void expect_render_error(const TempDir& dir, std::vector<std::string> args,
   const fs::path out = dir / output;
   args.insert(args.begin(), "render");
   args.insert(args.end(), {"-o", out.string(), "--quiet"});
-  CommandResult r = run_rll(args);
-  std::string cmd;
-  for (const auto& a : args) cmd += " " + a;
-  SCOPED_TRACE("rll" + cmd + "\n" + r.output);
-  EXPECT_GE(r.exit_code, 1);
-  EXPECT_LT(r.exit_code, 128);  // 128 + signal: a crash
-  for (const auto& m : mentions) EXPECT_NE(r.output.find(m), std::string::npos) << "missing: " << m;
+  expect_clean_failure(args, mentions);
   EXPECT_FALSE(fs::exists(out));
 }
 

@@ -79,6 +79,17 @@ Image render_scene(const Scene& scene, const RenderRequest& req) {
   return film.resolve();
 }
 
+void expect_clean_failure(const std::vector<std::string>& args,
+                          std::initializer_list<std::string> mentions) {
+  CommandResult r = run_rll(args);
+  std::string cmd;
+  for (const auto& a : args) cmd += " " + a;
+  SCOPED_TRACE("rll" + cmd + "\n" + r.output);
+  EXPECT_GE(r.exit_code, 1);
+  EXPECT_LT(r.exit_code, 128);
+  for (const auto& m : mentions) EXPECT_NE(r.output.find(m), std::string::npos) << "missing: " << m;
+}
+
 double image_mean(const Image& image) {
   double s = 0;
   for (const auto& p : image.pixels()) s += double(p.x) + p.y + p.z;

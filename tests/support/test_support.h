@@ -2,9 +2,13 @@
 // the statistics the tests assert with.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "rll/core/error.h"
 
 #include "rll/core/image.h"
 #include "rll/render/integrator.h"
@@ -26,12 +30,34 @@ class TempDir {
   std::filesystem::path m_path;
 };
 
+// The message of the rll::Error that `f` throws; a test failure if it throws none.
+template <typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected an rll::Error";
+  return "";
+}
+
+// Expects `message` to contain every one of `parts`.
+inline void expect_mentions(const std::string& message, std::initializer_list<std::string> parts) {
+  for (const auto& p : parts)
+    EXPECT_NE(message.find(p), std::string::npos) << "'" << p << "' not in: " << message;
+}
+
 struct CommandResult {
   int exit_code = -1;
   std::string output;  // stdout and stderr together
 };
 // Runs the rll program with the given arguments (shell-quoted here).
 CommandResult run_rll(const std::vector<std::string>& args);
+// Runs rll and checks a clean failure: an exit code in [1, 127] (128 + signal is a crash) and
+// every one of `mentions` in the output.
+void expect_clean_failure(const std::vector<std::string>& args,
+                          std::initializer_list<std::string> mentions);
 
 struct RenderRequest {
   std::string sampler = "power";

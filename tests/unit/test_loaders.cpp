@@ -9,27 +9,11 @@
 #include "support/test_support.h"
 
 using namespace rll;
+using rll::test::error_of;
+using rll::test::expect_mentions;
 using rll::test::TempDir;
 
 namespace {
-
-// The message of the rll::Error that `f` throws; a test failure if it throws none.
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected an rll::Error";
-  return "";
-}
-
-// Expects `message` to contain every one of `parts`.
-void expect_mentions(const std::string& message, std::initializer_list<std::string> parts) {
-  for (const auto& p : parts)
-    EXPECT_NE(message.find(p), std::string::npos) << "'" << p << "' not in: " << message;
-}
 
 Scene read_obj(const TempDir& dir, const std::string& obj, const std::string& name = "m.obj") {
   Scene s;

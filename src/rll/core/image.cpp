@@ -47,6 +47,19 @@ float srgb_to_linear(float c) {
   return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
 }
 
+// An 8-bit RGB image from stb_image (which it frees), decoded from sRGB when `srgb`.
+Image from_8bit(unsigned char* data, int w, int h, bool srgb, const std::string& name) {
+  if (!data) fail("cannot read '{}': {}", name, stbi_failure_reason());
+  Image img(w, h);
+  for (size_t i = 0; i < img.pixel_count(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      float v = data[3 * i + c] / 255.0f;
+      img[i][c] = srgb ? srgb_to_linear(v) : v;
+    }
+  stbi_image_free(data);
+  return img;
+}
+
 }  // namespace
 
 uint8_t to_srgb8(float v, float scale) {
@@ -143,15 +156,22 @@ Image read_image(const fs::path& path, bool srgb) {
     return img;
   }
   unsigned char* data = stbi_load(path.c_str(), &w, &h, &n, 3);
-  if (!data) fail("cannot read '{}': {}", path.string(), stbi_failure_reason());
-  Image img(w, h);
-  for (size_t i = 0; i < img.pixel_count(); ++i)
-    for (int c = 0; c < 3; ++c) {
-      float v = data[3 * i + c] / 255.0f;
-      img[i][c] = srgb ? srgb_to_linear(v) : v;
-    }
-  stbi_image_free(data);
-  return img;
+  return from_8bit(data, w, h, srgb, path.string());
+}
+
+Image decode_image(const unsigned char* bytes, size_t size, bool srgb, const std::string& name) {
+  if (size > size_t(INT32_MAX)) fail("cannot read '{}': the image is too large", name);
+  int w = 0, h = 0, n = 0;
+  if (stbi_is_hdr_from_memory(bytes, int(size))) {
+    float* data = stbi_loadf_from_memory(bytes, int(size), &w, &h, &n, 3);
+    if (!data) fail("cannot read '{}': {}", name, stbi_failure_reason());
+    Image img(w, h);
+    for (size_t i = 0; i < img.pixel_count(); ++i) img[i] = Rgb(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
+    stbi_image_free(data);
+    return img;
+  }
+  unsigned char* data = stbi_load_from_memory(bytes, int(size), &w, &h, &n, 3);
+  return from_8bit(data, w, h, srgb, name);
 }
 
 }  // namespace rll

@@ -38,6 +38,10 @@ void write_image(const std::filesystem::path& path, const Image& image, float ex
 // from sRGB to linear when `srgb` is true.
 Image read_image(const std::filesystem::path& path, bool srgb = true);
 
+// Decodes an image file held in memory (PNG, JPEG and the other formats stb_image reads);
+// `name` is for messages.
+Image decode_image(const unsigned char* bytes, size_t size, bool srgb, const std::string& name);
+
 // Writes bytes to `path` atomically (temporary file in the same folder, then rename).
 void write_file_atomic(const std::filesystem::path& path, const std::string& bytes);
 

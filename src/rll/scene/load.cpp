@@ -1,5 +1,7 @@
 #include "rll/scene/load.h"
 
+#include <fmt/format.h>
+
 #include "rll/core/error.h"
 #include "rll/scene/builtin.h"
 
@@ -43,25 +45,38 @@ void drop_unused_materials(Scene& scene) {
 }
 }  // namespace
 
-Scene load_scene(const std::string& spec, const LoadOptions& options) {
+Scene read_scene(const std::string& spec) {
   Scene scene;
   const std::string prefix = "builtin:";
   if (spec.rfind(prefix, 0) == 0) {
     scene = make_builtin_scene(spec.substr(prefix.size()));
-  } else {
-    fs::path path(spec);
-    scene.source = spec;
-    if (!fs::exists(path)) fail("{}: file not found", spec);
-    if (fs::is_directory(path)) fail("{}: is a folder, not a scene file", spec);
-    std::string ext = lower_extension(path);
-    if (ext == ".json") load_json_scene(path, scene);
-    else if (ext == ".obj") load_obj(path, scene);
-    else fail("{}: unknown scene format '{}' (rll reads .json, .obj and builtin:NAME)", spec, ext);
-    drop_unused_materials(scene);
+    return scene;
   }
+  fs::path path(spec);
+  scene.source = spec;
+  if (!fs::exists(path)) fail("{}: file not found", spec);
+  if (fs::is_directory(path)) fail("{}: is a folder, not a scene file", spec);
+  std::string ext = lower_extension(path);
+  if (ext == ".json") load_json_scene(path, scene);
+  else if (ext == ".obj") load_obj(path, scene);
+  else if (ext == ".ply") load_ply(path, scene);
+  else if (ext == ".gltf" || ext == ".glb") load_gltf(path, scene);
+  else if (ext == ".pbrt") load_pbrt(path, scene);
+  else
+    fail("{}: unknown scene format '{}' (rll reads .json, .obj, .gltf, .glb, .ply, .pbrt and "
+         "builtin:NAME)",
+         spec, ext);
+  drop_unused_materials(scene);
+  return scene;
+}
+
+Scene load_scene(const std::string& spec, const LoadOptions& options) {
+  Scene scene = read_scene(spec);
   if (options.width < 0 || options.height < 0) fail("resolution must be positive");
   if (options.width > 0) scene.width = options.width;
   if (options.height > 0) scene.height = options.height;
+  if (options.print_warnings)
+    for (const auto& w : scene.warnings) fmt::print(stderr, "rll: warning: {}\n", w);
   scene.finalize();
   return scene;
 }

@@ -1,8 +1,10 @@
-// Scene loading: builtin:NAME, a JSON scene file, or a bare mesh file, chosen by the spec.
+// Scene loading: builtin:NAME, or a scene file chosen by its extension (JSON, OBJ, glTF, PLY,
+// pbrt).
 #pragma once
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include "rll/scene/scene.h"
 
@@ -10,15 +12,45 @@ namespace rll {
 
 struct LoadOptions {
   int width = 0, height = 0;  // film size override; 0 keeps the scene's
+  bool print_warnings = true;  // print Scene::warnings to stderr as "rll: warning: ..."
 };
 
 // Loads and finalizes a scene; throws rll::Error naming the file (and line where known).
 Scene load_scene(const std::string& spec, const LoadOptions& options = {});
+// Reads a scene without finalizing it (no light, camera or sky dome is required or added), as
+// `rll convert` writes it back out.
+Scene read_scene(const std::string& spec);
+
+// What a reader may do beyond parsing the bytes it is given. The fuzz targets turn file access
+// off (a reference to another file is then an error) and cap the geometry a small input may
+// multiply into (instances, tessellated shapes).
+struct ReadPolicy {
+  bool read_files = true;
+  size_t max_triangles = size_t(1) << 31;
+};
 
 // Format readers. Each appends what it reads to `scene` (geometry, materials, textures,
 // lights, camera when the format has one) without finalizing it.
 void load_json_scene(const std::filesystem::path& path, Scene& scene);
 // Wavefront OBJ + MTL through tinyobjloader: Kd, Ks, Ns, Ke, map_Kd (see docs/scene-format.md).
 void load_obj(const std::filesystem::path& path, Scene& scene);
+// Stanford PLY mesh (ASCII or binary) with a default diffuse material.
+void load_ply(const std::filesystem::path& path, Scene& scene);
+// glTF 2.0 (.gltf with its buffers and images, or .glb) through tinygltf.
+void load_gltf(const std::filesystem::path& path, Scene& scene);
+// A pbrt-v4 scene file (the subset in docs/scene-format.md).
+void load_pbrt(const std::filesystem::path& path, Scene& scene);
+
+// The parsers behind them, on bytes in memory (`name` is the file name for messages; relative
+// references resolve against `base_dir`).
+// A PLY file's triangles (polygons fan-triangulated), positions, and normals and uvs when it has
+// them; `material` and `light` are left empty.
+Mesh parse_ply(std::string_view bytes, const std::string& name);
+void parse_gltf(std::string_view bytes, const std::string& name,
+                const std::filesystem::path& base_dir, Scene& scene,
+                const ReadPolicy& policy = {});
+void parse_pbrt(std::string_view text, const std::string& name,
+                const std::filesystem::path& base_dir, Scene& scene,
+                const ReadPolicy& policy = {});
 
 }  // namespace rll

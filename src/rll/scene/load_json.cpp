@@ -14,6 +14,7 @@
 #include "rll/scene/builder.h"
 #include "rll/scene/load.h"
 #include "rll/scene/text_scan.h"
+#include "rll/scene/transform.h"
 
 namespace rll {
 namespace fs = std::filesystem;
@@ -132,43 +133,6 @@ float positive(float x, const std::string& ptr) {
   if (!(x > 0)) fail("{} must be positive (got {})", ptr, x);
   return x;
 }
-
-// Affine transform p -> A p + t of a shape.
-struct Affine {
-  float a[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  Vec3 t;
-  Vec3 apply(const Vec3& p) const {
-    return Vec3(a[0][0] * p.x + a[0][1] * p.y + a[0][2] * p.z,
-                a[1][0] * p.x + a[1][1] * p.y + a[1][2] * p.z,
-                a[2][0] * p.x + a[2][1] * p.y + a[2][2] * p.z) +
-           t;
-  }
-  float det() const {
-    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
-           a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
-           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
-  }
-  // Normals transform with the inverse transpose; the cofactor matrix is that times det(A), and
-  // the scale does not matter since shading normalizes.
-  Vec3 apply_normal(const Vec3& n) const {
-    Vec3 c0(a[1][1] * a[2][2] - a[1][2] * a[2][1], a[1][2] * a[2][0] - a[1][0] * a[2][2],
-            a[1][0] * a[2][1] - a[1][1] * a[2][0]);
-    Vec3 c1(a[0][2] * a[2][1] - a[0][1] * a[2][2], a[0][0] * a[2][2] - a[0][2] * a[2][0],
-            a[0][1] * a[2][0] - a[0][0] * a[2][1]);
-    Vec3 c2(a[0][1] * a[1][2] - a[0][2] * a[1][1], a[0][2] * a[1][0] - a[0][0] * a[1][2],
-            a[0][0] * a[1][1] - a[0][1] * a[1][0]);
-    Vec3 r = c0 * n.x + c1 * n.y + c2 * n.z;
-    return det() < 0 ? -r : r;
-  }
-  // this = m * this
-  void prepend(const float m[3][3]) {
-    float r[3][3];
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        r[i][j] = m[i][0] * a[0][j] + m[i][1] * a[1][j] + m[i][2] * a[2][j];
-    std::copy(&r[0][0], &r[0][0] + 9, &a[0][0]);
-  }
-};
 
 Affine to_transform(const json& v, const std::string& ptr) {
   check_object(v, ptr, {"translate", "scale", "rotate", "matrix"});
@@ -440,7 +404,7 @@ class JsonSceneReader {
       }
     }
     if (auto it = v.find("transform"); it != v.end())
-      transform(to_transform(*it, child(ptr, "transform")), t0, v0);
+      transform_mesh(m_scene.mesh, to_transform(*it, child(ptr, "transform")), t0, v0);
   }
 
   void read_mesh_file(const json& v, const std::string& ptr) {
@@ -481,20 +445,6 @@ class JsonSceneReader {
     }
   }
 
-  // Transforms the triangles from t0 and the vertices from v0 on (a shape just added).
-  void transform(const Affine& x, size_t t0, size_t v0) {
-    Mesh& mesh = m_scene.mesh;
-    for (size_t i = v0; i < mesh.positions.size(); ++i)
-      mesh.positions[i] = x.apply(mesh.positions[i]);
-    for (size_t i = v0; i < mesh.normals.size(); ++i)
-      mesh.normals[i] = x.apply_normal(mesh.normals[i]);
-    // A mirroring transform turns the winding around; flip it back so that front faces (and
-    // one-sided emitters) keep facing the way the transformed normals do.
-    if (x.det() < 0)
-      for (size_t t = t0; t < mesh.triangles.size(); ++t)
-        std::swap(mesh.triangles[t][1], mesh.triangles[t][2]);
-  }
-
   void read_light(const json& v, const std::string& ptr) {
     if (!v.is_object()) fail("{} must be an object (got {})", ptr, v.type_name());
     std::string type = required_field(v, ptr, "type", to_string);
@@ -514,19 +464,51 @@ class JsonSceneReader {
   }
 
   void read_sky(const json& v, const std::string& ptr) {
-    check_object(v, ptr, {"type", "triangles", "radiance", "up", "radius_scale"});
+    check_object(v, ptr,
+                 {"type", "triangles", "radiance", "up", "radius_scale", "full_sphere", "image",
+                  "mapping", "transform"});
     std::string type = required_field(v, ptr, "type", to_string);
     if (type != "dome")
       fail("{}: unknown sky type '{}' (rll knows dome)", child(ptr, "type"), type);
     SkyDome sky;
+    sky.full_sphere = optional_field(v, ptr, "full_sphere", to_bool).value_or(false);
     sky.triangles = optional_field(v, ptr, "triangles", to_int).value_or(sky.triangles);
     if (sky.triangles < 4 || sky.triangles > (1 << 22))
       fail("{} must be in [4, {}] (got {})", child(ptr, "triangles"), 1 << 22, sky.triangles);
+    if (sky.full_sphere && (sky.triangles < 8 || sky.triangles % 2 != 0))
+      fail("{} must be even and at least 8 for a full sphere (got {})", child(ptr, "triangles"),
+           sky.triangles);
     sky.radiance = optional_field(v, ptr, "radiance", to_colour).value_or(sky.radiance);
     sky.up = normalize(optional_field(v, ptr, "up", to_direction).value_or(sky.up));
     sky.radius_scale = optional_field(v, ptr, "radius_scale", to_number).value_or(sky.radius_scale);
     if (!(sky.radius_scale > 2))
       fail("{} must be greater than 2 (got {})", child(ptr, "radius_scale"), sky.radius_scale);
+    if (v.contains("image")) {
+      auto map = std::make_shared<EnvironmentMap>();
+      const fs::path file = referenced_file(v["image"], child(ptr, "image"));
+      try {
+        map->image = read_image(file, /*srgb=*/true);
+      } catch (const Error& e) {
+        fail("{}: {}", child(ptr, "image"), e.what());
+      }
+      std::string mapping = optional_field(v, ptr, "mapping", to_string).value_or("equal-area");
+      if (mapping == "equirect")
+        map->mapping = EnvironmentMap::Mapping::Equirect;
+      else if (mapping != "equal-area")
+        fail("{}: unknown mapping '{}' (rll knows equal-area, equirect)", child(ptr, "mapping"),
+             mapping);
+      if (auto it = v.find("transform"); it != v.end()) {
+        // The map's frame in the world; directions are looked up through its inverse.
+        Affine x = to_transform(*it, child(ptr, "transform"));
+        x.t = Vec3(0);
+        const Affine inv = inverse(x);
+        std::copy(&inv.a[0][0], &inv.a[0][0] + 9, &map->world_to_map[0][0]);
+      }
+      sky.map = std::move(map);
+    } else {
+      for (const char* key : {"mapping", "transform"})
+        if (v.contains(key)) fail("{}: \"{}\" needs an \"image\"", ptr, key);
+    }
     m_scene.sky = sky;
   }
 

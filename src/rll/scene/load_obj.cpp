@@ -19,10 +19,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Aluminium's complex index of refraction: a near-white metal for MTL materials that are
-// mirrors (illum 3, or only Ks), so that Ks alone gives the tint.
-const Rgb kTintableEta{1.66f, 0.88f, 0.52f}, kTintableK{9.22f, 6.27f, 4.84f};
-
 // All MTL files an OBJ names, parsed by tinyobjloader into one list.
 struct MtlLibrary {
   std::vector<tinyobj::material_t> materials;

@@ -28,6 +28,10 @@ struct Material {
   bool is_emissive() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
 };
 
+// Aluminium's complex index of refraction: a near-white metal that `specular` tints, for the
+// formats that describe a metal by its colour alone (MTL, glTF, pbrt's "reflectance").
+inline const Rgb kTintableEta{1.66f, 0.88f, 0.52f}, kTintableK{9.22f, 6.27f, 4.84f};
+
 const char* material_type_name(MaterialType t);
 
 }  // namespace rll

@@ -3,12 +3,15 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <charconv>
+#include <cstring>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 
 #include "rll/core/error.h"
+#include "rll/scene/transform.h"
 
 namespace rll {
 namespace fs = std::filesystem;
@@ -149,10 +152,11 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
   };
 
   json j;
-  j["camera"] = {{"position", vec(scene.camera.position)},
-                 {"target", vec(scene.camera.target)},
-                 {"up", vec(scene.camera.up)},
-                 {"fov", number(scene.camera.fov)}};
+  if (scene.has_camera)  // otherwise the reader fits one to the scene, as it was here
+    j["camera"] = {{"position", vec(scene.camera.position)},
+                   {"target", vec(scene.camera.target)},
+                   {"up", vec(scene.camera.up)},
+                   {"fov", number(scene.camera.fov)}};
   j["film"] = {{"width", scene.width}, {"height", scene.height}};
   json lights = json::array();
   for (const Light& l : scene.lights) {
@@ -171,6 +175,23 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
                 {"radiance", vec(s.radiance)},
                 {"up", vec(s.up)},
                 {"radius_scale", number(s.radius_scale)}};
+    if (s.full_sphere) j["sky"]["full_sphere"] = true;
+    if (s.map) {
+      const std::string file = stem + "_sky.exr";
+      write_image(dir / file, s.map->image);
+      j["sky"]["image"] = file;
+      j["sky"]["mapping"] =
+          s.map->mapping == EnvironmentMap::Mapping::Equirect ? "equirect" : "equal-area";
+      Affine to_map;
+      std::copy(&s.map->world_to_map[0][0], &s.map->world_to_map[0][0] + 9, &to_map.a[0][0]);
+      const Affine to_world = inverse(to_map);
+      json rows = json::array();
+      for (int i = 0; i < 3; ++i)
+        rows.push_back(json::array(
+            {number(to_world.a[i][0]), number(to_world.a[i][1]), number(to_world.a[i][2]), 0}));
+      rows.push_back(json::array({0, 0, 0, 1}));
+      j["sky"]["transform"] = {{"matrix", rows}};
+    }
   }
 
   if (!used_materials.empty()) {
@@ -256,6 +277,99 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
   std::string text;
   write_pretty(text, j, 0);
   write_file_atomic(json_path, text + "\n");
+}
+
+std::string ply_bytes(const Mesh& mesh, PlyEncoding encoding) {
+  const bool normals = !mesh.normals.empty(), uvs = !mesh.uvs.empty();
+  const char* format = encoding == PlyEncoding::Ascii                ? "ascii"
+                       : encoding == PlyEncoding::BinaryLittleEndian ? "binary_little_endian"
+                                                                     : "binary_big_endian";
+  std::string out = fmt::format("ply\nformat {} 1.0\ncomment written by rll\nelement vertex {}\n",
+                                format, mesh.positions.size());
+  out += "property float x\nproperty float y\nproperty float z\n";
+  if (normals) out += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (uvs) out += "property float u\nproperty float v\n";
+  out += fmt::format("element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+                     mesh.triangles.size());
+  if (encoding == PlyEncoding::Ascii) {
+    fmt::memory_buffer b;
+    auto it = std::back_inserter(b);
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+      const Vec3& p = mesh.positions[i];
+      fmt::format_to(it, "{} {} {}", p.x, p.y, p.z);
+      if (normals) fmt::format_to(it, " {} {} {}", mesh.normals[i].x, mesh.normals[i].y, mesh.normals[i].z);
+      if (uvs) fmt::format_to(it, " {} {}", mesh.uvs[i].x, mesh.uvs[i].y);
+      b.push_back('\n');
+    }
+    for (const auto& t : mesh.triangles) fmt::format_to(it, "3 {} {} {}\n", t[0], t[1], t[2]);
+    out.append(b.data(), b.size());
+    return out;
+  }
+  const bool swap = (encoding == PlyEncoding::BinaryBigEndian) == (std::endian::native == std::endian::little);
+  auto put = [&](auto v) {
+    char bytes[sizeof(v)];
+    std::memcpy(bytes, &v, sizeof(v));
+    if (swap) std::reverse(bytes, bytes + sizeof(v));
+    out.append(bytes, sizeof(v));
+  };
+  out.reserve(out.size() + mesh.positions.size() * 32 + mesh.triangles.size() * 13);
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    for (int k = 0; k < 3; ++k) put(mesh.positions[i][k]);
+    if (normals)
+      for (int k = 0; k < 3; ++k) put(mesh.normals[i][k]);
+    if (uvs) {
+      put(mesh.uvs[i].x);
+      put(mesh.uvs[i].y);
+    }
+  }
+  for (const auto& t : mesh.triangles) {
+    put(uint8_t(3));
+    for (uint32_t v : t) put(int32_t(v));
+  }
+  return out;
+}
+
+std::vector<MaterialMesh> split_by_material(const Scene& scene) {
+  const Mesh& mesh = scene.mesh;
+  const size_t sky_begin = scene.sky_first_triangle, sky_end = sky_begin + scene.sky_triangle_count;
+  std::map<uint32_t, size_t> slot;
+  std::vector<MaterialMesh> out;
+  std::vector<int64_t> remap(mesh.positions.size(), -1);
+  std::vector<std::vector<uint32_t>> triangles;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    if (t >= sky_begin && t < sky_end) continue;
+    auto [it, added] = slot.emplace(mesh.material[t], out.size());
+    if (added) {
+      out.push_back({mesh.material[t], {}});
+      triangles.emplace_back();
+    }
+    triangles[it->second].push_back(uint32_t(t));
+  }
+  for (size_t i = 0; i < out.size(); ++i) {
+    Mesh& m = out[i].mesh;
+    std::vector<uint32_t> used;
+    for (uint32_t t : triangles[i]) {
+      std::array<uint32_t, 3> tri;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = mesh.triangles[t][size_t(k)];
+        if (remap[v] < 0) {
+          remap[v] = int64_t(m.positions.size());
+          used.push_back(v);
+          m.positions.push_back(mesh.positions[v]);
+          if (!mesh.normals.empty()) m.normals.push_back(mesh.normals[v]);
+          if (!mesh.uvs.empty()) m.uvs.push_back(mesh.uvs[v]);
+        }
+        tri[size_t(k)] = uint32_t(remap[v]);
+      }
+      m.triangles.push_back(tri);
+    }
+    for (uint32_t v : used) remap[v] = -1;
+    // A zero normal means "none" in rll; other formats have no such value, so a mesh with any
+    // is written without normals.
+    if (std::any_of(m.normals.begin(), m.normals.end(), [](const Vec3& n) { return n == Vec3(0); }))
+      m.normals.clear();
+  }
+  return out;
 }
 
 }  // namespace rll

@@ -1,11 +1,63 @@
 #include "rll/scene/scene.h"
 
+#include <fmt/format.h>
+
 #include <numeric>
 
 #include "rll/core/error.h"
 #include "rll/lights/light_tree.h"
+#include "rll/scene/interaction.h"
 
 namespace rll {
+
+Vec2 equal_area_sphere_to_square(const Vec3& d) {
+  // The radius in the square grows as sqrt(1 - |z|) (equal area), the angle within each octant
+  // linearly; the lower hemisphere folds out to the corners.
+  const float ax = std::abs(d.x), ay = std::abs(d.y), az = std::abs(d.z);
+  const float r = safe_sqrt(1 - az);
+  const float big = std::max(ax, ay), small = std::min(ax, ay);
+  float phi = big == 0 ? 0 : std::atan(small / big) * (2 / kPi);  // in [0, 1]
+  if (ay > ax) phi = 1 - phi;
+  float sv = phi * r, su = r - sv;
+  if (d.z < 0) {
+    std::swap(su, sv);
+    su = 1 - su;
+    sv = 1 - sv;
+  }
+  su = std::copysign(su, d.x);
+  sv = std::copysign(sv, d.y);
+  return Vec2{0.5f * (su + 1), 0.5f * (sv + 1)};
+}
+
+Vec3 equal_area_square_to_sphere(Vec2 p) {
+  const float u = 2 * p.x - 1, v = 2 * p.y - 1, au = std::abs(u), av = std::abs(v);
+  const float signed_distance = 1 - (au + av), r = 1 - std::abs(signed_distance);
+  const float phi = (r == 0 ? 1 : (av - au) / r + 1) * (kPi / 4);
+  const float z = std::copysign(1 - r * r, signed_distance);
+  const float cos_phi = std::copysign(std::cos(phi), u), sin_phi = std::copysign(std::sin(phi), v);
+  const float s = r * safe_sqrt(2 - r * r);
+  return Vec3(cos_phi * s, sin_phi * s, z);
+}
+
+Rgb EnvironmentMap::lookup(const Vec3& world_direction) const {
+  const float(&m)[3][3] = world_to_map;
+  const Vec3& w = world_direction;
+  Vec3 d = normalize(Vec3(m[0][0] * w.x + m[0][1] * w.y + m[0][2] * w.z,
+                          m[1][0] * w.x + m[1][1] * w.y + m[1][2] * w.z,
+                          m[2][0] * w.x + m[2][1] * w.y + m[2][2] * w.z));
+  float u = 0, v = 0;  // image coordinates in [0, 1], v down the image
+  if (mapping == Mapping::Equirect) {
+    float phi = std::atan2(d.y, d.x);
+    u = (phi < 0 ? phi + 2 * kPi : phi) / (2 * kPi);
+    v = safe_acos(d.z) / kPi;
+  } else {
+    const Vec2 p = equal_area_sphere_to_square(d);
+    u = p.x;
+    v = p.y;
+  }
+  // sample_texture reads v up the image.
+  return sample_texture(image, Vec2{u, 1 - v});
+}
 
 const char* material_type_name(MaterialType t) {
   switch (t) {
@@ -34,12 +86,14 @@ void Mesh::append(const Mesh& o, uint32_t material_offset) {
 
 void add_sky_dome(Scene& scene, const SkyDome& sky, const Vec3& center, float radius) {
   if (!(sky.radius_scale > 2)) fail("{}: sky radius scale must be greater than 2", scene.source);
-  if (sky.triangles < 4) fail("{}: sky.triangles must be at least 4 (got {})", scene.source, sky.triangles);
+  if (sky.triangles < (sky.full_sphere ? 8 : 4) || (sky.full_sphere && sky.triangles % 2 != 0))
+    fail("{}: sky.triangles must be at least 4 (a full sphere: even and at least 8; got {})",
+         scene.source, sky.triangles);
   // Rings of vertices at polar angles theta_i = i * (pi/2) / R around the zenith; ring i has
   // s_i vertices, and the strip between rings i and i+1 holds s_i + s_{i+1} triangles, the
   // polar fan s_1. Total = 2 * sum(s_i) - s_R, so any count >= 4 is reachable with s_i
   // roughly proportional to sin(theta_i), giving triangles of similar solid angle.
-  const int n = sky.triangles;
+  const int n = sky.full_sphere ? sky.triangles / 2 : sky.triangles;  // per hemisphere
   int rings = std::max(1, int(std::round(std::sqrt(n / kPi))));
   std::vector<int> s(rings + 1, 0);
   auto total = [&] {
@@ -106,13 +160,65 @@ void add_sky_dome(Scene& scene, const SkyDome& sky, const Vec3& center, float ra
       }
     }
   }
+  if (sky.full_sphere) {
+    // The lower hemisphere mirrors the upper one through the equator, whose ring it shares so
+    // that the sphere is closed.
+    const uint32_t equator = ring_start[rings], upper_vertices = uint32_t(dome.positions.size());
+    std::vector<uint32_t> mirror(upper_vertices);
+    for (uint32_t v = 0; v < upper_vertices; ++v) {
+      if (v >= equator) {
+        mirror[v] = v;
+        continue;
+      }
+      const Vec3 d = dome.positions[v] - center;
+      mirror[v] = uint32_t(dome.positions.size());
+      dome.positions.push_back(center + d - frame.n * (2 * dot(d, frame.n)));
+    }
+    const size_t upper_triangles = dome.triangles.size();
+    for (size_t t = 0; t < upper_triangles; ++t) {
+      const auto tri = dome.triangles[t];
+      add(mirror[tri[0]], mirror[tri[1]], mirror[tri[2]]);
+    }
+  }
   Material m;
   m.name = "sky";
   m.albedo = Rgb(0);
   m.emission = sky.radiance;
   uint32_t mat = uint32_t(scene.materials.size());
-  scene.materials.push_back(m);
-  dome.material.assign(dome.triangles.size(), 0);
+  if (sky.map) {
+    // One material per triangle, emitting the map's mean over the triangle's solid angle:
+    // stratified points on the flat triangle, each weighted by the solid angle per unit area
+    // it covers, cos / r^2.
+    const int grid = 8;
+    for (size_t t = 0; t < dome.triangles.size(); ++t) {
+      const auto& tri = dome.triangles[t];
+      const Vec3 a = dome.positions[tri[0]] - center, b = dome.positions[tri[1]] - center,
+                 c = dome.positions[tri[2]] - center;
+      const Vec3 nrm = normalize(cross(b - a, c - a));
+      Rgb sum(0);
+      float weight = 0;
+      for (int i = 0; i < grid; ++i)
+        for (int j = 0; j < grid; ++j) {
+          float u = (i + 0.5f) / grid, v = (j + 0.5f) / grid;
+          if (u + v > 1) {
+            u = 1 - u;
+            v = 1 - v;
+          }
+          const Vec3 p = a + (b - a) * u + (c - a) * v;
+          const float r2 = length_sq(p), w = std::abs(dot(nrm, p)) / (r2 * std::sqrt(r2));
+          sum += sky.map->lookup(p) * w;
+          weight += w;
+        }
+      Material tm = m;
+      tm.name = fmt::format("sky {}", t);
+      tm.emission = sky.radiance * (sum / weight);
+      scene.materials.push_back(tm);
+      dome.material.push_back(uint32_t(t));
+    }
+  } else {
+    scene.materials.push_back(m);
+    dome.material.assign(dome.triangles.size(), 0);
+  }
   dome.light.assign(dome.triangles.size(), -1);
   scene.sky_first_triangle = scene.mesh.triangle_count();
   scene.sky_triangle_count = dome.triangles.size();

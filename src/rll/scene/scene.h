@@ -17,10 +17,36 @@ namespace rll {
 
 class LightTree;
 
-// A sky as a dome of emissive triangles over the upper hemisphere around `up`.
+// An environment image for the sky: the radiance seen along world direction d is
+// SkyDome::radiance * lookup(d).
+struct EnvironmentMap {
+  enum class Mapping : uint8_t {
+    EqualArea,  // pbrt-v4's equal-area octahedral square (Clarberg), +z at the square's centre
+    Equirect,   // latitude-longitude: u = phi / 2pi from +x towards +y, v = theta / pi from +z
+  };
+  Image image;  // row 0 at the top
+  Mapping mapping = Mapping::EqualArea;
+  // From world directions to the map's frame (a rotation, possibly with a mirror).
+  float world_to_map[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  // Bilinear lookup of the image along a world direction (need not be normalized).
+  Rgb lookup(const Vec3& world_direction) const;
+};
+
+// pbrt-v4's equal-area octahedral map (Clarberg) between unit directions and [0, 1]^2, with
+// +z at the square's centre and -z at its corners.
+Vec2 equal_area_sphere_to_square(const Vec3& d);
+Vec3 equal_area_square_to_sphere(Vec2 p);
+
+// A sky as a dome of emissive triangles over the upper hemisphere around `up`, or the whole
+// sphere.
 struct SkyDome {
-  int triangles = 2048;
+  int triangles = 2048;  // over the whole dome (for a full sphere: even, half on each side)
   Rgb radiance{1.0f};
+  // A sphere of triangles, as an infinite light is, rather than a hemisphere.
+  bool full_sphere = false;
+  // With a map, each triangle emits the map's mean over the solid angle it covers (times
+  // `radiance`), and so is a light of its own colour; without, every triangle emits `radiance`.
+  std::shared_ptr<const EnvironmentMap> map;
   Vec3 up{0, 1, 0};
   // Dome radius in units of the scene's bounding radius; > 2 so that shadow rays towards a
   // directional light, which stop at the bounding sphere, never reach it.
@@ -38,6 +64,9 @@ struct Scene {
   int width = 640, height = 480;
   bool has_camera = false;  // false: finalize() fits one to the bounds
   std::optional<SkyDome> sky;
+  // What the loaders skipped or approximated (an unsupported pbrt directive, a glTF spot light):
+  // load_scene prints each as "rll: warning: ..." and keeps them here.
+  std::vector<std::string> warnings;
 
   // Filled by finalize():
   Bounds3 bounds;      // all geometry except the sky dome

@@ -1,0 +1,144 @@
+// Writes the fuzz targets' seed corpora: small valid files of each format, made by rll's own
+// writers (PLY, glTF) or written out here (pbrt, which must not refer to other files).
+// Usage: rll_fuzz_seeds DIR  (writes DIR/ply, DIR/gltf, DIR/pbrt)
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "rll/core/error.h"
+#include "rll/scene/builder.h"
+#include "rll/scene/save.h"
+#include "rll/scene/text_scan.h"
+
+namespace fs = std::filesystem;
+using namespace rll;
+
+namespace {
+
+void write(const fs::path& p, const std::string& bytes) {
+  std::ofstream f(p, std::ios::binary);
+  f << bytes;
+  if (!f) fail("cannot write {}", p.string());
+}
+
+Scene small_scene() {
+  Scene s;
+  s.source = "seed";
+  SceneBuilder b(s);
+  Material plastic;
+  plastic.type = MaterialType::Plastic;
+  Material metal;
+  metal.type = MaterialType::Conductor;
+  b.box(Vec3(0), Vec3(1), b.diffuse(Rgb(0.7f)), true, 1u << 5);
+  b.sphere(Vec3(0.5f, 0.3f, 0.5f), 0.2f, 0, b.material(plastic));
+  b.quad(Vec3(0.1f, 0.01f, 0.1f), Vec3(0.2f, 0, 0), Vec3(0, 0, 0.2f), b.material(metal));
+  b.quad(Vec3(0.4f, 0.99f, 0.4f), Vec3(0, 0, 0.2f), Vec3(0.2f, 0, 0), b.emitter(Rgb(5, 4, 3)));
+  s.lights.push_back(make_point_light(Vec3(0.5f), Rgb(1)));
+  s.lights.push_back(make_directional_light(normalize(Vec3(1, 2, 3)), Rgb(2)));
+  s.has_camera = true;
+  s.camera.position = Vec3(0.5f, 0.5f, 3);
+  s.camera.target = Vec3(0.5f);
+  return s;
+}
+
+// A GLB holding a .gltf's JSON (whose buffer is a data URI) and no binary chunk.
+std::string glb_of(std::string json) {
+  while (json.size() % 4) json += ' ';
+  std::string out = "glTF";
+  auto u32 = [&](uint32_t v) { out.append(reinterpret_cast<const char*>(&v), 4); };
+  u32(2);
+  u32(uint32_t(20 + json.size()));
+  u32(uint32_t(json.size()));
+  u32(0x4E4F534A);
+  return out + json;
+}
+
+const char* kPbrtSeeds[] = {
+    R"(LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective" "float fov" [ 45 ]
+Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 24 ]
+Sampler "halton" "integer pixelsamples" 4
+WorldBegin
+LightSource "point" "rgb I" [ 1 1 1 ] "point3 from" [ 0 2 0 ]
+LightSource "distant" "point3 from" [ 0 1 0 ] "point3 to" [ 0 0 0 ] "blackbody L" 5500
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [ 0.5 0.4 0.3 ]
+  AreaLightSource "diffuse" "rgb L" [ 4 4 4 ] "bool twosided" true
+  Translate 0 1 0
+  Shape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "integer indices" [ 0 1 2 ]
+    "normal N" [ 0 0 1 0 0 1 0 0 1 ] "point2 uv" [ 0 0 1 0 0 1 ]
+AttributeEnd
+)",
+    R"(Scale -1 1 1
+LookAt 1 2 3 0 0 0 0 0 1
+Camera "perspective"
+WorldBegin
+MakeNamedMaterial "gold" "string type" "conductor" "spectrum eta" "metal-Au-eta"
+  "spectrum k" "metal-Au-k" "float roughness" 0.1
+MakeNamedMaterial "glass" "string type" "dielectric" "float eta" 1.5
+ObjectBegin "ball"
+  NamedMaterial "gold"
+  Shape "sphere" "float radius" 0.5 "float zmin" -0.2 "float phimax" 270
+ObjectEnd
+AttributeBegin Translate 1 0 0 Rotate 30 0 1 0 ObjectInstance "ball" AttributeEnd
+AttributeBegin Scale 2 2 2 ObjectInstance "ball" AttributeEnd
+NamedMaterial "glass"
+Shape "disk" "float radius" 2 "float innerradius" 0.5
+Material "coateddiffuse" "rgb reflectance" [ 0.2 0.2 0.8 ] "float roughness" 0.05
+Shape "bilinearmesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 1 1 1 ] "integer indices" [ 0 1 2 3 ]
+LightSource "infinite" "rgb L" [ 0.3 0.4 0.5 ]
+)",
+    R"(Transform [ 1 0 0 0  0 1 0 0  0 0 1 0  0 0 -5 1 ]
+Camera "perspective" "float fov" 30
+WorldBegin
+CoordinateSystem "start"
+TransformBegin
+  ConcatTransform [ 2 0 0 0  0 2 0 0  0 0 2 0  0 0 0 1 ]
+  ReverseOrientation
+  AreaLightSource "diffuse" "spectrum L" [ 400 1 700 2 ] "float scale" 3
+  Shape "sphere"
+TransformEnd
+CoordSysTransform "camera"
+Shape "curve" "point3 P" [ 0 0 0 1 1 1 2 2 2 3 3 3 ]
+MakeNamedMedium "fog" "string type" "homogeneous"
+Attribute "shape" "float radius" 2
+Option "bool disablepixeljitter" true
+)",
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: rll_fuzz_seeds DIR\n");
+    return 2;
+  }
+  try {
+    const fs::path dir = argv[1];
+    for (const char* f : {"ply", "gltf", "pbrt"}) fs::create_directories(dir / f);
+    Scene s = small_scene();
+    Mesh tri;
+    tri.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    tri.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+    tri.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    tri.triangles = {{0, 1, 2}, {0, 2, 3}};
+    write(dir / "ply/ascii.ply", ply_bytes(tri, PlyEncoding::Ascii));
+    write(dir / "ply/little.ply", ply_bytes(tri, PlyEncoding::BinaryLittleEndian));
+    write(dir / "ply/big.ply", ply_bytes(tri, PlyEncoding::BinaryBigEndian));
+    Mesh plain;
+    plain.positions = s.mesh.positions;
+    plain.triangles = s.mesh.triangles;
+    write(dir / "ply/scene.ply", ply_bytes(plain, PlyEncoding::Ascii));
+    const fs::path gltf = dir / "gltf/scene.gltf";
+    save_gltf_scene(s, gltf);
+    write(dir / "gltf/scene.glb", glb_of(read_text_file(gltf)));
+    for (size_t i = 0; i < std::size(kPbrtSeeds); ++i)
+      write(dir / fmt::format("pbrt/seed{}.pbrt", i), kPbrtSeeds[i]);
+  } catch (const Error& e) {
+    std::fprintf(stderr, "rll_fuzz_seeds: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Runs each scene-parser fuzzer for a bounded time (make fuzz). Usage: fuzz.sh BUILD SECONDS
+set -euo pipefail
+build=${1:-build-fuzz}
+seconds=${2:-60}
+root=$(cd "$(dirname "$0")/.." && pwd)
+corpus=$build/corpus
+crashes=$build/crashes
+rm -rf "$corpus/seeds"
+mkdir -p "$crashes"
+"$build/fuzz/rll_fuzz_seeds" "$corpus/seeds"
+export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1
+export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+status=0
+for format in ply gltf pbrt; do
+  fuzzer=$build/fuzz/rll_fuzz_$format
+  regressions=$root/tests/fuzz/$format
+  mkdir -p "$corpus/$format"
+  echo "== $format: regression inputs"
+  if compgen -G "$regressions/*" > /dev/null; then
+    "$fuzzer" -runs=0 "$regressions" || status=1
+  fi
+  echo "== $format: fuzzing for ${seconds}s"
+  # The working corpus grows across runs; seeds and regression inputs are read-only extras.
+  "$fuzzer" "$corpus/$format" "$corpus/seeds/$format" "$regressions" \
+    -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+    -artifact_prefix="$crashes/$format-" -print_final_stats=1 2>&1 | tail -n 25 || status=1
+done
+if [ "$status" -ne 0 ]; then
+  echo "fuzz: a fuzzer found a crash; inputs are in $crashes (add them to tests/fuzz/<format>/)"
+fi
+exit $status

@@ -1,0 +1,248 @@
+// Writes a scene as glTF 2.0: one mesh of one primitive per material, materials through the
+// metallic-roughness model and the extensions rll reads (so that reading back gives the same
+// rll materials), KHR_lights_punctual lights and the camera.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <map>
+#include <set>
+#include <nlohmann/json.hpp>
+
+#include "rll/core/error.h"
+#include "rll/scene/save.h"
+
+namespace rll {
+namespace fs = std::filesystem;
+using json = nlohmann::ordered_json;
+
+namespace {
+
+std::string base64(const std::string& bytes) {
+  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t v = uint32_t(uint8_t(bytes[i])) << 16;
+    if (i + 1 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 1])) << 8;
+    if (i + 2 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 2]));
+    out += k[(v >> 18) & 63];
+    out += k[(v >> 12) & 63];
+    out += i + 1 < bytes.size() ? k[(v >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? k[v & 63] : '=';
+  }
+  return out;
+}
+
+json vec(const Vec3& v) {
+  return json::array({v.x, v.y, v.z});
+}
+
+// A node matrix (column-major) whose axes are x, y, z and origin o.
+json matrix(const Vec3& x, const Vec3& y, const Vec3& z, const Vec3& o) {
+  return json::array({x.x, x.y, x.z, 0, y.x, y.y, y.z, 0, z.x, z.y, z.z, 0, o.x, o.y, o.z, 1});
+}
+
+class GltfWriter {
+ public:
+  GltfWriter(const Scene& scene, const fs::path& path) : m_scene(scene), m_path(path) {}
+
+  std::vector<std::string> write() {
+    m_doc["asset"] = {{"version", "2.0"}, {"generator", "rll"}};
+    json nodes = json::array();
+    json primitives = json::array();
+    for (const MaterialMesh& part : split_by_material(m_scene))
+      primitives.push_back(primitive(part));
+    if (!primitives.empty()) {
+      m_doc["meshes"] = json::array({{{"primitives", primitives}}});
+      nodes.push_back({{"mesh", 0}});
+    }
+    if (m_scene.has_camera) nodes.push_back(camera());
+    json lights = json::array();
+    for (const Light& l : m_scene.lights) {
+      if (l.type == LightType::Triangle) continue;
+      json light;
+      const float scale = std::max(max_component(l.radiance), 1e-30f);
+      light["color"] = vec(l.radiance / scale);
+      light["intensity"] = max_component(l.radiance);
+      json node;
+      if (l.type == LightType::Point) {
+        light["type"] = "point";
+        node["translation"] = vec(l.p0);
+      } else {
+        light["type"] = "directional";
+        const Frame f(normalize(l.p0));  // the light shines along the node's -z
+        node["matrix"] = matrix(f.s, f.t, f.n, Vec3(0));
+      }
+      node["extensions"] = {{"KHR_lights_punctual", {{"light", lights.size()}}}};
+      lights.push_back(light);
+      nodes.push_back(node);
+    }
+    if (!lights.empty()) {
+      m_doc["extensions"] = {{"KHR_lights_punctual", {{"lights", lights}}}};
+      m_extensions.insert("KHR_lights_punctual");
+    }
+    if (m_scene.sky) m_warnings.push_back("glTF has no sky: the sky dome is not written");
+    json scene_nodes = json::array();
+    for (size_t i = 0; i < nodes.size(); ++i) scene_nodes.push_back(i);
+    m_doc["scene"] = 0;
+    m_doc["scenes"] = json::array({{{"nodes", scene_nodes}}});
+    m_doc["nodes"] = nodes;
+    if (!m_materials.empty()) m_doc["materials"] = m_materials;
+    if (!m_textures.empty()) {
+      m_doc["textures"] = m_textures;
+      m_doc["images"] = m_images;
+    }
+    m_doc["accessors"] = m_accessors;
+    m_doc["bufferViews"] = m_views;
+    m_doc["buffers"] =
+        json::array({{{"byteLength", m_buffer.size()},
+                      {"uri", "data:application/octet-stream;base64," + base64(m_buffer)}}});
+    if (!m_extensions.empty()) m_doc["extensionsUsed"] = m_extensions;
+    write_file_atomic(m_path, m_doc.dump(1) + "\n");
+    return m_warnings;
+  }
+
+ private:
+  // Appends data to the buffer (4-byte aligned) as a view and an accessor; returns its index.
+  int accessor(const void* data, size_t bytes, size_t count, int component, const char* type,
+               json extra = json::object()) {
+    while (m_buffer.size() % 4) m_buffer.push_back('\0');
+    m_views.push_back({{"buffer", 0}, {"byteOffset", m_buffer.size()}, {"byteLength", bytes}});
+    m_buffer.append(static_cast<const char*>(data), bytes);
+    json a = {{"bufferView", m_views.size() - 1},
+              {"componentType", component},
+              {"count", count},
+              {"type", type}};
+    for (auto& [k, v] : extra.items()) a[k] = v;
+    m_accessors.push_back(a);
+    return int(m_accessors.size() - 1);
+  }
+
+  json primitive(const MaterialMesh& part) {
+    const Mesh& m = part.mesh;
+    json attributes;
+    Vec3 lo(kInf), hi(-kInf);
+    for (const Vec3& p : m.positions) {
+      lo = min(lo, p);
+      hi = max(hi, p);
+    }
+    attributes["POSITION"] =
+        accessor(m.positions.data(), m.positions.size() * 12, m.positions.size(), 5126, "VEC3",
+                 {{"min", vec(lo)}, {"max", vec(hi)}});
+    if (!m.normals.empty()) {
+      std::vector<Vec3> n(m.normals.size());
+      for (size_t i = 0; i < n.size(); ++i) n[i] = normalize(m.normals[i]);
+      attributes["NORMAL"] = accessor(n.data(), n.size() * 12, n.size(), 5126, "VEC3");
+    }
+    if (!m.uvs.empty()) {
+      std::vector<float> uv;
+      for (const Vec2& t : m.uvs) uv.insert(uv.end(), {t.x, 1 - t.y});  // glTF's v runs down
+      attributes["TEXCOORD_0"] = accessor(uv.data(), uv.size() * 4, m.uvs.size(), 5126, "VEC2");
+    }
+    const int indices = accessor(m.triangles.data(), m.triangles.size() * 12,
+                                 m.triangles.size() * 3, 5125, "SCALAR");
+    return {
+        {"attributes", attributes}, {"indices", indices}, {"material", material(part.material)}};
+  }
+
+  int material(uint32_t index) {
+    if (auto it = m_material_index.find(index); it != m_material_index.end()) return it->second;
+    const Material& m = m_scene.materials[index];
+    json g;
+    g["name"] = m.name;
+    json pbr;
+    json extensions = json::object();
+    pbr["roughnessFactor"] = std::sqrt(std::min(1.0f, std::max(0.0f, m.roughness)));
+    if (m.roughness > 1)
+      m_warnings.push_back(
+          fmt::format("material '{}': roughness {} is clamped to glTF's 1", m.name, m.roughness));
+    if (m.type == MaterialType::Conductor) {
+      pbr["metallicFactor"] = 1;
+      Rgb base = m.specular;
+      if (!(m.eta == kTintableEta && m.k == kTintableK)) {
+        // glTF's metal is its colour at normal incidence: the Fresnel reflectance of eta, k.
+        Rgb f0;
+        for (int i = 0; i < 3; ++i)
+          f0[i] = (sqr(m.eta[i] - 1) + sqr(m.k[i])) / (sqr(m.eta[i] + 1) + sqr(m.k[i]));
+        base = base * f0;
+        m_warnings.push_back(fmt::format(
+            "material '{}': a conductor's eta and k are written as its reflectance at normal "
+            "incidence (glTF's metal colour)",
+            m.name));
+      }
+      pbr["baseColorFactor"] = {base.x, base.y, base.z, 1};
+    } else {
+      pbr["metallicFactor"] = 0;
+      pbr["baseColorFactor"] = {m.albedo.x, m.albedo.y, m.albedo.z, 1};
+      if (m.albedo_texture >= 0) pbr["baseColorTexture"] = {{"index", texture(m.albedo_texture)}};
+      if (m.type == MaterialType::Diffuse) {
+        extensions["KHR_materials_specular"] = {{"specularFactor", 0}};
+      } else {
+        extensions["KHR_materials_specular"] = {{"specularColorFactor", vec(m.specular)}};
+        extensions["KHR_materials_ior"] = {{"ior", m.ior}};
+        m_extensions.insert("KHR_materials_ior");
+      }
+      m_extensions.insert("KHR_materials_specular");
+    }
+    g["pbrMetallicRoughness"] = pbr;
+    if (m.is_emissive()) {
+      // emissiveFactor is at most 1; the strength extension carries the rest.
+      const float strength = max_component(m.emission);
+      g["emissiveFactor"] = vec(m.emission / strength);
+      if (strength != 1) {
+        extensions["KHR_materials_emissive_strength"] = {{"emissiveStrength", strength}};
+        m_extensions.insert("KHR_materials_emissive_strength");
+      }
+    }
+    if (m.two_sided_emission) g["doubleSided"] = true;
+    if (!extensions.empty()) g["extensions"] = extensions;
+    m_materials.push_back(g);
+    return m_material_index[index] = int(m_materials.size() - 1);
+  }
+
+  int texture(int index) {
+    if (auto it = m_texture_index.find(index); it != m_texture_index.end()) return it->second;
+    const std::string file = fmt::format("{}_tex{}.png", m_path.stem().string(), index);
+    const Image& img = m_scene.textures[size_t(index)];
+    if (std::any_of(img.pixels().begin(), img.pixels().end(),
+                    [](const Rgb& c) { return max_component(c) > 1; }))
+      m_warnings.push_back(fmt::format("texture {}: values above 1 are clamped in the PNG", index));
+    write_image(m_path.parent_path() / file, img);
+    m_images.push_back({{"uri", file}});
+    m_textures.push_back({{"source", m_images.size() - 1}});
+    return m_texture_index[index] = int(m_textures.size() - 1);
+  }
+
+  json camera() {
+    const Camera& c = m_scene.camera;
+    const Vec3 f = normalize(c.target - c.position), r = normalize(cross(f, c.up)), u = cross(r, f);
+    m_doc["cameras"] =
+        json::array({{{"type", "perspective"},
+                      {"perspective",
+                       {{"yfov", radians(c.fov)},
+                        {"aspectRatio", float(m_scene.width) / float(m_scene.height)},
+                        {"znear", 1e-3}}}}});
+    return {{"camera", 0}, {"matrix", matrix(r, u, -f, c.position)}};
+  }
+
+  const Scene& m_scene;
+  fs::path m_path;
+  json m_doc;
+  std::string m_buffer;
+  json m_views = json::array(), m_accessors = json::array(), m_materials = json::array(),
+       m_textures = json::array(), m_images = json::array();
+  std::map<uint32_t, int> m_material_index;
+  std::map<int, int> m_texture_index;
+  std::set<std::string> m_extensions;
+  std::vector<std::string> m_warnings;
+};
+
+}  // namespace
+
+std::vector<std::string> save_gltf_scene(const Scene& scene, const fs::path& path) {
+  if (path.extension() != ".gltf") fail("{}: a glTF scene is saved as a .gltf file", path.string());
+  return GltfWriter(scene, path).write();
+}
+
+}  // namespace rll
