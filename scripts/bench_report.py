@@ -154,13 +154,13 @@ P("")
 
 # --- Ablation ----------------------------------------------------------------------------------
 names = {
-    0: "paper: uniform within, full-pdf reward, power prior and split, prior in the cell CDF, exponential Q, jitter, 4-px cells",
+    0: "paper: uniform within, full-pdf reward, power prior and split, prior in the cell CDF, exponential Q, jitter",
     1: "+ cluster reward (DESIGN 2)",
     2: "+ tree descent within clusters",
     3: "+ importance prior and split",
     4: "+ tree's probability as the defensive term",
     5: "+ shrinkage Q, trust schedule, coarse-to-fine cells",
-    6: "+ no jitter, 2-px cells = rll's defaults",
+    6: "+ no jitter = rll's defaults",
 }
 P("## Ablation\n")
 P("Equal time, direct lighting; each row adds one correction to the row above. relMSE median, "

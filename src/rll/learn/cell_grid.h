@@ -15,7 +15,7 @@
 namespace rll {
 
 struct CellGridSettings {
-  float footprint_scale = 2;   // cell radius = footprint_scale * ray footprint ...
+  float footprint_scale = 4;   // cell radius = footprint_scale * ray footprint ...
   float max_cell = 0.05f;      // ... at most max_cell * scene diameter
   int normal_bins = 4;         // bins per axis of the octahedral normal map
   // Jitter amplitude in cell units (0: none). Renewing the jitter every pass blends cell

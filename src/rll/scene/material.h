@@ -19,7 +19,7 @@ struct Material {
   Rgb albedo{0.8f};          // Lambertian reflectance (Diffuse, Plastic base)
   int albedo_texture = -1;   // index into Scene::textures; multiplies albedo
   Rgb specular{1.0f};        // tint of the specular lobe (Conductor, Plastic)
-  Rgb eta{0.2f, 0.92f, 1.1f};  // conductor: real part of the index of refraction (default: gold)
+  Rgb eta{0.2f, 0.92f, 1.1f};  // conductor: real part of the index of refraction (default: copper)
   Rgb k{3.9f, 2.45f, 2.14f};   //            imaginary part
   float ior = 1.5f;          // plastic coating's index of refraction
   float roughness = 0.3f;    // GGX alpha (isotropic), clamped to >= 1e-3
