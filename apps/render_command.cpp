@@ -21,7 +21,7 @@ namespace {
 
 struct RenderOptions {
   SessionSettings session;
-  std::string sampler = "power";
+  std::string sampler = "rll";
   int spp = 16;
   double time = 0;
   uint64_t seed = 1;
@@ -129,7 +129,8 @@ void add_render_command(CLI::App& app) {
   auto o = std::make_shared<RenderOptions>();
   auto* cmd = app.add_subcommand("render", "Render a scene to an image");
   add_session_options(cmd, o->session);
-  cmd->add_option("--sampler", o->sampler, "Light sampler: uniform, power, tree, rll, oracle")->capture_default_str();
+  cmd->add_option("--sampler", o->sampler, fmt::format("Light sampler: {}", fmt::join(light_sampler_names(), ", ")))
+      ->capture_default_str();
   cmd->add_option("--spp", o->spp, "Samples per pixel (an upper limit when --time is given)")->capture_default_str();
   cmd->add_option("--time", o->time, "Time budget in seconds; stops at whichever of --spp and --time comes first");
   cmd->add_option("--seed", o->seed, "Random seed; the same seed gives the same image with any --threads")

@@ -79,7 +79,9 @@ class RenderSession;
 inline constexpr uint64_t kDefaultReferenceSeed = 1000003;
 
 struct ReferenceRequest {
-  std::string sampler = "power";
+  // Tree sampling: visibility-blind, without learning state, and far better behaved than power
+  // on occluded scenes (whose lamps power sampling gives pmfs near 1e-7).
+  std::string sampler = "tree";
   int spp = 1024;  // at least this many samples per pixel
   uint64_t seed = kDefaultReferenceSeed;
   int pass_spp = 1, max_pass_spp = 8;  // as in RenderSettings
