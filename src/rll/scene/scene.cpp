@@ -95,6 +95,8 @@ void add_sky_dome(Scene& scene, const SkyDome& sky, const Vec3& center, float ra
   // roughly proportional to sin(theta_i), giving triangles of similar solid angle.
   const int n = sky.full_sphere ? sky.triangles / 2 : sky.triangles;  // per hemisphere
   int rings = std::max(1, int(std::round(std::sqrt(n / kPi))));
+  // Rings have at least 3 vertices each, so R rings make at least 6R - 3 triangles.
+  rings = std::max(1, std::min(rings, (n + 3) / 6));
   std::vector<int> s(rings + 1, 0);
   auto total = [&] {
     int t = 0;
