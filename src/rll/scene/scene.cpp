@@ -257,7 +257,13 @@ void Scene::finalize() {
       fail("{}: a light has a non-finite or negative parameter", source);
 
   bounds = Bounds3{};
-  for (const auto& p : mesh.positions) bounds.expand(p);
+  if (sky_triangle_count == 0) {
+    for (const auto& p : mesh.positions) bounds.expand(p);
+  } else {  // finalized before: the dome is in the mesh but stays out of the bounds
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+      if (t < sky_first_triangle || t >= sky_first_triangle + sky_triangle_count)
+        for (uint32_t v : mesh.triangles[t]) bounds.expand(mesh.positions[v]);
+  }
   for (const auto& l : lights)
     if (l.type == LightType::Point) bounds.expand(l.p0);
   if (bounds.empty()) bounds.expand(Vec3(0));
