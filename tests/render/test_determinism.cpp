@@ -4,7 +4,6 @@
 
 #include <cstring>
 
-#include "rll/scene/builtin.h"
 #include "support/test_support.h"
 
 using namespace rll;
@@ -26,10 +25,8 @@ size_t differing_pixels(const Image& a, const Image& b) {
 class Determinism : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(Determinism, SameSeedSameImageWithAnyThreadCount) {
-  Scene scene = make_builtin_scene("cornell-box");
-  scene.width = 40;  // not a multiple of the 16-pixel tiles
-  scene.height = 36;
-  scene.finalize();
+  // 40 x 36: not a multiple of the 16-pixel tiles.
+  const Scene scene = small_builtin_scene("cornell-box", 40, 36);
   RenderRequest r;
   r.sampler = GetParam();
   r.integrator.max_depth = 4;  // Russian roulette from depth 3 draws numbers too

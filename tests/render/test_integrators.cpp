@@ -8,21 +8,12 @@
 #include <cmath>
 
 #include "rll/core/params.h"
-#include "rll/scene/builtin.h"
 #include "support/test_support.h"
 
 using namespace rll;
 using namespace rll::test;
 
 namespace {
-
-Scene small_scene(const std::string& name, int w, int h) {
-  Scene s = make_builtin_scene(name);
-  s.width = w;
-  s.height = h;
-  s.finalize();
-  return s;
-}
 
 // Per-pixel difference estimates over a grid of image regions.
 std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx, int ny) {
@@ -71,7 +62,7 @@ RenderRequest request(const std::string& sampler, const std::string& integrator,
 }
 
 TEST(Integrators, DirectEqualsPathDepthOneCornellBox) {
-  const Scene scene = small_scene("cornell-box", 48, 48);
+  const Scene scene = small_builtin_scene("cornell-box", 48, 48);
   Image direct = render_scene(scene, request("power", "direct", 1, "", 64, 1));
   Image path = render_scene(scene, request("power", "path", 1, "mis", 64, 1));
   expect_images_agree(direct, path, "cornell-box");
@@ -81,14 +72,14 @@ TEST(Integrators, DirectEqualsPathDepthOneCornellBox) {
 // picks a box's own lamp with probability ~1e-5 (the sky's power dwarfs the lamps'), so that
 // NEE alone would see the lamps' light only as rare spikes; the light tree finds the near lamp.
 TEST(Integrators, DirectEqualsPathDepthOneUnderSky) {
-  const Scene scene = small_scene("cornell-boxes-room", 64, 48);
+  const Scene scene = small_builtin_scene("cornell-boxes-room", 64, 48);
   Image direct = render_scene(scene, request("tree", "direct", 1, "", 128, 3));
   Image path = render_scene(scene, request("tree", "path", 1, "mis", 128, 3));
   expect_images_agree(direct, path, "cornell-boxes-room");
 }
 
 TEST(Integrators, StrategiesAgreeCornellBox) {
-  const Scene scene = small_scene("cornell-box", 32, 32);
+  const Scene scene = small_builtin_scene("cornell-box", 32, 32);
   Image mis = render_scene(scene, request("power", "path", 3, "mis", 64, 5));
   Image nee = render_scene(scene, request("power", "path", 3, "nee", 64, 5));
   Image bsdf = render_scene(scene, request("power", "path", 3, "bsdf", 2048, 5));
