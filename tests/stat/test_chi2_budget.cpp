@@ -6,8 +6,9 @@
 
 size_t bsdf_chi2_test_count();   // tests/stat/test_bsdf.cpp
 size_t light_chi2_test_count();  // tests/stat/test_light.cpp
-// tests/unit/test_sampling.cpp: DiscreteDistribution (2) and SampleStream (2).
-constexpr size_t kUnitChi2Tests = 4;
+// tests/unit/test_sampling.cpp: DiscreteDistribution (2) and SampleStream (2);
+// tests/unit/test_sphere_chi2.cpp: the two that must pass (the others must fail).
+constexpr size_t kUnitChi2Tests = 6;
 
 TEST(Chi2Budget, SuiteBoundCoversEveryTest) {
   const size_t total = bsdf_chi2_test_count() + light_chi2_test_count() + kUnitChi2Tests;
