@@ -15,6 +15,7 @@
 #include "rll/core/parallel.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/render/render.h"
+#include "rll/scene/builtin.h"
 
 namespace rll::test {
 namespace fs = std::filesystem;
@@ -62,6 +63,14 @@ CommandResult run_rll(const std::vector<std::string>& args) {
   int status = ::pclose(pipe);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return r;
+}
+
+Scene small_builtin_scene(const std::string& name, int width, int height) {
+  Scene s = make_builtin_scene(name);
+  s.width = width;
+  s.height = height;
+  s.finalize();
+  return s;
 }
 
 Image render_scene(const Scene& scene, const RenderRequest& req) {

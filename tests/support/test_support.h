@@ -67,6 +67,9 @@ struct RenderRequest {
   int threads = 0;
   std::vector<std::string> set;  // key=value parameters
 };
+// A built-in scene (builtin:NAME) at the given film size, finalized.
+Scene small_builtin_scene(const std::string& name, int width, int height);
+
 // Renders an already finalized scene and returns the per-pixel mean image.
 Image render_scene(const Scene& scene, const RenderRequest& request);
 

@@ -74,11 +74,14 @@ void write_file_atomic(const fs::path& path, const std::string& bytes) {
   if (path.has_parent_path() && !fs::exists(path.parent_path()))
     fail("cannot write '{}': folder '{}' does not exist", path.string(), path.parent_path().string());
   fs::path tmp = temp_sibling(path);
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f) fail("cannot write '{}': cannot create a file there", path.string());
-    f.write(bytes.data(), std::streamsize(bytes.size()));
-    if (!f) fail("cannot write '{}': write failed", path.string());
+  std::ofstream f(tmp, std::ios::binary);
+  if (!f) fail("cannot write '{}': cannot create a file there", path.string());
+  f.write(bytes.data(), std::streamsize(bytes.size()));
+  f.close();  // buffered bytes reach the disk here: the write can still fail
+  if (!f) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    fail("cannot write '{}': write failed", path.string());
   }
   commit(tmp, path);
 }
@@ -113,11 +116,16 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
     std::vector<uint8_t> px(image.pixel_count() * 3);
     for (size_t i = 0; i < image.pixel_count(); ++i)
       for (int c = 0; c < 3; ++c) px[3 * i + c] = to_srgb8(image[i][c], scale);
-    if (!stbi_write_png(tmp.c_str(), image.width(), image.height(), 3, px.data(), image.width() * 3)) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      fail("cannot write '{}'", path.string());
-    }
+    // Encoded in memory: stbi_write_png ignores errors of its own file writes.
+    std::string png;
+    auto append = [](void* context, void* data, int size) {
+      static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
+    };
+    if (!stbi_write_png_to_func(append, &png, image.width(), image.height(), 3, px.data(),
+                                image.width() * 3))
+      fail("cannot write '{}': PNG encoding failed", path.string());
+    write_file_atomic(path, png);
+    return;
   } else {
     fail("cannot write '{}': unknown image extension '{}' (use .exr or .png)", path.string(), ext);
   }

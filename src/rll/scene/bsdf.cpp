@@ -7,8 +7,9 @@ namespace rll {
 // --- GGX ----------------------------------------------------------------------------------------
 
 float Ggx::d(const Vec3& wm) const {
+  // Microfacets face outwards: a normal below the surface has zero density.
+  if (wm.z <= 0) return 0;
   float cos2 = wm.z * wm.z;
-  if (cos2 <= 0) return 0;
   float tan2 = (1 - cos2) / cos2;
   float a2 = alpha * alpha;
   float e = 1 + tan2 / a2;

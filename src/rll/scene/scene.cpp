@@ -95,6 +95,8 @@ void add_sky_dome(Scene& scene, const SkyDome& sky, const Vec3& center, float ra
   // roughly proportional to sin(theta_i), giving triangles of similar solid angle.
   const int n = sky.full_sphere ? sky.triangles / 2 : sky.triangles;  // per hemisphere
   int rings = std::max(1, int(std::round(std::sqrt(n / kPi))));
+  // Rings have at least 3 vertices each, so R rings make at least 6R - 3 triangles.
+  rings = std::max(1, std::min(rings, (n + 3) / 6));
   std::vector<int> s(rings + 1, 0);
   auto total = [&] {
     int t = 0;
@@ -255,7 +257,13 @@ void Scene::finalize() {
       fail("{}: a light has a non-finite or negative parameter", source);
 
   bounds = Bounds3{};
-  for (const auto& p : mesh.positions) bounds.expand(p);
+  if (sky_triangle_count == 0) {
+    for (const auto& p : mesh.positions) bounds.expand(p);
+  } else {  // finalized before: the dome is in the mesh but stays out of the bounds
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+      if (t < sky_first_triangle || t >= sky_first_triangle + sky_triangle_count)
+        for (uint32_t v : mesh.triangles[t]) bounds.expand(mesh.positions[v]);
+  }
   for (const auto& l : lights)
     if (l.type == LightType::Point) bounds.expand(l.p0);
   if (bounds.empty()) bounds.expand(Vec3(0));
