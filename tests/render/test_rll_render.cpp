@@ -11,13 +11,7 @@ using namespace rll::test;
 
 namespace {
 
-Scene room(int w, int h) {
-  Scene s = make_builtin_scene("cornell-boxes-room");
-  s.width = w;
-  s.height = h;
-  s.finalize();
-  return s;
-}
+Scene room(int w, int h) { return small_builtin_scene("cornell-boxes-room", w, h); }
 
 void expect_same_mean(const Scene& scene, IntegratorType type, int spp, const std::string& a, const std::string& b,
                       std::vector<std::string> set_b = {}) {

@@ -10,13 +10,7 @@ using namespace rll::test;
 
 namespace {
 
-Scene small_scene(const std::string& name, int w, int h) {
-  Scene s = make_builtin_scene(name);
-  s.width = w;
-  s.height = h;
-  s.finalize();
-  return s;
-}
+Scene small_scene(const std::string& name, int w, int h) { return small_builtin_scene(name, w, h); }
 
 void expect_samplers_agree(const Scene& scene, IntegratorType type, int spp, const std::vector<std::string>& samplers) {
   RenderRequest base;

@@ -58,13 +58,13 @@ SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, c
   }
 }
 
-float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, const Vec3& p, const Vec3& n) {
-  if (light >= tree.light_count()) return 0;
-  const LightTreeNode& top = tree.node(from);
-  if (light < top.begin || light >= top.end) return 0;
+namespace {
+// Probability that a descent from `from` reaches `to`, a node under it: the steps' products
+// top-down from 1, exactly as tree_descend multiplies them.
+float path_pmf(const LightTree& tree, uint32_t from, uint32_t to, const Vec3& p, const Vec3& n) {
   uint32_t path[kMaxDepth];
   int k = 0;
-  for (uint32_t i = tree.leaf_of(light); i != from; i = tree.node(i).parent) path[k++] = i;
+  for (uint32_t i = to; i != from; i = tree.node(i).parent) path[k++] = i;
   float pmf = 1;
   uint32_t parent = from;
   while (k-- > 0) {
@@ -76,21 +76,17 @@ float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, con
   }
   return pmf;
 }
+}  // namespace
+
+float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, const Vec3& p, const Vec3& n) {
+  if (light >= tree.light_count()) return 0;
+  const LightTreeNode& top = tree.node(from);
+  if (light < top.begin || light >= top.end) return 0;
+  return path_pmf(tree, from, tree.leaf_of(light), p, n);
+}
 
 float tree_reach_pmf(const LightTree& tree, uint32_t node, const Vec3& p, const Vec3& n) {
-  uint32_t path[kMaxDepth];
-  int k = 0;
-  for (uint32_t i = node; i != LightTree::kRoot; i = tree.node(i).parent) path[k++] = i;
-  float pmf = 1;
-  uint32_t parent = LightTree::kRoot;
-  while (k-- > 0) {
-    const LightTreeNode& nd = tree.node(parent);
-    float p0 = first_child_probability(tree, nd, p, n);
-    pmf *= path[k] == nd.child ? p0 : 1 - p0;
-    if (pmf == 0) return 0;
-    parent = path[k];
-  }
-  return pmf;
+  return path_pmf(tree, LightTree::kRoot, node, p, n);
 }
 
 TreeLightSampler::TreeLightSampler(const Scene& scene) : m_tree(*scene.light_tree) {

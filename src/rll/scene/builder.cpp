@@ -121,7 +121,8 @@ void SceneBuilder::wall_with_holes(int axis, float offset, float u0, float v0, f
     }
 }
 
-void SceneBuilder::sphere(const Vec3& center, float radius, int subdivisions, uint32_t material, bool inward) {
+void SceneBuilder::sphere(const Vec3& center, float radius, int subdivisions, uint32_t material, bool inward,
+                          bool smooth) {
   const float t = (1 + std::sqrt(5.0f)) / 2;
   std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
                          {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
@@ -151,7 +152,7 @@ void SceneBuilder::sphere(const Vec3& center, float radius, int subdivisions, ui
   }
   Mesh& mesh = m_scene.mesh;
   uint32_t base = uint32_t(mesh.positions.size());
-  for (const auto& p : v) vertex(center + p * radius, inward ? -p : p);
+  for (const auto& p : v) vertex(center + p * radius, smooth ? (inward ? -p : p) : Vec3(0));
   for (auto tri : f) {
     if (inward) std::swap(tri[1], tri[2]);
     mesh.triangles.push_back({base + tri[0], base + tri[1], base + tri[2]});

@@ -26,8 +26,10 @@ class SceneBuilder {
   };
   void wall_with_holes(int axis, float offset, float u0, float v0, float u1, float v1,
                        const std::vector<Hole>& holes, bool normal_positive, uint32_t material);
-  // Icosphere (subdivided icosahedron) with outward or inward faces and smooth normals.
-  void sphere(const Vec3& center, float radius, int subdivisions, uint32_t material, bool inward = false);
+  // Icosphere (subdivided icosahedron) with outward or inward faces, with smooth shading
+  // normals or flat facets.
+  void sphere(const Vec3& center, float radius, int subdivisions, uint32_t material, bool inward = false,
+              bool smooth = true);
 
  private:
   uint32_t vertex(const Vec3& p, const Vec3& n = Vec3(0));
