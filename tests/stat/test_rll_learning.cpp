@@ -9,6 +9,7 @@
 
 #include "rll/accel/accel.h"
 #include "rll/core/params.h"
+#include "rll/core/rng.h"
 #include "rll/core/parallel.h"
 #include "rll/lights/rll_sampler.h"
 #include "rll/lights/tree_sampler.h"
@@ -183,4 +184,99 @@ TEST(RllLearning, TrainedStateIsStronglyNonUniform) {
   // sky through a window spread theirs over many clusters, rightly).
   EXPECT_GT(p75, 10.0f);
   EXPECT_GT(p90, 25.0f);
+}
+
+TEST(RllLearning, FullTableEvictsAndStaysCorrect) {
+  // A table far too small for the scene: inserts fail (those points sample like the tree),
+  // least recently used cells are evicted between passes, and the sampler stays a valid,
+  // unbiased distribution throughout.
+  Scene scene = make_builtin_scene("cornell-boxes-room");
+  scene.width = 32;
+  scene.height = 24;
+  scene.finalize();
+  Accel accel(scene.mesh);
+  Params params = Params::parse({"rll.capacity=40"});
+  RllLightSampler rll(scene, rll_settings_from(params));
+  train_sampler(scene, accel, rll, 12);
+  nlohmann::json d = rll.describe();
+  EXPECT_GT(d["evictions"].get<uint64_t>(), 0u);
+  EXPECT_GT(d["failed_inserts"].get<uint64_t>(), 0u);
+  EXPECT_LE(d["cells_used"].get<uint32_t>(), 40u);
+  auto contexts = make_contexts(scene, accel, 60, 5);
+  Pcg32 rng(8);
+  for (auto& c : contexts) {
+    rll.prepare(c, rng.next_float());
+    double sum = 0;
+    for (uint32_t l = 0; l < scene.lights.size(); ++l) sum += rll.pmf(c, l);
+    EXPECT_NEAR(sum, 1.0, 1e-4);
+    for (int k = 0; k < 16; ++k) {
+      SampledLight s = rll.sample(c, rng.next_double());
+      ASSERT_GT(s.pmf, 0);
+      EXPECT_EQ(s.pmf, rll.pmf(c, s.light));
+    }
+  }
+  RenderRequest a;
+  a.sampler = "tree";
+  a.integrator.type = IntegratorType::Direct;
+  a.spp = 512;
+  RenderRequest b = a;
+  b.sampler = "rll";
+  b.set = {"rll.capacity=40"};
+  b.seed = 7;
+  Estimate diff = difference_estimate(render_scene(scene, b), render_scene(scene, a));
+  EXPECT_LE(std::abs(diff.mean), 4.5 * diff.stderr_) << diff.mean << " +- " << diff.stderr_;
+}
+
+TEST(RllLearning, AnimatedFramesRefitAndStayUnbiased) {
+  // Lamps switch off and slide between frames: the light tree is refitted (bounds and power of
+  // every node consistent with its children and lights), and rll, carrying what it learnt
+  // from the earlier frames, renders the last frame as the tree sampler does.
+  Scene scene = make_builtin_scene("cornell-boxes-dynamic");
+  scene.width = 32;
+  scene.height = 24;
+  scene.finalize();
+  Accel accel(scene.mesh);
+  Params params;
+  RllLightSampler rll(scene, rll_settings_from(params));
+  for (int f = 0; f < 3; ++f) {
+    scene.animate(scene, f);
+    scene.refresh_lights_from_mesh();
+    accel.update_vertices(scene.mesh);
+    rll.lights_changed(scene);
+    train_sampler(scene, accel, rll, 8);
+  }
+  const LightTree& tree = *scene.light_tree;
+  size_t dark = 0;
+  for (uint32_t l = 0; l < scene.lights.size(); ++l) {
+    const LightBounds& leaf = tree.node(tree.leaf_of(l)).bounds;
+    EXPECT_EQ(leaf.power, light_bounds(scene.lights[l]).power);
+    dark += leaf.power == 0;
+  }
+  EXPECT_GT(dark, 0u) << "frame 2 must have switched some lamps off";
+  for (uint32_t i = 0; i < tree.node_count(); ++i) {
+    const LightTreeNode& n = tree.node(i);
+    if (n.is_leaf()) continue;
+    const LightBounds &a = tree.node(n.child).bounds, &b = tree.node(n.child + 1).bounds;
+    EXPECT_NEAR(n.bounds.power, a.power + b.power, 1e-3f * (a.power + b.power) + 1e-6f);
+    if (!n.bounds.infinite) {
+      EXPECT_TRUE(n.bounds.box.contains(a.box.lo) && n.bounds.box.contains(a.box.hi));
+      EXPECT_TRUE(n.bounds.box.contains(b.box.lo) && n.bounds.box.contains(b.box.hi));
+    }
+  }
+  // The last frame, rendered with the sampler that learnt the earlier ones, against tree.
+  IntegratorSettings is;
+  is.type = IntegratorType::Direct;
+  Integrator with_rll(scene, accel, rll, is);
+  Film film(scene.width, scene.height);
+  RenderSettings rs;
+  rs.spp = 512;
+  rs.seed = 5;
+  rs.frame = 2;
+  render(scene, with_rll, rll, film, rs);
+  RenderRequest t;
+  t.sampler = "tree";
+  t.integrator = is;
+  t.spp = 512;
+  Estimate diff = difference_estimate(film.resolve(), render_scene(scene, t));
+  EXPECT_LE(std::abs(diff.mean), 4.5 * diff.stderr_) << diff.mean << " +- " << diff.stderr_;
 }

@@ -17,8 +17,6 @@ struct Camera {
   Ray generate_ray(float x, float y) const;
   // Angle subtended by one pixel at the image centre (radians), for ray footprints.
   float pixel_angle() const { return m_pixel_angle; }
-  // Solid angle of the pixel hit by direction d, relative: cos^3 falloff of a flat film.
-  float pixel_cos(const Vec3& d) const { return dot(d, m_forward); }
 
  private:
   Vec3 m_forward, m_right, m_up;
