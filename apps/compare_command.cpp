@@ -241,6 +241,19 @@ LogLogPlot convergence_plot(const Scene& scene, const std::vector<SamplerSummary
   return plot;
 }
 
+// The samplers' first-repeat images and then the reference in one row, 4 white pixels apart:
+// a picture to publish. Its PNG is tone-mapped with the report's exposure.
+Image side_by_side(const std::vector<const Image*>& images) {
+  constexpr int kGap = 4;
+  const int w = images.front()->width(), h = images.front()->height();
+  const int n = int(images.size());
+  Image row(n * w + (n - 1) * kGap, h, Rgb(1e6f));
+  for (int i = 0; i < n; ++i)
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) row.at(i * (w + kGap) + x, y) = images[size_t(i)]->at(x, y);
+  return row;
+}
+
 std::string integrator_text(const IntegratorSettings& is) {
   return fmt::format("{} (max depth {}, {})", integrator_name(is.type), is.max_depth,
                      strategy_name(is.strategy));
@@ -297,6 +310,10 @@ void run(const CompareOptions& o) {
     write_image(out / (file_stem(name) + ".error.exr"),
                 grey_image(errors[name], scene.width, scene.height));
   }
+  std::vector<const Image*> row;
+  for (const auto& name : samplers) row.push_back(&first_images.at(name));
+  row.push_back(&ref.image);
+  write_image(out / "side-by-side.png", side_by_side(row), o.exposure);
   LogLogPlot plot = convergence_plot(scene, summaries);
   write_file_atomic(out / "convergence.png", plot_png(plot));
 
@@ -356,7 +373,9 @@ void run(const CompareOptions& o) {
     sj["error_image"] = file_stem(s.name) + ".error.exr";
     j["samplers"].push_back(std::move(sj));
   }
-  j["files"] = {{"report", "report.html"}, {"convergence", "convergence.png"}};
+  j["files"] = {{"report", "report.html"},
+                {"convergence", "convergence.png"},
+                {"side_by_side", "side-by-side.png"}};
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 
   fmt::print("{}", format_table(summaries));
@@ -371,7 +390,7 @@ void add_compare_command(CLI::App& app) {
       app.add_subcommand("compare",
                          "Render a scene with several light samplers under the same budget and "
                          "measure them against a reference (writes summary.json, report.html, "
-                         "convergence.png and every image as .exr into --out)");
+                         "convergence.png, side-by-side.png and every image as .exr into --out)");
   add_session_options(cmd, o->session);
   std::string all;
   for (const auto& n : light_sampler_names()) all += (all.empty() ? "" : ",") + n;

@@ -110,6 +110,21 @@ TEST_F(CompareOutput, ConvergencePlotIsAPng) {
   EXPECT_GT(h, 200);
 }
 
+TEST_F(CompareOutput, SideBySideHoldsEverySamplerAndTheReference) {
+  // Two samplers and the reference, 4 pixels apart, each tone-mapped from its .exr.
+  int w = 0, h = 0, n = 0;
+  ASSERT_TRUE(stbi_info(out("side-by-side.png").c_str(), &w, &h, &n));
+  const Image ref = read_image(out("reference.exr"));
+  EXPECT_EQ(w, 3 * ref.width() + 2 * 4);
+  EXPECT_EQ(h, ref.height());
+  const Image row = read_image(out("side-by-side.png"));
+  const Image uniform = read_image(out("uniform.exr"));
+  const int x = ref.width() / 2, y = ref.height() / 2;
+  EXPECT_NEAR(row.at(ref.width() + 4 + x, y).y, std::min(uniform.at(x, y).y, 1.0f), 0.02f);
+  EXPECT_NEAR(row.at(2 * (ref.width() + 4) + x, y).y, std::min(ref.at(x, y).y, 1.0f), 0.02f);
+  EXPECT_EQ(summary()["files"]["side_by_side"], "side-by-side.png");
+}
+
 TEST_F(CompareOutput, PrintsTheTableAndTheReportPath) {
   EXPECT_TRUE(contains(s_result->output, "relMSE median [min, max]")) << s_result->output;
   EXPECT_TRUE(contains(s_result->output, "efficiency"));

@@ -16,8 +16,8 @@ class Accel;
 struct OracleSettings {
   int discovery_spp = 4;      // camera paths per pixel used to find cells and their points
   int bounces = 2;            // diffuse bounces followed during discovery (0: camera only)
-  int points_per_cell = 8;    // shading points kept per cell (reservoir)
-  int rays = 4;               // shadow rays per point and cluster
+  int points_per_cell = 32;   // shading points kept per cell (reservoir)
+  int rays = 8;               // shadow rays per point and cluster
   int refine = 32;            // greedy split-collapse steps per cell on the estimates
   uint64_t seed = 77;
 };
