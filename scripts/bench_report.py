@@ -111,6 +111,21 @@ for scene, integ, s, b, r in goal_rows:
     if integ == "direct" and scene != "cornell-boxes-dynamic":
         ratio = rate(s, b["rll"]) / rate(s, b["power"])
         goal(f"{scene}, direct: rll samples per second >= 85% of power's", f"{100 * ratio:.0f}%", ratio >= 0.85)
+for scene in ("cornell-boxes-room", "arch-interior"):
+    for integ in integrators:
+        s = load(f"{scene}-{integ}-spp")
+        if not s:
+            continue
+        r = {x["name"]: med(x, "relmse") for x in s["samplers"]}
+        best_other = min(v for n, v in r.items() if n != "oracle")
+        goal(f"{scene}, {integ}: oracle's equal-spp relMSE <= every other sampler's",
+             f"{r['oracle']:.3g} against {best_other:.3g}", r["oracle"] <= best_other)
+for sampler in ("power", "rll"):
+    p = os.path.join(out_dir, f"rays-{sampler}.txt")
+    m = re.search(r"ratio\s+([0-9.]+) %", open(p).read()) if os.path.exists(p) else None
+    if m:
+        goal(f"renderer keeps >= 50% of the bare Embree ray rate (path, cornell-boxes-room, {sampler})",
+             f"{m.group(1)}%", float(m.group(1)) >= 50)
 mem = max((med(b["rll"], "seconds") and b["rll"]["memory"]["sampler_bytes"]) for _, _, _, b, _ in goal_rows)
 goal("rll's default memory <= 512 MiB", f"{mem / 2**20:.0f} MiB (sampler state)", mem <= 512 * 2**20)
 P("")
