@@ -26,6 +26,15 @@ def med(s, key):
     return s[key]["median"]
 
 
+def comparisons(suffix="", only=None):
+    """(scene, integrator, summary) of every comparison that ran, in table order."""
+    for scene in only or scenes:
+        for integ in integrators:
+            s = load(f"{scene}-{integ}{suffix}")
+            if s:
+                yield scene, integ, s
+
+
 def by_name(summary):
     return {s["name"]: s for s in summary["samplers"]}
 
@@ -71,18 +80,14 @@ P("relMSE at equal time (lower is better), median of the repeats, and rll's rati
 P("| scene | integrator | power | tree | rll | oracle | rll / power | rll / tree |")
 P("|---|---|---|---|---|---|---|---|")
 goal_rows = []
-for scene in scenes:
-    for integ in integrators:
-        s = load(f"{scene}-{integ}")
-        if not s:
-            continue
-        b = by_name(s)
-        r = {n: med(b[n], "relmse") if n in b else None for n in order}
-        rp = r["rll"] / r["power"] if r["rll"] and r["power"] else None
-        rt = r["rll"] / r["tree"] if r["rll"] and r["tree"] else None
-        P(f"| {scene} | {integ} | {fmt(r['power'])} | {fmt(r['tree'])} | {fmt(r['rll'])} | {fmt(r['oracle'])} | "
-          f"{fmt(rp)} | {fmt(rt)} |")
-        goal_rows.append((scene, integ, s, b, r))
+for scene, integ, s in comparisons():
+    b = by_name(s)
+    r = {n: med(b[n], "relmse") if n in b else None for n in order}
+    rp = r["rll"] / r["power"] if r["rll"] and r["power"] else None
+    rt = r["rll"] / r["tree"] if r["rll"] and r["tree"] else None
+    P(f"| {scene} | {integ} | {fmt(r['power'])} | {fmt(r['tree'])} | {fmt(r['rll'])} | {fmt(r['oracle'])} | "
+      f"{fmt(rp)} | {fmt(rt)} |")
+    goal_rows.append((scene, integ, s, b, r))
 P("")
 
 P("## Goals\n")
@@ -111,15 +116,11 @@ for scene, integ, s, b, r in goal_rows:
     if integ == "direct" and scene != "cornell-boxes-dynamic":
         ratio = rate(s, b["rll"]) / rate(s, b["power"])
         goal(f"{scene}, direct: rll samples per second >= 85% of power's", f"{100 * ratio:.0f}%", ratio >= 0.85)
-for scene in ("cornell-boxes-room", "arch-interior"):
-    for integ in integrators:
-        s = load(f"{scene}-{integ}-spp")
-        if not s:
-            continue
-        r = {x["name"]: med(x, "relmse") for x in s["samplers"]}
-        best_other = min(v for n, v in r.items() if n != "oracle")
-        goal(f"{scene}, {integ}: oracle's equal-spp relMSE <= every other sampler's",
-             f"{r['oracle']:.3g} against {best_other:.3g}", r["oracle"] <= best_other)
+for scene, integ, s in comparisons("-spp", ("cornell-boxes-room", "arch-interior")):
+    r = {x["name"]: med(x, "relmse") for x in s["samplers"]}
+    best_other = min(v for n, v in r.items() if n != "oracle")
+    goal(f"{scene}, {integ}: oracle's equal-spp relMSE <= every other sampler's",
+         f"{r['oracle']:.3g} against {best_other:.3g}", r["oracle"] <= best_other)
 for sampler in ("power", "rll"):
     p = os.path.join(out_dir, f"rays-{sampler}.txt")
     m = re.search(r"ratio\s+([0-9.]+) %", open(p).read()) if os.path.exists(p) else None
@@ -156,15 +157,10 @@ P("## Equal samples per pixel\n")
 P("The gap to the oracle (exhaustive per-cell knowledge, precomputed outside the timing) at equal spp:\n")
 P("| scene | integrator | spp | oracle | rll | tree | power | rll / oracle |")
 P("|---|---|---|---|---|---|---|---|")
-for scene in scenes:
-    for integ in integrators:
-        s = load(f"{scene}-{integ}-spp")
-        if not s:
-            continue
-        b = by_name(s)
-        r = {n: med(b[n], "relmse") for n in b}
-        P(f"| {scene} | {integ} | {s['budget']['spp']} | {fmt(r.get('oracle'))} | {fmt(r.get('rll'))} | "
-          f"{fmt(r.get('tree'))} | {fmt(r.get('power'))} | {fmt(r['rll'] / r['oracle'])} |")
+for scene, integ, s in comparisons("-spp"):
+    r = {x["name"]: med(x, "relmse") for x in s["samplers"]}
+    P(f"| {scene} | {integ} | {s['budget']['spp']} | {fmt(r.get('oracle'))} | {fmt(r.get('rll'))} | "
+      f"{fmt(r.get('tree'))} | {fmt(r.get('power'))} | {fmt(r['rll'] / r['oracle'])} |")
 P("")
 
 # --- Ablation ----------------------------------------------------------------------------------

@@ -156,10 +156,7 @@ TEST(RllLearning, SameStateWhateverTheThreadCount) {
 TEST(RllLearning, TrainedStateIsStronglyNonUniform) {
   // The sampler statistics (test_light_samplers.cpp) run on this trained state; they mean
   // something for RLL only if the cells' cluster distributions are far from uniform.
-  Scene scene = make_builtin_scene("cornell-boxes-room");
-  scene.width = 48;
-  scene.height = 36;
-  scene.finalize();
+  Scene scene = small_builtin_scene("cornell-boxes-room", 48, 36);
   Accel accel(scene.mesh);
   Params params;
   RllLightSampler rll(scene, rll_settings_from(params));
@@ -190,10 +187,7 @@ TEST(RllLearning, FullTableEvictsAndStaysCorrect) {
   // A table far too small for the scene: inserts fail (those points sample like the tree),
   // least recently used cells are evicted between passes, and the sampler stays a valid,
   // unbiased distribution throughout.
-  Scene scene = make_builtin_scene("cornell-boxes-room");
-  scene.width = 32;
-  scene.height = 24;
-  scene.finalize();
+  Scene scene = small_builtin_scene("cornell-boxes-room", 32, 24);
   Accel accel(scene.mesh);
   Params params = Params::parse({"rll.capacity=40"});
   RllLightSampler rll(scene, rll_settings_from(params));
@@ -231,10 +225,7 @@ TEST(RllLearning, AnimatedFramesRefitAndStayUnbiased) {
   // Lamps switch off and slide between frames: the light tree is refitted (bounds and power of
   // every node consistent with its children and lights), and rll, carrying what it learnt
   // from the earlier frames, renders the last frame as the tree sampler does.
-  Scene scene = make_builtin_scene("cornell-boxes-dynamic");
-  scene.width = 32;
-  scene.height = 24;
-  scene.finalize();
+  Scene scene = small_builtin_scene("cornell-boxes-dynamic", 32, 24);
   Accel accel(scene.mesh);
   Params params;
   RllLightSampler rll(scene, rll_settings_from(params));
