@@ -10,15 +10,22 @@ namespace fs = std::filesystem;
 
 void add_session_options(CLI::App* cmd, SessionSettings& s) {
   cmd->add_option("scene", s.scene,
-                  "Scene: a .json, .obj, .gltf, .glb, .ply or .pbrt file, or builtin:NAME (see `rll scenes`)")
+                  "Scene: a .json, .obj, .gltf, .glb, .ply or .pbrt file, or builtin:NAME (see "
+                  "`rll scenes`)")
       ->required();
   cmd->add_option("--integrator", s.integrator,
-                  "Light transport: direct (next-event estimation) or path")
+                  "Light transport: direct (light and BSDF sampling by MIS at the first hit; --set "
+                  "direct.strategy=nee for light sampling only) or path")
       ->capture_default_str();
   cmd->add_option("--max-depth", s.max_depth,
                   "Path length limit (path integrator; 1 = direct light)")
       ->capture_default_str();
   cmd->add_option("--res", s.resolution, "Film resolution WIDTHxHEIGHT (default: the scene's)");
+  cmd->add_option(
+         "--points", s.points,
+         "Sample points: sobol (Owen-scrambled Sobol', per pixel) or independent (a hash per "
+         "pixel, sample and dimension); both reproducible for any --threads")
+      ->capture_default_str();
   cmd->add_option("--set", s.set,
                   "Sampler/integrator parameter key=value (repeatable), e.g. rll.alpha=0.1")
       ->take_all();

@@ -187,8 +187,10 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
     Film earlier(session.scene().width, session.scene().height);
     RenderSettings rf = rs;
     rf.frame = f;
-    session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1), !o.quiet, interrupt_flag());
-    if (interrupted()) fail("interrupted during the run of '{}'; the summary and report were not written", name);
+    session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1), !o.quiet,
+                   interrupt_flag());
+    if (interrupted())
+      fail("interrupted during the run of '{}'; the summary and report were not written", name);
   }
   session.set_frame(o.frames - 1, sampler.get());
   rs.frame = o.frames - 1;
@@ -359,6 +361,7 @@ void run(const CompareOptions& o) {
   j["frames"] = o.frames;
   j["repeats"] = o.repeats;
   j["seed"] = o.seed;
+  j["points"] = point_set_name(session.points());
   j["pass_spp"] = {{"first", o.pass_spp}, {"max", o.max_pass_spp}};
   j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
   j["set"] = o.session.set;
@@ -401,9 +404,10 @@ void add_compare_command(CLI::App& app) {
   auto* time = cmd->add_option("--time", o->time, "Equal time: seconds per run");
   auto* spp = cmd->add_option("--spp", o->spp, "Equal samples: samples per pixel per run");
   time->excludes(spp);
-  cmd->add_option("--frames", o->frames,
-                  "Frames per run (animated scenes): each frame gets the budget, learning carries over, "
-                  "the last frame is measured")
+  cmd->add_option(
+         "--frames", o->frames,
+         "Frames per run (animated scenes): each frame gets the budget, learning carries over, "
+         "the last frame is measured")
       ->capture_default_str();
   cmd->add_option("--repeats", o->repeats, "Runs per sampler; reported as median and range")
       ->capture_default_str();

@@ -7,8 +7,8 @@
 #include "commands.h"
 #include "rll/accel/accel.h"
 #include "rll/core/error.h"
-#include "rll/core/params.h"
 #include "rll/core/parallel.h"
+#include "rll/core/params.h"
 #include "rll/core/sysinfo.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/render/progress.h"
@@ -36,7 +36,8 @@ struct RenderOptions {
 };
 
 std::string default_output(const std::string& scene) {
-  std::string stem = scene.rfind("builtin:", 0) == 0 ? scene.substr(8) : fs::path(scene).stem().string();
+  std::string stem =
+      scene.rfind("builtin:", 0) == 0 ? scene.substr(8) : fs::path(scene).stem().string();
   return "out/" + stem + ".png";
 }
 
@@ -58,7 +59,8 @@ void run(const RenderOptions& o) {
   if (o.pass_spp < 1) fail("--pass-spp must be at least 1");
   if (o.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
   Params::parse(o.session.set);
-  fs::path output = o.output.empty() ? fs::path(default_output(o.session.scene)) : fs::path(o.output);
+  fs::path output =
+      o.output.empty() ? fs::path(default_output(o.session.scene)) : fs::path(o.output);
   prepare_output(output, "-o", {".exr", ".png"});
   if (!o.stats.empty()) prepare_output(o.stats, "--stats", {".json"});
 
@@ -81,14 +83,18 @@ void run(const RenderOptions& o) {
     session.set_frame(f, sampler.get());
     rs.frame = f;
     Film film(scene.width, scene.height);
-    std::string label = frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
+    std::string label =
+        frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
     RenderProgress p = session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag());
     fs::path out = frame_path(output, f, frames);
     write_image(out, film.resolve(), o.exposure);
     if (p.cancelled) fmt::print(stderr, "rll: interrupted after {} spp; ", p.spp_done);
-    fmt::print(stderr, "wrote {} ({} spp, {})\n", out.string(), p.spp_done, format_duration(p.seconds));
-    if (p.nonfinite) fmt::print(stderr, "rll: warning: {} non-finite samples were dropped\n", p.nonfinite);
-    frame_stats.push_back({{"frame", f}, {"spp", p.spp_done}, {"seconds", p.seconds}, {"output", out.string()}});
+    fmt::print(stderr, "wrote {} ({} spp, {})\n", out.string(), p.spp_done,
+               format_duration(p.seconds));
+    if (p.nonfinite)
+      fmt::print(stderr, "rll: warning: {} non-finite samples were dropped\n", p.nonfinite);
+    frame_stats.push_back(
+        {{"frame", f}, {"spp", p.spp_done}, {"seconds", p.seconds}, {"output", out.string()}});
     total.seconds += p.seconds;
     total.samples += p.samples;
     total.rays += p.rays;
@@ -101,7 +107,8 @@ void run(const RenderOptions& o) {
     nlohmann::json j;
     j["scene"] = o.session.scene;
     j["resolution"] = {scene.width, scene.height};
-    j["integrator"] = {{"name", integrator_name(is.type)}, {"max_depth", is.max_depth},
+    j["integrator"] = {{"name", integrator_name(is.type)},
+                       {"max_depth", is.max_depth},
                        {"strategy", strategy_name(is.strategy)}};
     j["sampler"] = sampler->describe();
     j["spp"] = total.spp_done;
@@ -109,13 +116,16 @@ void run(const RenderOptions& o) {
     j["seconds"] = total.seconds;
     j["samples"] = total.samples;
     j["samples_per_second"] = total.seconds > 0 ? total.samples / total.seconds : 0.0;
-    j["rays"] = {{"camera", total.rays.camera}, {"bounce", total.rays.bounce}, {"shadow", total.rays.shadow},
+    j["rays"] = {{"camera", total.rays.camera},
+                 {"bounce", total.rays.bounce},
+                 {"shadow", total.rays.shadow},
                  {"total", total.rays.total()}};
     j["rays_per_second"] = total.seconds > 0 ? total.rays.total() / total.seconds : 0.0;
     j["lights"] = scene.lights.size();
     j["triangles"] = scene.mesh.triangle_count();
     j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
     j["seed"] = o.seed;
+    j["points"] = point_set_name(session.points());
     j["interrupted"] = total.cancelled;
     j["nonfinite_samples"] = total.nonfinite;
     j["memory"] = {{"peak_rss_bytes", peak_rss_bytes()}};
@@ -129,23 +139,32 @@ void add_render_command(CLI::App& app) {
   auto o = std::make_shared<RenderOptions>();
   auto* cmd = app.add_subcommand("render", "Render a scene to an image");
   add_session_options(cmd, o->session);
-  cmd->add_option("--sampler", o->sampler, fmt::format("Light sampler: {}", fmt::join(light_sampler_names(), ", ")))
+  cmd->add_option("--sampler", o->sampler,
+                  fmt::format("Light sampler: {}", fmt::join(light_sampler_names(), ", ")))
       ->capture_default_str();
-  cmd->add_option("--spp", o->spp, "Samples per pixel (an upper limit when --time is given)")->capture_default_str();
-  cmd->add_option("--time", o->time, "Time budget in seconds; stops at whichever of --spp and --time comes first");
-  cmd->add_option("--seed", o->seed, "Random seed; the same seed gives the same image with any --threads")
+  cmd->add_option("--spp", o->spp, "Samples per pixel (an upper limit when --time is given)")
+      ->capture_default_str();
+  cmd->add_option("--time", o->time,
+                  "Time budget in seconds; stops at whichever of --spp and --time comes first");
+  cmd->add_option("--seed", o->seed,
+                  "Random seed; the same seed gives the same image with any --threads")
       ->capture_default_str();
   cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
   cmd->add_option("--pass-spp", o->pass_spp,
-                  "Samples per pixel of the first passes; passes double every two passes up to --max-pass-spp "
+                  "Samples per pixel of the first passes; passes double every two passes up to "
+                  "--max-pass-spp "
                   "(learning samplers adapt between passes)")
       ->capture_default_str();
-  cmd->add_option("--max-pass-spp", o->max_pass_spp, "Largest pass, in samples per pixel")->capture_default_str();
-  cmd->add_option("--frames", o->frames, "Frames to render; animated scenes move between frames, learning persists")
+  cmd->add_option("--max-pass-spp", o->max_pass_spp, "Largest pass, in samples per pixel")
       ->capture_default_str();
-  cmd->add_option("-o,--output", o->output, "Output image, .exr (linear) or .png (sRGB); default out/<scene>.png");
+  cmd->add_option("--frames", o->frames,
+                  "Frames to render; animated scenes move between frames, learning persists")
+      ->capture_default_str();
+  cmd->add_option("-o,--output", o->output,
+                  "Output image, .exr (linear) or .png (sRGB); default out/<scene>.png");
   cmd->add_option("--stats", o->stats, "Write render statistics to this JSON file");
-  cmd->add_option("--exposure", o->exposure, "Exposure in stops for .png output")->capture_default_str();
+  cmd->add_option("--exposure", o->exposure, "Exposure in stops for .png output")
+      ->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "No progress bar");
   cmd->callback([o] { run(*o); });
 }

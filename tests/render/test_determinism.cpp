@@ -22,13 +22,14 @@ size_t differing_pixels(const Image& a, const Image& b) {
   return n;
 }
 
-class Determinism : public ::testing::TestWithParam<std::string> {};
+class Determinism : public ::testing::TestWithParam<std::tuple<std::string, PointSet>> {};
 
 TEST_P(Determinism, SameSeedSameImageWithAnyThreadCount) {
   // 40 x 36: not a multiple of the 16-pixel tiles.
   const Scene scene = small_builtin_scene("cornell-box", 40, 36);
   RenderRequest r;
-  r.sampler = GetParam();
+  r.sampler = std::get<0>(GetParam());
+  r.points = std::get<1>(GetParam());
   r.integrator.max_depth = 4;  // Russian roulette from depth 3 draws numbers too
   r.spp = 8;
   r.seed = 12345;
@@ -45,7 +46,11 @@ TEST_P(Determinism, SameSeedSameImageWithAnyThreadCount) {
   EXPECT_GT(differing_pixels(one, other), one.pixel_count() * 9 / 10);
 }
 
-INSTANTIATE_TEST_SUITE_P(Samplers, Determinism, ::testing::Values("power", "uniform"),
-                         [](const auto& info) { return info.param; });
+INSTANTIATE_TEST_SUITE_P(Samplers, Determinism,
+                         ::testing::Combine(::testing::Values("power", "uniform"),
+                                            ::testing::Values(PointSet::Sobol, PointSet::Independent)),
+                         [](const auto& info) {
+                           return std::get<0>(info.param) + "_" + point_set_name(std::get<1>(info.param));
+                         });
 
 }  // namespace

@@ -1,7 +1,9 @@
 // The four checks every light sampler passes, on several built-in scenes and several hundred
 // shading contexts each: sample's pmf equals pmf(); pmfs sum to one; sampled counts fit N*pmf
 // (chi-square, pooled small bins, Sidak-corrected); each light that can contribute has pmf > 0;
-// and with stratified u each light is drawn N*pmf times to within one draw.
+// and with stratified u each light is drawn N*pmf times to within one draw. Every check runs
+// twice: learning samplers trained, and u drawn, with Owen-scrambled Sobol' points and with
+// independent points (the renderer's two point sets).
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
@@ -33,18 +35,21 @@ const std::vector<SamplerCase>& sampler_cases() {
       {"rll_tree", "rll", {}},
       {"rll_power", "rll", {"rll.within=power"}},
       {"rll_uniform", "rll", {"rll.within=uniform"}},
-      {"rll_paper", "rll", {"rll.within=uniform", "rll.reward=fullpdf", "rll.prior=power", "rll.split_by=power"}},
+      {"rll_paper",
+       "rll",
+       {"rll.within=uniform", "rll.reward=fullpdf", "rll.prior=power", "rll.split_by=power"}},
   };
   return cases;
 }
 
-const std::vector<std::string> kScenes = {"cornell-box", "cornell-boxes-room", "arch-interior", "many-lights-open",
-                                          "furnace"};
+const std::vector<std::string> kScenes = {"cornell-box", "cornell-boxes-room", "arch-interior",
+                                          "many-lights-open", "furnace"};
 constexpr int kContexts = 200;
 constexpr int kChiContexts = 6;
 constexpr int kChiSamples = 20000;
 // Every chi-square test of this file, for the Sidak correction.
-const int kChiTests = int(kScenes.size()) * 16 * kChiContexts;
+const int kChiTests = int(kScenes.size()) * 16 * kChiContexts * 2;
+using Param = std::tuple<size_t, std::string, PointSet>;
 
 struct Fixture {
   Scene scene;
@@ -53,7 +58,7 @@ struct Fixture {
   std::vector<LightContext> contexts;
 };
 
-Fixture make_fixture(const SamplerCase& c, const std::string& scene_name) {
+Fixture make_fixture(const SamplerCase& c, const std::string& scene_name, PointSet points) {
   Fixture f;
   f.scene = make_builtin_scene(scene_name);
   f.scene.width = 48;
@@ -63,33 +68,40 @@ Fixture make_fixture(const SamplerCase& c, const std::string& scene_name) {
   Params params = Params::parse(c.set);
   f.sampler = make_light_sampler(c.sampler, f.scene, params);
   params.check_all_used();
-  train_sampler(f.scene, *f.accel, *f.sampler, 32);  // RLL: strongly non-uniform cells (test_rll_learning)
+  train_sampler(f.scene, *f.accel, *f.sampler, 32,
+                points);  // RLL: strongly non-uniform cells (test_rll_learning)
   f.contexts = make_contexts(f.scene, *f.accel, kContexts, 1234);
-  for (size_t i = 0; i < f.contexts.size(); ++i) f.sampler->prepare(f.contexts[i], float(i % 97) / 97.0f);
+  for (size_t i = 0; i < f.contexts.size(); ++i)
+    f.sampler->prepare(f.contexts[i], float(i % 97) / 97.0f);
   return f;
 }
 
-class LightSamplerStat : public ::testing::TestWithParam<std::tuple<size_t, std::string>> {
+class LightSamplerStat : public ::testing::TestWithParam<Param> {
  protected:
-  static std::map<std::pair<size_t, std::string>, Fixture>& cache() {
-    static std::map<std::pair<size_t, std::string>, Fixture> c;
+  static std::map<Param, Fixture>& cache() {
+    static std::map<Param, Fixture> c;
     return c;
   }
   Fixture& fixture() {
-    auto key = std::make_pair(std::get<0>(GetParam()), std::get<1>(GetParam()));
+    const Param& key = GetParam();
     auto it = cache().find(key);
     if (it == cache().end())
-      it = cache().emplace(key, make_fixture(sampler_cases()[key.first], key.second)).first;
+      it = cache()
+               .emplace(key, make_fixture(sampler_cases()[std::get<0>(key)], std::get<1>(key),
+                                          std::get<2>(key)))
+               .first;
     return it->second;
   }
+  PointSet points() const { return std::get<2>(GetParam()); }
 };
 
 TEST_P(LightSamplerStat, SampledPmfEqualsPmf) {
   Fixture& f = fixture();
-  Pcg32 rng(99);
-  for (const auto& ctx : f.contexts)
+  for (size_t c = 0; c < f.contexts.size(); ++c)
     for (int k = 0; k < 64; ++k) {
-      SampledLight s = f.sampler->sample(ctx, rng.next_double());
+      const LightContext& ctx = f.contexts[c];
+      SampledLight s =
+          f.sampler->sample(ctx, SampleStream(99, c, uint64_t(k), points()).next_double());
       ASSERT_GT(s.pmf, 0) << "sample returned no light";
       ASSERT_EQ(s.pmf, f.sampler->pmf(ctx, s.light)) << "light " << s.light;
     }
@@ -121,11 +133,14 @@ TEST_P(LightSamplerStat, ChiSquareOfSampledCounts) {
   Fixture& f = fixture();
   const size_t n = f.scene.lights.size();
   const double alpha = sidak_alpha(0.01, kChiTests);
-  Pcg32 rng(4242);
   for (int c = 0; c < kChiContexts; ++c) {
     const LightContext& ctx = f.contexts[size_t(c) * f.contexts.size() / kChiContexts];
     std::vector<double> observed(n, 0), expected(n, 0);
-    for (int k = 0; k < kChiSamples; ++k) observed[f.sampler->sample(ctx, rng.next_double()).light] += 1;
+    for (int k = 0; k < kChiSamples; ++k)
+      observed[f.sampler
+                   ->sample(ctx,
+                            SampleStream(4242, uint64_t(c), uint64_t(k), points()).next_double())
+                   .light] += 1;
     for (uint32_t l = 0; l < n; ++l) expected[l] = double(kChiSamples) * f.sampler->pmf(ctx, l);
     ChiSquareResult r = chi_square(observed, expected);
     EXPECT_FALSE(r.sample_in_zero_bin) << "context " << c << ": a light with pmf 0 was sampled";
@@ -152,13 +167,15 @@ TEST_P(LightSamplerStat, StratifiedCountsMatchPmf) {
         continue;
       }
       double expected = p * N;
-      ASSERT_NEAR(count[l] / expected, 1.0, 2.0 / expected + 1e-4) << "context " << c << " light " << l;
+      ASSERT_NEAR(count[l] / expected, 1.0, 2.0 / expected + 1e-4)
+          << "context " << c << " light " << l;
     }
   }
 }
 
-std::string case_name(const ::testing::TestParamInfo<std::tuple<size_t, std::string>>& info) {
-  std::string s = sampler_cases()[std::get<0>(info.param)].label + "_" + std::get<1>(info.param);
+std::string case_name(const ::testing::TestParamInfo<Param>& info) {
+  std::string s = sampler_cases()[std::get<0>(info.param)].label + "_" + std::get<1>(info.param) +
+                  "_" + point_set_name(std::get<2>(info.param));
   for (auto& ch : s)
     if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
   return s;
@@ -166,7 +183,9 @@ std::string case_name(const ::testing::TestParamInfo<std::tuple<size_t, std::str
 
 INSTANTIATE_TEST_SUITE_P(AllSamplers, LightSamplerStat,
                          ::testing::Combine(::testing::Range<size_t>(0, sampler_cases().size()),
-                                            ::testing::ValuesIn(kScenes)),
+                                            ::testing::ValuesIn(kScenes),
+                                            ::testing::Values(PointSet::Sobol,
+                                                              PointSet::Independent)),
                          case_name);
 
 }  // namespace

@@ -7,13 +7,15 @@
 
 namespace rll::test {
 
-std::vector<LightContext> make_contexts(const Scene& scene, const Accel& accel, int count, uint64_t seed) {
+std::vector<LightContext> make_contexts(const Scene& scene, const Accel& accel, int count,
+                                        uint64_t seed) {
   Pcg32 rng(seed);
   std::vector<LightContext> out;
   const Mesh& mesh = scene.mesh;
   std::vector<float> areas(mesh.triangle_count(), 0.0f);
   for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
-    bool sky = t >= scene.sky_first_triangle && t < scene.sky_first_triangle + scene.sky_triangle_count;
+    bool sky =
+        t >= scene.sky_first_triangle && t < scene.sky_first_triangle + scene.sky_triangle_count;
     if (!sky) areas[t] = mesh.area(t);
   }
   DiscreteDistribution by_area(areas);
@@ -24,7 +26,8 @@ std::vector<LightContext> make_contexts(const Scene& scene, const Accel& accel, 
     Hit hit;
     if (!accel.intersect(ray, hit)) continue;
     SurfaceHit sh = make_surface_hit(scene, hit);
-    bool sky = sh.tri >= scene.sky_first_triangle && sh.tri < scene.sky_first_triangle + scene.sky_triangle_count;
+    bool sky = sh.tri >= scene.sky_first_triangle &&
+               sh.tri < scene.sky_first_triangle + scene.sky_triangle_count;
     if (sky) continue;
     LightContext c;
     c.p = sh.p;
@@ -54,7 +57,8 @@ bool light_can_contribute(const Light& l, const Vec3& p, const Vec3& n) {
   // Some point of the triangle (probe points) above the surface and facing p.
   Pcg32 rng(17);
   for (int i = 0; i < 64; ++i) {
-    Vec2 b = i < 3 ? Vec2{i == 0 ? 1.f : 0.f, i == 1 ? 1.f : 0.f} : sample_uniform_triangle({rng.next_float(), rng.next_float()});
+    Vec2 b = i < 3 ? Vec2{i == 0 ? 1.f : 0.f, i == 1 ? 1.f : 0.f}
+                   : sample_uniform_triangle({rng.next_float(), rng.next_float()});
     Vec3 y = l.p0 * b.x + l.p1 * b.y + l.p2 * (1 - b.x - b.y);
     Vec3 d = y - p;
     if (dot(d, n) > 1e-6f * length(d) && !is_black(emitted_radiance(l, -normalize(d)))) return true;
@@ -62,7 +66,8 @@ bool light_can_contribute(const Light& l, const Vec3& p, const Vec3& n) {
   return false;
 }
 
-void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler, int passes) {
+void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler, int passes,
+                   PointSet points) {
   if (!sampler.learns()) return;
   IntegratorSettings is;
   is.type = IntegratorType::Path;
@@ -72,6 +77,7 @@ void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler
   RenderSettings rs;
   rs.spp = passes;
   rs.pass_spp = 1;
+  rs.points = points;
   render(scene, integrator, sampler, film, rs);
 }
 

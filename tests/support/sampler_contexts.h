@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "rll/accel/accel.h"
+#include "rll/core/rng.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/scene/scene.h"
 
@@ -11,13 +12,15 @@ namespace rll::test {
 
 // `count` contexts: half on surfaces seen through random pixels, half uniformly by area over
 // the non-sky triangles with a random side. Deterministic for a given seed.
-std::vector<LightContext> make_contexts(const Scene& scene, const Accel& accel, int count, uint64_t seed);
+std::vector<LightContext> make_contexts(const Scene& scene, const Accel& accel, int count,
+                                        uint64_t seed);
 
 // True if some point of the light emits towards p and lies above the surface (n), ignoring
 // occlusion: then a sampler must give the light a nonzero probability.
 bool light_can_contribute(const Light& light, const Vec3& p, const Vec3& n);
 
 // Trains a learning sampler by rendering `passes` passes of the scene (no-op otherwise).
-void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler, int passes);
+void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler, int passes,
+                   PointSet points = PointSet::Sobol);
 
 }  // namespace rll::test

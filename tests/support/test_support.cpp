@@ -11,8 +11,8 @@
 #include <stdexcept>
 
 #include "rll/accel/accel.h"
-#include "rll/core/params.h"
 #include "rll/core/parallel.h"
+#include "rll/core/params.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/render/render.h"
 #include "rll/scene/builtin.h"
@@ -43,8 +43,10 @@ namespace {
 std::string shell_quote(const std::string& s) {
   std::string q = "'";
   for (char c : s) {
-    if (c == '\'') q += "'\\''";
-    else q += c;
+    if (c == '\'')
+      q += "'\\''";
+    else
+      q += c;
   }
   return q + "'";
 }
@@ -84,6 +86,7 @@ Image render_scene(const Scene& scene, const RenderRequest& req) {
   RenderSettings rs;
   rs.spp = req.spp;
   rs.seed = req.seed;
+  rs.points = req.points;
   render(scene, integrator, *sampler, film, rs);
   return film.resolve();
 }

@@ -11,6 +11,7 @@
 #include "rll/core/error.h"
 
 #include "rll/core/image.h"
+#include "rll/core/rng.h"
 #include "rll/render/integrator.h"
 #include "rll/scene/scene.h"
 
@@ -66,6 +67,7 @@ struct RenderRequest {
   uint64_t seed = 1;
   int threads = 0;
   std::vector<std::string> set;  // key=value parameters
+  PointSet points = PointSet::Sobol;
 };
 // A built-in scene (builtin:NAME) at the given film size, finalized.
 Scene small_builtin_scene(const std::string& name, int width, int height);

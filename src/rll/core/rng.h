@@ -3,8 +3,10 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "rll/core/math.h"
+#include "rll/core/sobol.h"
 
 namespace rll {
 
@@ -43,36 +45,65 @@ class Pcg32 {
     return double(((hi << 32) | lo) >> 11) * 0x1p-53;
   }
   // Uniform integer in [0, bound).
-  uint32_t next_bounded(uint32_t bound) {
-    return uint32_t((uint64_t(next_u32()) * bound) >> 32);
-  }
+  uint32_t next_bounded(uint32_t bound) { return uint32_t((uint64_t(next_u32()) * bound) >> 32); }
 
  private:
   uint64_t m_state, m_inc;
 };
 
-// Per-sample stream: a key from (seed, pixel, sample index) and a dimension counter.
+// Which points a render's samples use. `Sobol`: Owen-scrambled Sobol' points, scrambled per
+// pixel, so that each pixel's samples are stratified in every dimension and in the 2D pairs the
+// integrator draws together; `Independent`: a hash per (pixel, sample, dimension).
+enum class PointSet : uint8_t { Sobol, Independent };
+const char* point_set_name(PointSet p);
+// Parses "sobol" or "independent"; throws rll::Error naming `flag` otherwise.
+PointSet parse_point_set(const std::string& name, const char* flag);
+
+// Per-sample stream: the numbers of sample `sample_index` of one pixel, dimension by dimension.
+// Every value is a function of (seed, pixel, sample index, dimension) only.
 class SampleStream {
  public:
   SampleStream() = default;
-  SampleStream(uint64_t seed, uint64_t pixel, uint64_t sample_index)
+  SampleStream(uint64_t seed, uint64_t pixel, uint64_t sample_index,
+               PointSet points = PointSet::Independent)
       : m_key(mix64(mix64(seed ^ 0x9e3779b97f4a7c15ull) ^ mix64(pixel + 0x632be59bd9b4e019ull) ^
                     mix64(sample_index * 0xd1342543de82ef95ull + 1))),
-        m_dim(0) {}
-  float next() { return u32_to_unit_float(uint32_t(mix64(m_key + 0x9e3779b97f4a7c15ull * ++m_dim) >> 32)); }
-  // 53 random bits, for choices among millions of items (a float has only 24).
+        m_scramble(
+            mix64(mix64(seed ^ 0x2545f4914f6cdd1dull) ^ mix64(pixel + 0x632be59bd9b4e019ull))),
+        m_index(uint32_t(sample_index)),
+        m_dim(0),
+        m_points(points) {}
+  float next() { return u32_to_unit_float(next_u32()); }
+  // 53 bits, for choices among millions of items (a float has only 24): with Sobol' points the
+  // 32 stratified bits are topped up with independent low bits.
   double next_double() {
-    return double(mix64(m_key + 0x9e3779b97f4a7c15ull * ++m_dim) >> 11) * 0x1p-53;
+    if (m_points == PointSet::Independent)
+      return double(mix64(m_key + 0x9e3779b97f4a7c15ull * ++m_dim) >> 11) * 0x1p-53;
+    const uint64_t hi = next_u32();
+    const uint64_t lo = mix64(m_key ^ (0xa0761d6478bd642full * m_dim)) >> 43;  // 21 bits
+    return double((hi << 21) | lo) * 0x1p-53;
   }
   Vec2 next2() {
     float a = next();
     return {a, next()};
   }
   uint32_t dimension() const { return m_dim; }
+  // Continue at dimension `dim`: integrators give each decision a fixed dimension, so that a
+  // decision uses the same Sobol' dimension in every sample whatever the path did before.
+  void seek(uint32_t dim) { m_dim = dim; }
+  PointSet points() const { return m_points; }
 
  private:
-  uint64_t m_key = 0;
+  uint32_t next_u32() {
+    if (m_points == PointSet::Independent)
+      return uint32_t(mix64(m_key + 0x9e3779b97f4a7c15ull * ++m_dim) >> 32);
+    return scrambled_sobol_u32(m_index, m_dim++, m_scramble);
+  }
+  uint64_t m_key = 0;       // (seed, pixel, sample): independent numbers
+  uint64_t m_scramble = 0;  // (seed, pixel): the pixel's Owen scramble
+  uint32_t m_index = 0;
   uint32_t m_dim = 0;
+  PointSet m_points = PointSet::Independent;
 };
 
 }  // namespace rll

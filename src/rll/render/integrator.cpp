@@ -8,31 +8,43 @@
 
 namespace rll {
 
-const char* integrator_name(IntegratorType t) { return t == IntegratorType::Direct ? "direct" : "path"; }
+const char* integrator_name(IntegratorType t) {
+  return t == IntegratorType::Direct ? "direct" : "path";
+}
 
 const char* strategy_name(LightStrategy s) {
   switch (s) {
-    case LightStrategy::Mis: return "mis";
-    case LightStrategy::Nee: return "nee";
-    case LightStrategy::Bsdf: return "bsdf";
+    case LightStrategy::Mis:
+      return "mis";
+    case LightStrategy::Nee:
+      return "nee";
+    case LightStrategy::Bsdf:
+      return "bsdf";
   }
   return "?";
 }
 
-IntegratorSettings make_integrator_settings(const std::string& name, int max_depth, const Params& params) {
+IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
+                                            const Params& params) {
   IntegratorSettings s;
-  if (name == "direct") s.type = IntegratorType::Direct;
-  else if (name == "path") s.type = IntegratorType::Path;
-  else fail("unknown integrator '{}' (valid: direct, path)", name);
+  if (name == "direct")
+    s.type = IntegratorType::Direct;
+  else if (name == "path")
+    s.type = IntegratorType::Path;
+  else
+    fail("unknown integrator '{}' (valid: direct, path)", name);
   if (max_depth < 1) fail("--max-depth must be at least 1 (got {})", max_depth);
   s.max_depth = max_depth;
+  // Both integrators combine light and BSDF sampling by MIS unless told otherwise; `direct` is
+  // `path` at depth 1 (as pbrt-v4's path integrator with maxdepth 1).
+  const std::string key = s.type == IntegratorType::Path ? "path.strategy" : "direct.strategy";
+  std::string st = params.get_choice(key, "mis", {"mis", "nee", "bsdf"});
+  s.strategy = st == "mis"   ? LightStrategy::Mis
+               : st == "nee" ? LightStrategy::Nee
+                             : LightStrategy::Bsdf;
   if (s.type == IntegratorType::Path) {
-    std::string st = params.get_choice("path.strategy", "mis", {"mis", "nee", "bsdf"});
-    s.strategy = st == "mis" ? LightStrategy::Mis : st == "nee" ? LightStrategy::Nee : LightStrategy::Bsdf;
     s.rr_depth = int(params.get_int("path.rr_depth", 3));
     if (s.rr_depth < 1) fail("--set path.rr_depth must be at least 1");
-  } else {
-    s.strategy = LightStrategy::Nee;
   }
   return s;
 }
@@ -42,15 +54,41 @@ struct Integrator::Vertex {
   LightContext ctx;
   Vec3 wo;
   const Bsdf* bsdf;
+  int depth;
 };
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sampler,
                        IntegratorSettings settings)
-    : m_scene(scene), m_accel(accel), m_sampler(sampler), m_settings(settings), m_learns(sampler.learns()) {}
+    : m_scene(scene),
+      m_accel(accel),
+      m_sampler(sampler),
+      m_settings(settings),
+      m_learns(sampler.learns()) {}
 
+namespace {
+// Each decision of a path has a fixed dimension of the sample: the pixel position takes the first
+// two, then every vertex the next kVertexDims, so that with Sobol' points a decision is stratified
+// over a pixel's samples whatever the earlier vertices drew (pairs drawn together are adjacent).
+constexpr uint32_t kCameraDims = 2;
+enum VertexDim : uint32_t {
+  kLightChoice,
+  kLightPoint,
+  kLightPoint2,
+  kLobe,
+  kDirection,
+  kDirection2,
+  kPrepare,
+  kRoulette,
+  kVertexDims
+};
+inline void seek(SampleStream& stream, int depth, VertexDim d) {
+  stream.seek(kCameraDims + uint32_t(depth) * kVertexDims + d);
+}
+}  // namespace
 
-Rgb Integrator::sample_light(const Vertex& v, SampleStream& stream, RayCounters& counters, bool mis) const {
-  // Draw the random numbers unconditionally so that every sample uses the same dimensions.
+Rgb Integrator::sample_light(const Vertex& v, SampleStream& stream, RayCounters& counters,
+                             bool mis) const {
+  seek(stream, v.depth, kLightChoice);
   double u_light = stream.next_double();
   Vec2 u_pos = stream.next2();
   SampledLight sl = m_sampler.sample(v.ctx, u_light);
@@ -84,9 +122,9 @@ Rgb Integrator::sample_light(const Vertex& v, SampleStream& stream, RayCounters&
 }
 
 Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters) const {
-  const bool direct = m_settings.type == IntegratorType::Direct;
   const LightStrategy strategy = m_settings.strategy;
-  const int max_depth = direct ? 1 : m_settings.max_depth;
+  const bool mis = strategy == LightStrategy::Mis;
+  const int max_depth = m_settings.type == IntegratorType::Direct ? 1 : m_settings.max_depth;
   const float pixel_angle = m_scene.camera.pixel_angle();
 
   Rgb L(0), beta(1);
@@ -107,7 +145,7 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
       if (!is_black(Le)) {
         if (depth == 0 || strategy == LightStrategy::Bsdf) {
           L += beta * Le;
-        } else if (strategy == LightStrategy::Mis) {
+        } else if (mis) {
           float light_pdf = m_sampler.pmf(prev_ctx, uint32_t(sh.light)) *
                             pdf_li(m_scene.lights[sh.light], prev_ctx.p, sh.p);
           L += beta * Le * power_heuristic(prev_bsdf_pdf, light_pdf);
@@ -129,12 +167,16 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     v.ctx.footprint = footprint;
     v.wo = wo;
     v.bsdf = &bsdf;
+    v.depth = depth;
+    seek(stream, depth, kPrepare);
     m_sampler.prepare(v.ctx, stream.next());
 
-    if (strategy != LightStrategy::Bsdf)
-      L += beta * sample_light(v, stream, counters, !direct && strategy == LightStrategy::Mis);
-    if (direct) break;
+    if (strategy != LightStrategy::Bsdf) L += beta * sample_light(v, stream, counters, mis);
+    // The last vertex's BSDF ray only finds emission, which light sampling alone leaves out.
+    const bool last = depth + 1 >= max_depth;
+    if (last && strategy == LightStrategy::Nee) break;
 
+    seek(stream, depth, kLobe);
     float u_lobe = stream.next();
     Vec2 u_dir = stream.next2();
     BsdfSample bs;
@@ -144,8 +186,9 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     prev_ctx = v.ctx;
     prev_bsdf_pdf = bs.pdf;
     prev_dir_pdf = bs.pdf;
-    if (depth + 1 >= m_settings.rr_depth) {
+    if (!last && depth + 1 >= m_settings.rr_depth) {
       float q = std::max(0.05f, 1 - max_component(beta));
+      seek(stream, depth, kRoulette);
       if (stream.next() < q) break;
       beta /= 1 - q;
     }

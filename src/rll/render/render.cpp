@@ -16,16 +16,18 @@ double seconds_since(Clock::time_point t0) {
 }
 }  // namespace
 
-RenderProgress render(const Scene& scene, const Integrator& integrator, LightSampler& sampler, Film& film,
-                      const RenderSettings& settings, const std::atomic<bool>* cancel,
+RenderProgress render(const Scene& scene, const Integrator& integrator, LightSampler& sampler,
+                      Film& film, const RenderSettings& settings, const std::atomic<bool>* cancel,
                       const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
   if (settings.spp < 1) fail("--spp must be at least 1 (got {})", settings.spp);
   if (settings.pass_spp < 1) fail("pass size must be at least 1 sample per pixel");
   const int max_pass = std::max(settings.pass_spp, settings.max_pass_spp);
-  if (film.width() != scene.width || film.height() != scene.height) fail("film size does not match the scene");
+  if (film.width() != scene.width || film.height() != scene.height)
+    fail("film size does not match the scene");
   const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
   const int tiles_x = (w + ts - 1) / ts, tiles_y = (h + ts - 1) / ts;
-  const uint64_t frame_seed = mix64(settings.seed + 0x51ed270b27f3e5a1ull * uint64_t(settings.frame));
+  const uint64_t frame_seed =
+      mix64(settings.seed + 0x51ed270b27f3e5a1ull * uint64_t(settings.frame));
 
   RenderProgress progress;
   progress.spp_target = settings.spp;
@@ -52,7 +54,7 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
       for (int y = y0; y < std::min(h, y0 + ts); ++y)
         for (int x = x0; x < std::min(w, x0 + ts); ++x)
           for (int s = first; s < first + count; ++s) {
-            SampleStream stream(frame_seed, uint64_t(y) * w + x, uint64_t(s));
+            SampleStream stream(frame_seed, uint64_t(y) * w + x, uint64_t(s), settings.points);
             Vec2 jitter = stream.next2();
             Ray ray = scene.camera.generate_ray(x + jitter.x, y + jitter.y);
             Rgb L = integrator.li(ray, stream, rays);
@@ -85,8 +87,9 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
     }
   }
   progress.seconds = seconds_since(t0);
-  progress.out_of_time = progress.out_of_time ||
-                         (settings.time_limit > 0 && progress.spp_done < settings.spp && !progress.cancelled);
+  progress.out_of_time =
+      progress.out_of_time ||
+      (settings.time_limit > 0 && progress.spp_done < settings.spp && !progress.cancelled);
   return progress;
 }
 

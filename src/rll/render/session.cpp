@@ -23,6 +23,7 @@ LoadOptions parse_resolution(const std::string& res) {
 RenderSession::RenderSession(const SessionSettings& settings)
     : m_settings(settings), m_params(Params::parse(settings.set)) {
   const LoadOptions lo = parse_resolution(settings.resolution);
+  m_points = parse_point_set(settings.points, "--points");
   m_scene = load_scene(settings.scene, lo);
   m_integrator = make_integrator_settings(settings.integrator, settings.max_depth, m_params);
   m_accel = std::make_unique<Accel>(m_scene.mesh);
@@ -64,7 +65,9 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
                                      const AfterPass& after_pass) const {
   Integrator integrator(m_scene, *m_accel, sampler, m_integrator);
   ProgressBar bar(label, show_progress);
-  RenderProgress p = rll::render(m_scene, integrator, sampler, film, settings, cancel,
+  RenderSettings rs = settings;
+  rs.points = m_points;
+  RenderProgress p = rll::render(m_scene, integrator, sampler, film, rs, cancel,
                                  [&](const RenderProgress& pr, const Film& f) {
                                    bar.update(pr);
                                    if (after_pass) after_pass(pr, f);

@@ -24,6 +24,7 @@ struct SessionSettings {
   std::string integrator = "path";
   int max_depth = 5;
   std::vector<std::string> set;  // key=value parameters for samplers and the integrator
+  std::string points = "sobol";  // --points: sobol or independent
 };
 
 // Parses --res WIDTHxHEIGHT (empty: keep the scene's); throws rll::Error naming the flag.
@@ -38,6 +39,7 @@ class RenderSession {
   const Scene& scene() const { return m_scene; }
   Accel& accel() { return *m_accel; }
   const IntegratorSettings& integrator() const { return m_integrator; }
+  PointSet points() const { return m_points; }
   const SessionSettings& settings() const { return m_settings; }
 
   // A fresh sampler (no learnt state) by name, its parameters from --set. A variant may carry
@@ -53,7 +55,8 @@ class RenderSession {
   void set_frame(int frame, LightSampler* sampler);
 
   using AfterPass = std::function<void(const RenderProgress&, const Film&)>;
-  // Renders the current frame into `film` with `sampler`, showing a progress bar labelled
+  // Renders the current frame into `film` with `sampler` (with the session's --points, whatever
+  // settings.points says), showing a progress bar labelled
   // `label` on a terminal when `show_progress`; `after_pass` as in render().
   RenderProgress render(LightSampler& sampler, Film& film, const RenderSettings& settings,
                         const std::string& label, bool show_progress,
@@ -65,6 +68,7 @@ class RenderSession {
   Params m_params;
   Scene m_scene;
   IntegratorSettings m_integrator;
+  PointSet m_points = PointSet::Sobol;
   std::unique_ptr<Accel> m_accel;
 };
 
