@@ -53,6 +53,34 @@ TEST(DiscreteDistribution, SampledIndicesFollowPmf) {
   EXPECT_GE(r.p_value, chi2_alpha()) << describe(r);
 }
 
+// The guide table must not change the inverse-CDF map: over an increasing grid of u the index
+// never decreases and each index takes a share of the grid equal to its pmf (within one cell),
+// even where thousands of tiny weights share one cutpoint interval with a huge one.
+TEST(DiscreteDistribution, GuidedSearchIsTheInverseCdf) {
+  std::vector<float> w(12000, 0.0f);
+  Pcg32 rng(11);
+  for (size_t i = 0; i < w.size(); ++i) w[i] = i % 5 == 0 ? 0.0f : 1e-4f * rng.next_float();
+  w[7000] = 50.0f;  // half of the mass in one entry
+  w[11999] = 1e-6f;
+  DiscreteDistribution d(w);
+  const int n = 4000000;
+  std::vector<double> count(w.size(), 0.0);
+  size_t prev = 0;
+  for (int k = 0; k < n; ++k) {
+    const size_t i = d.sample((k + 0.5) / n);
+    ASSERT_GE(i, prev) << "u " << (k + 0.5) / n;
+    prev = i;
+    count[i] += 1;
+  }
+  for (size_t i = 0; i < w.size(); ++i) {
+    if (w[i] == 0) {
+      ASSERT_EQ(count[i], 0) << i;
+      continue;
+    }
+    ASSERT_NEAR(count[i], d.pmf(i) * n, 1.0 + 1e-3 * d.pmf(i) * n) << i;
+  }
+}
+
 TEST(DiscreteDistribution, ZeroWeightsAreNeverChosen) {
   // Zeros first, last, in runs; u on every cdf boundary and at the ends of [0, 1).
   const std::vector<float> w = {0, 0, 1, 0, 0, 2, 0, 1, 0, 0};

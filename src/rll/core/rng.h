@@ -72,7 +72,9 @@ class SampleStream {
             mix64(mix64(seed ^ 0x2545f4914f6cdd1dull) ^ mix64(pixel + 0x632be59bd9b4e019ull))),
         m_index(uint32_t(sample_index)),
         m_dim(0),
-        m_points(points) {}
+        m_points(points) {
+    if (points == PointSet::Sobol) m_shuffled = sobol_shuffled_index(m_index, 0, m_scramble);
+  }
   float next() { return u32_to_unit_float(next_u32()); }
   // 53 bits, for choices among millions of items (a float has only 24): with Sobol' points the
   // 32 stratified bits are topped up with independent low bits.
@@ -94,14 +96,17 @@ class SampleStream {
   PointSet points() const { return m_points; }
 
  private:
-  uint32_t next_u32() {
+  [[gnu::always_inline]] uint32_t next_u32() {
     if (m_points == PointSet::Independent)
       return uint32_t(mix64(m_key + 0x9e3779b97f4a7c15ull * ++m_dim) >> 32);
-    return scrambled_sobol_u32(m_index, m_dim++, m_scramble);
+    const uint32_t dim = m_dim++;
+    if (dim < kSobolDimensions) return scrambled_sobol_u32_shuffled(m_shuffled, dim, m_scramble);
+    return scrambled_sobol_u32(m_index, dim, m_scramble);
   }
   uint64_t m_key = 0;       // (seed, pixel, sample): independent numbers
   uint64_t m_scramble = 0;  // (seed, pixel): the pixel's Owen scramble
   uint32_t m_index = 0;
+  uint32_t m_shuffled = 0;  // m_index shuffled for the first block of Sobol' dimensions
   uint32_t m_dim = 0;
   PointSet m_points = PointSet::Independent;
 };

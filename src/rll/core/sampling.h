@@ -71,6 +71,7 @@ class DiscreteDistribution {
  private:
   std::vector<float> m_pmf;
   std::vector<double> m_cdf;  // m_cdf[i] = sum of pmf[0..i], last == 1
+  std::vector<uint32_t> m_guide;  // size()+1 cutpoints: first index whose cdf exceeds k/size()
   double m_total = 0;
 };
 

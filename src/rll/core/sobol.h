@@ -1,6 +1,7 @@
 // Owen-scrambled Sobol' points: the low-discrepancy sample values a render draws per pixel.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace rll {
@@ -8,9 +9,23 @@ namespace rll {
 // Dimensions with their own Joe & Kuo (2008) direction numbers; later ones are padded.
 inline constexpr uint32_t kSobolDimensions = 1024;
 
+namespace detail {
+// Per dimension, four tables of 256 entries: the index's bytes' contributions to the point, with
+// the point's bits reversed (the scramble works on reversed values, so that is what it reads).
+const uint32_t* sobol_byte_tables();
+// Coordinate `dim` (< kSobolDimensions) of Sobol' point `index` with its 32 bits reversed.
+inline uint32_t sobol_u32_reversed(uint32_t index, uint32_t dim) {
+  static const uint32_t* const tables = sobol_byte_tables();
+  const uint32_t* t = tables + size_t(dim) * 1024;
+  return t[index & 255] ^ t[256 + ((index >> 8) & 255)] ^ t[512 + ((index >> 16) & 255)] ^ t[768 + (index >> 24)];
+}
+}  // namespace detail
+
 // Coordinate `dim` (< kSobolDimensions) of Sobol' point `index`, as 32-bit fixed point
 // (unscrambled).
 uint32_t sobol_u32(uint32_t index, uint32_t dim);
+// The same from the generator matrix column by column (tests check the tables against it).
+uint32_t sobol_u32_reference(uint32_t index, uint32_t dim);
 
 namespace detail {
 
@@ -69,16 +84,22 @@ inline uint32_t owen_scramble(uint32_t v, uint32_t seed) {
 // `dim` reuses table dimension dim % kSobolDimensions, and each block of kSobolDimensions
 // dimensions shuffles the index by its own nested uniform scramble keyed by (seed, block), so
 // that each padded dimension is still stratified on its own and a block is a Sobol' sequence.
-inline uint32_t scrambled_sobol_u32(uint32_t index, uint32_t dim, uint64_t seed) {
-  const uint32_t block = dim / kSobolDimensions;
-  // The first block is shuffled too (Burley's "shuffled scrambled Sobol'"): value scrambles alone
-  // map point i of every seed to one Sobol' point, flipping its top bit or not, so the sequences
-  // of two pixels correlate by about +-0.75. A nested scramble of the index maps every aligned
-  // block of 2^m indices to another, so each prefix of 2^m points is still a scrambled net.
-  index = detail::owen_scramble_keyed(
-      index, detail::sobol_mix64(seed ^ (0xbb67ae8584caa73bull * (uint64_t(block) + 1))));
+// The index shuffle of a block of kSobolDimensions dimensions (see scrambled_sobol_u32).
+inline uint32_t sobol_shuffled_index(uint32_t index, uint32_t block, uint64_t seed) {
+  return detail::owen_scramble_keyed(index, detail::sobol_mix64(seed ^ (0xbb67ae8584caa73bull * block)));
+}
+// Coordinate `dim` of the point whose index was already shuffled for dim's block.
+inline uint32_t scrambled_sobol_u32_shuffled(uint32_t shuffled_index, uint32_t dim, uint64_t seed) {
   const uint64_t key = detail::sobol_mix64(seed + 0x9e3779b97f4a7c15ull * (uint64_t(dim) + 1));
-  return detail::owen_scramble_keyed(sobol_u32(index, dim % kSobolDimensions), key);
+  return detail::reverse_bits(
+      detail::owen_permute_reversed(detail::sobol_u32_reversed(shuffled_index, dim % kSobolDimensions), key));
+}
+
+inline uint32_t scrambled_sobol_u32(uint32_t index, uint32_t dim, uint64_t seed) {
+  // The shuffle is shared by the whole block, unlike the value scramble, so that the block's
+  // dimensions keep their joint stratification (2D pairs in particular); each block is shuffled
+  // independently.
+  return scrambled_sobol_u32_shuffled(sobol_shuffled_index(index, dim / kSobolDimensions, seed), dim, seed);
 }
 
 // A 32-bit fixed-point coordinate as a float in [0,1): its 24 high bits, so never 1.

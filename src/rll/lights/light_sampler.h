@@ -47,6 +47,9 @@ class LightSampler {
     (void)ctx;
     (void)u;
   }
+  // True if prepare() does anything: the integrator skips the call, and its random number,
+  // for samplers that keep no per-point state.
+  virtual bool prepares() const { return false; }
   // u is uniform in [0,1) with 53 bits: descents over millions of lights need them.
   virtual SampledLight sample(const LightContext& ctx, double u) const = 0;
   // Probability that sample(ctx, .) returns `light`.

@@ -29,6 +29,7 @@ class OracleLightSampler final : public LightSampler {
   OracleLightSampler(const Scene& scene, const Accel& accel, const RllSettings& rll, const OracleSettings& settings);
   std::string name() const override { return "oracle"; }
   void prepare(LightContext& ctx, float u) const override { m_rll->prepare(ctx, u); }
+  bool prepares() const override { return true; }
   SampledLight sample(const LightContext& ctx, double u) const override { return m_rll->sample(ctx, u); }
   float pmf(const LightContext& ctx, uint32_t light) const override { return m_rll->pmf(ctx, light); }
   // Lights moved or switched: the knowledge is computed again (outside render time too).

@@ -40,6 +40,7 @@ class RllLightSampler final : public LightSampler {
   RllLightSampler(const Scene& scene, const RllSettings& settings);
   std::string name() const override { return "rll"; }
   void prepare(LightContext& ctx, float u) const override;
+  bool prepares() const override { return true; }
   SampledLight sample(const LightContext& ctx, double u) const override;
   float pmf(const LightContext& ctx, uint32_t light) const override;
   bool learns() const override { return !m_frozen; }

@@ -63,7 +63,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sam
       m_accel(accel),
       m_sampler(sampler),
       m_settings(settings),
-      m_learns(sampler.learns()) {}
+      m_learns(sampler.learns()),
+      m_prepares(sampler.prepares()) {}
 
 namespace {
 // Each decision of a path has a fixed dimension of the sample: the pixel position takes the first
@@ -137,6 +138,8 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
   for (int depth = 0;; ++depth) {
     Hit hit;
     if (!m_accel.intersect(ray, hit)) break;
+    // Past the last vertex a hit only matters if it is an emitter (MIS of the BSDF ray).
+    if (depth >= max_depth && m_scene.mesh.light[hit.tri] < 0) break;
     SurfaceHit sh = make_surface_hit(m_scene, hit);
     Vec3 wo = -ray.d;
 
@@ -168,8 +171,10 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     v.wo = wo;
     v.bsdf = &bsdf;
     v.depth = depth;
-    seek(stream, depth, kPrepare);
-    m_sampler.prepare(v.ctx, stream.next());
+    if (m_prepares) {
+      seek(stream, depth, kPrepare);
+      m_sampler.prepare(v.ctx, stream.next());
+    }
 
     if (strategy != LightStrategy::Bsdf) L += beta * sample_light(v, stream, counters, mis);
     // The last vertex's BSDF ray only finds emission, which light sampling alone leaves out.

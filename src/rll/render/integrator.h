@@ -59,7 +59,7 @@ class Integrator {
   const Accel& m_accel;
   LightSampler& m_sampler;
   IntegratorSettings m_settings;
-  bool m_learns;
+  bool m_learns, m_prepares;
 };
 
 }  // namespace rll

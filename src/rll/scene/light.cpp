@@ -111,6 +111,22 @@ Vec3 sample_spherical_triangle(const Vec3& a, const Vec3& b, const Vec3& c, Vec2
 
 bool use_spherical(float omega) { return omega > kMinSphericalSolidAngle && omega < kMaxSphericalSolidAngle; }
 
+// The solid angle a triangle light subtends at p where spherical sampling may use it, else 0.
+// A triangle inside a sphere of radius r around its centroid, seen from distance d > r,
+// subtends at most area / (d - r)^2: when that bound is already below the spherical threshold
+// (a sky dome's triangles, far lamps) the exact formula, with its three normalisations and an
+// arctangent, is skipped. The decision is the same as with the exact angle.
+float spherical_solid_angle(const Light& l, const Vec3& p) {
+  const Vec3 c = (l.p0 + l.p1 + l.p2) * (1.0f / 3.0f);
+  const float r2 = std::max({length_sq(l.p0 - c), length_sq(l.p1 - c), length_sq(l.p2 - c)});
+  const float d2 = length_sq(p - c);
+  if (d2 > r2) {
+    const float gap = std::sqrt(d2) - std::sqrt(r2);
+    if (l.area < kMinSphericalSolidAngle * 0.5f * gap * gap) return 0;
+  }
+  return triangle_solid_angle(p, l.p0, l.p1, l.p2);
+}
+
 }  // namespace
 
 LightLiSample sample_li(const Light& l, const Vec3& p, Vec2 u) {
@@ -118,7 +134,7 @@ LightLiSample sample_li(const Light& l, const Vec3& p, Vec2 u) {
   switch (l.type) {
     case LightType::Triangle: {
       if (l.area <= 0) return s;
-      float omega = triangle_solid_angle(p, l.p0, l.p1, l.p2);
+      float omega = spherical_solid_angle(l, p);
       Vec3 y;
       if (use_spherical(omega)) {
         Vec3 w = sample_spherical_triangle(l.p0 - p, l.p1 - p, l.p2 - p, u);
@@ -173,7 +189,7 @@ float pdf_li(const Light& l, const Vec3& p, const Vec3& y) {
   Vec3 d = y - p;
   float d2 = length_sq(d);
   if (!(d2 > 0)) return 0;
-  float omega = triangle_solid_angle(p, l.p0, l.p1, l.p2);
+  float omega = spherical_solid_angle(l, p);
   if (use_spherical(omega)) return 1 / omega;
   float cos_l = std::abs(dot(l.n, d)) / std::sqrt(d2);
   return cos_l > 0 ? d2 / (cos_l * l.area) : 0;
