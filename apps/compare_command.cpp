@@ -213,6 +213,7 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
   run.checkpoints = recorder.checkpoints();
   run.relmse = run.checkpoints.back().relmse;
   run.mse = run.checkpoints.back().mse;
+  run.trimmed_relmse = trimmed_relmse(image, reference);
   run.describe = sampler->describe();
   if (run.describe.is_object() && run.describe.contains("bytes") &&
       run.describe["bytes"].is_number())

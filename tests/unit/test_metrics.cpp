@@ -91,3 +91,22 @@ TEST(Metrics, GreyImage) {
   EXPECT_EQ(g[1].z, 2.0f);
   EXPECT_THROW(grey_image({1.0f}, 2, 1), Error);
 }
+
+namespace {
+// Trimmed relMSE leaves out the worst 0.1% of pixels: one firefly among 2000 pixels decides
+// relMSE but not the trimmed figure, which then equals the relMSE of the remaining pixels.
+TEST(Metrics, TrimmedRelMseDropsTheWorstTenthOfAPercent) {
+  rll::Image ref(50, 30), img(50, 30);  // 1500 pixels: the worst one is left out
+  for (size_t i = 0; i < ref.pixel_count(); ++i) {
+    ref[i] = rll::Rgb(1.0f);
+    img[i] = rll::Rgb(i % 2 ? 1.1f : 0.9f);  // relative squared error 0.01 / 1.01 everywhere
+  }
+  const double base = 0.01 / 1.01;
+  EXPECT_NEAR(rll::trimmed_relmse(img, ref), base, 1e-6);
+  img[777] = rll::Rgb(1000.0f);  // a firefly
+  img[1255] = rll::Rgb(1.5f);    // a moderate outlier: within the 99.9% kept
+  EXPECT_GT(rll::relmse(img, ref), 100 * base);
+  const double kept = (1498 * base + 0.25 / 1.01) / 1499;
+  EXPECT_NEAR(rll::trimmed_relmse(img, ref), kept, 1e-6);
+}
+}  // namespace

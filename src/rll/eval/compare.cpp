@@ -67,13 +67,14 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
       fail("sampler '{}' was not run for the same repeats as '{}'", name, samplers[0]);
     SamplerSummary s;
     s.name = name;
-    std::vector<double> spp, seconds, setup, rel, mse_v, eff, ratio;
+    std::vector<double> spp, seconds, setup, rel, trimmed, mse_v, eff, ratio;
     for (const auto& [repeat, run] : mine) {
       s.runs.push_back(run);
       spp.push_back(run->spp);
       seconds.push_back(run->seconds);
       setup.push_back(run->setup_seconds);
       rel.push_back(run->relmse);
+      trimmed.push_back(run->trimmed_relmse);
       mse_v.push_back(run->mse);
       if (auto e = efficiency(run->relmse, run->seconds)) eff.push_back(*e);
       const double base = first.at(repeat)->relmse;
@@ -87,6 +88,7 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
     s.seconds = spread_of(seconds);
     s.setup_seconds = spread_of(setup);
     s.relmse = spread_of(rel);
+    s.trimmed_relmse = spread_of(trimmed);
     s.mse = spread_of(mse_v);
     s.efficiency = spread_of(eff);
     s.relmse_ratio = spread_of(ratio);
@@ -122,6 +124,7 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
   j["seconds"] = spread_json(s.seconds);
   j["setup_seconds"] = spread_json(s.setup_seconds);
   j["relmse"] = spread_json(s.relmse);
+  j["trimmed_relmse"] = spread_json(s.trimmed_relmse);
   j["mse"] = spread_json(s.mse);
   j["efficiency"] = spread_json(s.efficiency);
   j["relmse_ratio"] = spread_json(s.relmse_ratio);
@@ -138,6 +141,7 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
                     {"seconds", r->seconds},
                     {"setup_seconds", r->setup_seconds},
                     {"relmse", r->relmse},
+                    {"trimmed_relmse", r->trimmed_relmse},
                     {"mse", r->mse},
                     {"checkpoints", std::move(cps)}});
   }
@@ -148,11 +152,12 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
 
 std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSummary>& summaries) {
   std::vector<std::vector<std::string>> rows;
-  rows.push_back({"sampler", "spp", "seconds", "relMSE median [min, max]", "ratio", "efficiency"});
+  rows.push_back(
+      {"sampler", "spp", "seconds", "relMSE median [min, max]", "trimmed relMSE", "ratio", "efficiency"});
   for (const auto& s : summaries) {
     rows.push_back(
         {s.name, fmt::format("{:g}", s.spp.median), fmt::format("{:.2f}", s.seconds.median),
-         with_range(s.relmse, sci),
+         with_range(s.relmse, sci), s.trimmed_relmse.values.empty() ? "-" : sci(s.trimmed_relmse.median),
          s.relmse_ratio.values.empty() ? "-" : fmt::format("{:.3f}", s.relmse_ratio.median),
          s.efficiency.values.empty() ? "-" : fmt::format("{:.4g}", s.efficiency.median)});
   }

@@ -48,6 +48,7 @@ struct RunResult {
   double seconds = 0;        // rendering, learning included
   double setup_seconds = 0;  // making the sampler (e.g. an oracle's estimates), not in `seconds`
   double relmse = 0, mse = 0;
+  double trimmed_relmse = 0;  // of the final image
   std::optional<double> sampler_bytes;  // the sampler's describe()["bytes"], when it reports one
   size_t peak_rss_bytes = 0;            // of the whole process, after this run
   nlohmann::json describe;              // the sampler's describe()
@@ -67,7 +68,7 @@ Spread spread_of(std::vector<double> values);
 
 struct SamplerSummary {
   std::string name;
-  Spread spp, seconds, setup_seconds, relmse, mse, efficiency;
+  Spread spp, seconds, setup_seconds, relmse, trimmed_relmse, mse, efficiency;
   // Per repeat, relMSE over the first sampler's relMSE in the same repeat: ratios taken within
   // one repeat cancel machine noise that hits all samplers of that repeat alike.
   Spread relmse_ratio;
@@ -86,7 +87,7 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
 nlohmann::json sampler_summary_json(const SamplerSummary& s);
 
 // The table printed at the end of a compare: sampler, spp, seconds, relMSE median [min-max],
-// ratio to the first sampler, efficiency.
+// trimmed relMSE, ratio to the first sampler, efficiency.
 std::string format_table(const std::vector<SamplerSummary>& summaries);
 // The same table as rows of cells (header first), for the HTML report.
 std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSummary>& summaries);

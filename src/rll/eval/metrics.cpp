@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "rll/core/error.h"
 
@@ -96,6 +97,20 @@ std::vector<uint8_t> false_colour(const std::vector<float>& values, float lo, fl
     rgb[3 * i + 2] = c.b;
   }
   return rgb;
+}
+
+double trimmed_relmse(const Image& image, const Image& reference) {
+  std::vector<float> map = relative_error_map(image, reference);
+  const size_t drop = size_t(std::floor(double(map.size()) * kTrimmedFraction));
+  const size_t keep = map.size() - drop;
+  if (keep == 0) return 0;
+  // NaN pixels count as the worst, so they are dropped first.
+  for (auto& v : map)
+    if (std::isnan(v)) v = std::numeric_limits<float>::infinity();
+  std::nth_element(map.begin(), map.begin() + ptrdiff_t(keep - 1), map.end());
+  double sum = 0;
+  for (size_t i = 0; i < keep; ++i) sum += map[i];
+  return sum / double(keep);
 }
 
 double quantile(std::vector<float> values, double q) {

@@ -17,6 +17,11 @@ inline constexpr double kRelMseEpsilon = 0.01;
 double mse(const Image& image, const Image& reference);
 // Mean over pixels and channels of (x - ref)^2 / (ref^2 + kRelMseEpsilon).
 double relmse(const Image& image, const Image& reference);
+// The share of pixels trimmed relMSE leaves out: the worst 0.1% by their own relative error.
+inline constexpr double kTrimmedFraction = 0.001;
+// relMSE with the worst kTrimmedFraction of pixels (by their own relative error, the
+// relative_error_map) left out, so that a few fireflies cannot decide a comparison alone.
+double trimmed_relmse(const Image& image, const Image& reference);
 // Per pixel, the mean over channels of (x - ref)^2 / (ref^2 + kRelMseEpsilon): its mean over
 // pixels is relmse(image, reference).
 std::vector<float> relative_error_map(const Image& image, const Image& reference);
