@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
 # `make bench`: the benchmark suite. Equal-time comparisons of every sampler on the paper's
 # scenes (median of 3 interleaved runs), equal-spp runs for the gap to the oracle, the
-# ablation from paper-faithful settings to rll's defaults, the renderer's ray rate against a
-# bare Embree loop and the samplers' per-call costs. Rewrites bench/RESULTS.md; every report
-# stays under out/bench/. Takes about an hour on 2 cores; BENCH_QUICK=1 checks the pipeline in
-# a few minutes (its figures mean nothing).
+# ablation from paper-faithful settings to rll's defaults, the per-sample noise of `tree`
+# against pbrt-v4's figures (seed to seed), the renderer's ray rate against a bare Embree loop
+# and the samplers' per-call costs. The `tree` of rll's first version (commit $V1_COMMIT, its
+# renderer: light sampling only, independent points, a Morton LBVH mixing sky and lamps) is
+# built once under build-v1/ and run beside the current samplers, on the same reference.
+# Rewrites bench/RESULTS.md; every report stays under out/bench/. Takes about 80 minutes on 2
+# cores; BENCH_QUICK=1 checks the pipeline in a few minutes (its figures mean nothing);
+# BENCH_V1=0 skips the first version.
 set -euo pipefail
 build=${1:-build}
 rll="$build/rll"
@@ -16,6 +20,15 @@ else
   res=320x240; seconds=10; repeats=3; ref_direct=2048; ref_path=1024; spp_direct=64; spp_path=32; frames=3
 fi
 samplers=power,tree,rll,oracle
+V1_COMMIT=a3cbdd4
+v1="build-v1/rll"
+if [ "${BENCH_V1:-1}" = 1 ] && [ ! -x "$v1" ]; then
+  echo "bench: building rll's first version ($V1_COMMIT) under build-v1/"
+  rm -rf build-v1/src && mkdir -p build-v1/src
+  git archive "$V1_COMMIT" | tar -x -C build-v1/src
+  cmake -S build-v1/src -B build-v1 -G Ninja -DCMAKE_BUILD_TYPE=Release -DRLL_TESTS=OFF -DRLL_BENCH=OFF > /dev/null
+  cmake --build build-v1 --target rll_cli -j "$(nproc)" > /dev/null
+fi
 # The reference: rendered once per scene and integrator with rll (unbiased, tested against
 # power and tree) and cached under out/cache. Its seed differs from every compared run, so its
 # noise adds the same variance to every sampler's error and favours none; rll is used because,
@@ -27,10 +40,20 @@ run() {  # name, then compare arguments
   echo "bench: $name"
   "$rll" compare "$@" "${common[@]}" --out "$out/$name" > "$out/$name.txt" 2>&1 || { cat "$out/$name.txt"; exit 1; }
 }
+run_v1() {  # name of a finished comparison, then compare arguments: v1's tree on its reference
+  local name=$1; shift
+  [ "${BENCH_V1:-1}" = 1 ] || return 0
+  echo "bench: $name (first version's tree)"
+  "$v1" compare "$@" --samplers tree --res "$res" --repeats "$repeats" --quiet \
+    --reference "$out/$name/reference.exr" --out "$out/$name-v1" > "$out/$name-v1.txt" 2>&1 ||
+    { cat "$out/$name-v1.txt"; exit 1; }
+}
 for scene in cornell-boxes-room arch-interior many-lights-open cornell-boxes-dynamic; do
   f=1; [ $scene = cornell-boxes-dynamic ] && f=$frames
   run "$scene-direct" builtin:$scene --integrator direct --samplers $samplers --time $seconds --frames $f --reference-spp $ref_direct
+  run_v1 "$scene-direct" builtin:$scene --integrator direct --time $seconds --frames $f
   run "$scene-path" builtin:$scene --integrator path --samplers $samplers --time $seconds --frames $f --reference-spp $ref_path
+  run_v1 "$scene-path" builtin:$scene --integrator path --time $seconds --frames $f
   run "$scene-direct-spp" builtin:$scene --integrator direct --samplers oracle,rll,tree,power --spp $spp_direct --frames $f --reference-spp $ref_direct
   run "$scene-path-spp" builtin:$scene --integrator path --samplers oracle,rll,tree,power --spp $spp_path --frames $f --reference-spp $ref_path
 done
@@ -44,6 +67,19 @@ a5=${a4/learning=exponential:/learning=shrinkage:}; a5=${a5/inherit=false/inheri
 ablation="tree,$a0,$a1,$a2,$a3,$a4,$a5,rll"
 for scene in cornell-boxes-room arch-interior; do
   run "ablation-$scene" builtin:$scene --integrator direct --samplers "$ablation" --time $seconds --reference-spp $ref_direct
+done
+# Per-sample noise of `tree`, measured as pbrt-v4's was (shared/PEERS.md): the relMSE of one
+# seed's render against another's, 1024 spp, 160x120, direct lighting; with the renderer's
+# defaults (MIS, Sobol'), with independent points, with light sampling only (v1's renderer) and
+# v1's own binary.
+s2s_spp=1024; [ "${BENCH_QUICK:-0}" = 1 ] && s2s_spp=16
+for scene in cornell-boxes-room arch-interior; do
+  echo "bench: seed to seed, $scene"
+  d="$out/seed-to-seed-$scene"
+  SPP=$s2s_spp scripts/seed_to_seed.sh "$rll" "$scene" tree "$d-default" > "$d-default.txt"
+  SPP=$s2s_spp scripts/seed_to_seed.sh "$rll" "$scene" tree "$d-independent" --points independent > "$d-independent.txt"
+  SPP=$s2s_spp scripts/seed_to_seed.sh "$rll" "$scene" tree "$d-nee" --points independent --set direct.strategy=nee > "$d-nee.txt"
+  if [ "${BENCH_V1:-1}" = 1 ]; then SPP=$s2s_spp scripts/seed_to_seed.sh "$v1" "$scene" tree "$d-v1" > "$d-v1.txt"; fi
 done
 echo "bench: ray rate"
 "$build/bench/rll_bench_rays" builtin:cornell-boxes-room power 4 > "$out/rays-power.txt"

@@ -10,8 +10,8 @@ import sys
 from datetime import date
 
 out_dir, results, settings = sys.argv[1], sys.argv[2], sys.argv[3]
-OWN = ["Headline", "Goals", "Equal time", "Equal samples per pixel", "Ablation", "Renderer ray rate",
-       "Sampler costs", "How these figures were made"]
+OWN = ["Headline", "Goals", "Per-sample noise of tree (seed to seed)", "Equal time", "Equal samples per pixel",
+       "Ablation", "Renderer ray rate", "Sampler costs", "How these figures were made"]
 
 
 def load(name):
@@ -52,6 +52,32 @@ def rate(summary, s):
     return med(s, "spp") * pixels(summary) / med(s, "seconds")
 
 
+def trimmed(s):
+    t = s.get("trimmed_relmse")
+    return t["median"] if isinstance(t, dict) else None
+
+
+def v1_tree(scene, integ):
+    """The first version's tree, run on the same reference (None where it did not run)."""
+    s = load(f"{scene}-{integ}-v1")
+    return s["samplers"][0] if s else None
+
+
+def seed_to_seed(scene, config):
+    p = os.path.join(out_dir, f"seed-to-seed-{scene}-{config}.txt")
+    if not os.path.exists(p):
+        return None
+    text = open(p).read()
+    m = re.search(r"relmse=([0-9.e+-]+)", text)
+    t = re.search(r"trimmed_relmse=([0-9.e+-]+)", text)
+    sec = re.search(r"seconds=([0-9.]+)", text)
+    return {"relmse": float(m.group(1)), "trimmed": float(t.group(1)) if t else None,
+            "seconds": float(sec.group(1))} if m else None
+
+
+PBRT_SEED_TO_SEED = {"cornell-boxes-room": 0.00087, "arch-interior": 0.00015}
+
+
 lines = []
 P = lines.append
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
@@ -76,17 +102,21 @@ order = ["power", "tree", "rll", "oracle"]
 
 # --- Headline and goals ------------------------------------------------------------------------
 P("## Headline\n")
-P("relMSE at equal time (lower is better), median of the repeats, and rll's ratio to the others:\n")
-P("| scene | integrator | power | tree | rll | oracle | rll / power | rll / tree |")
-P("|---|---|---|---|---|---|---|---|")
+P("relMSE at equal time (lower is better), median of the repeats, and rll's ratio to the others. "
+  "`tree (v1)` is the first version's tree in the first version's renderer (light sampling only, "
+  "independent points), run on the same reference: what the ratios of the first RESULTS were "
+  "measured against.\n")
+P("| scene | integrator | power | tree (v1) | tree | rll | oracle | rll / power | rll / tree |")
+P("|---|---|---|---|---|---|---|---|---|")
 goal_rows = []
 for scene, integ, s in comparisons():
     b = by_name(s)
     r = {n: med(b[n], "relmse") if n in b else None for n in order}
+    v1 = v1_tree(scene, integ)
     rp = r["rll"] / r["power"] if r["rll"] and r["power"] else None
     rt = r["rll"] / r["tree"] if r["rll"] and r["tree"] else None
-    P(f"| {scene} | {integ} | {fmt(r['power'])} | {fmt(r['tree'])} | {fmt(r['rll'])} | {fmt(r['oracle'])} | "
-      f"{fmt(rp)} | {fmt(rt)} |")
+    P(f"| {scene} | {integ} | {fmt(r['power'])} | {fmt(med(v1, 'relmse') if v1 else None)} | {fmt(r['tree'])} | "
+      f"{fmt(r['rll'])} | {fmt(r['oracle'])} | {fmt(rp)} | {fmt(rt)} |")
     goal_rows.append((scene, integ, s, b, r))
 P("")
 
@@ -121,6 +151,11 @@ for scene, integ, s in comparisons("-spp", ("cornell-boxes-room", "arch-interior
     best_other = min(v for n, v in r.items() if n != "oracle")
     goal(f"{scene}, {integ}: oracle's equal-spp relMSE <= every other sampler's",
          f"{r['oracle']:.3g} against {best_other:.3g}", r["oracle"] <= best_other)
+for scene, target in PBRT_SEED_TO_SEED.items():
+    x = seed_to_seed(scene, "default")
+    if x:
+        goal(f"{scene}, direct, 1024 spp, 160x120: tree's seed-to-seed relMSE <= pbrt-v4's {target}",
+             f"{x['relmse']:.3g}", x["relmse"] <= target)
 for sampler in ("power", "rll"):
     p = os.path.join(out_dir, f"rays-{sampler}.txt")
     m = re.search(r"ratio\s+([0-9.]+) %", open(p).read()) if os.path.exists(p) else None
@@ -131,6 +166,24 @@ mem = max((med(b["rll"], "seconds") and b["rll"]["memory"]["sampler_bytes"]) for
 goal("rll's default memory <= 512 MiB", f"{mem / 2**20:.0f} MiB (sampler state)", mem <= 512 * 2**20)
 P("")
 
+# --- Seed to seed ------------------------------------------------------------------------------
+P("## Per-sample noise of tree (seed to seed)\n")
+P("The relMSE of a render against another seed's render of the same settings (1024 spp, 160x120, "
+  "direct lighting, `tree`), as pbrt-v4's BVH light sampler was measured in `shared/PEERS.md` "
+  "(pbrt-v4: path integrator with max depth 1, its default Owen-scrambled Sobol' sampler). "
+  "`scripts/seed_to_seed.sh`; seconds are one render's on 2 threads.\n")
+P("| scene | pbrt-v4 | rll v1 (its binary) | light sampling only, independent | MIS, independent | MIS, Sobol' (default) | default: trimmed relMSE | seconds (v1 / default) |")
+P("|---|---|---|---|---|---|---|---|")
+for scene, target in PBRT_SEED_TO_SEED.items():
+    c = {k: seed_to_seed(scene, k) for k in ("v1", "nee", "independent", "default")}
+    if not c["default"]:
+        continue
+    g = lambda k: fmt(c[k]["relmse"]) if c[k] else "—"
+    secs = f"{c["v1"]["seconds"]:.1f} / " if c["v1"] else ""
+    P(f"| {scene} | {target} | {g('v1')} | {g('nee')} | {g('independent')} | **{g('default')}** | "
+      f"{fmt(c['default']['trimmed'])} | {secs}{c["default"]["seconds"]:.1f} |")
+P("")
+
 # --- Full tables -------------------------------------------------------------------------------
 P("## Equal time\n")
 for scene, integ, s, b, r in goal_rows:
@@ -139,17 +192,18 @@ for scene, integ, s, b, r in goal_rows:
     P(f"{budget}, {s['repeats']} repeat(s), {s['resolution'][0]}x{s['resolution'][1]}, "
       f"reference {s['reference'].get('spp', '?')} spp ({s['reference'].get('sampler', '?')})"
       + (f", {s.get('frames', 1)} frames (the last measured)" if s.get("frames", 1) > 1 else "") + ".\n")
-    P("| sampler | spp | samples/s | relMSE median [min, max] | / power | / tree | / oracle | memory |")
-    P("|---|---|---|---|---|---|---|---|")
-    for n in order:
-        if n not in b:
-            continue
-        x = b[n]
+    P("| sampler | spp | samples/s | relMSE median [min, max] | trimmed relMSE | / power | / tree | / oracle | memory |")
+    P("|---|---|---|---|---|---|---|---|---|")
+    v1 = v1_tree(scene, integ)
+    rows = [(n, b[n]) for n in order if n in b]
+    if v1:
+        rows.insert(1, ("tree (v1)", v1))
+    for n, x in rows:
         rel = x["relmse"]
         def ratio(other):
             return fmt(rel["median"] / r[other]) if r.get(other) else "—"
         P(f"| {n} | {med(x, 'spp'):.0f} | {rate(s, x) / 1e6:.2f} M | {fmt(rel['median'])} [{fmt(rel['min'])}, "
-          f"{fmt(rel['max'])}] | {ratio('power')} | {ratio('tree')} | {ratio('oracle')} | "
+          f"{fmt(rel['max'])}] | {fmt(trimmed(x))} | {ratio('power')} | {ratio('tree')} | {ratio('oracle')} | "
           f"{x['memory']['peak_rss_bytes'] / 2**20:.0f} MiB |")
     P("")
 
@@ -229,9 +283,12 @@ if os.path.exists(p):
 
 P("## How these figures were made\n")
 P("`make bench` runs `scripts/bench.sh`: for each scene and integrator one `rll compare` at equal time "
-  "(`--samplers power,tree,rll,oracle --repeats 3`, runs interleaved, starting sampler rotated), one at "
-  "equal spp, and for the ablation one compare of rll variants written `rll:key=value:...`. The exact "
-  "command lines and outputs are in `out/bench/*.txt`.\n")
+  "(`--samplers power,tree,rll,oracle --repeats 3`, runs interleaved, starting sampler rotated), then the "
+  "first version's binary (`build-v1/rll`, built from commit a3cbdd4) on the same reference and budget "
+  "with `--samplers tree` (a separate process, run right after, so its timing shares the machine's state "
+  "less closely than the interleaved runs do), one at equal spp, and for the ablation one compare of rll "
+  "variants written `rll:key=value:...`; the seed-to-seed figures come from `scripts/seed_to_seed.sh`. "
+  "The exact command lines and outputs are in `out/bench/*.txt`.\n")
 
 # Keep the sections this script does not write.
 kept = []

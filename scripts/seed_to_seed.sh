@@ -3,7 +3,8 @@
 # measured against the other (`rll compare --reference`). This is how pbrt-v4's per-sample noise
 # was measured in shared/PEERS.md (1024 spp, 160x120, direct lighting), so the figures compare.
 # Usage: scripts/seed_to_seed.sh RLL SCENE SAMPLER OUT_DIR [extra render/compare flags...]
-# Prints one line: scene, sampler, spp, relMSE, trimmed relMSE if reported, seconds per render.
+# Prints one line: scene, sampler, spp, relMSE, trimmed relMSE (where the binary reports it) and
+# the seconds of one render.
 set -euo pipefail
 rll=$1 scene=$2 sampler=$3 out=$4
 shift 4
@@ -19,5 +20,8 @@ out, scene, sampler, spp = sys.argv[1:5]
 s = json.load(open(f"{out}/compare/summary.json"))["samplers"][0]
 st = json.load(open(f"{out}/seed1.json"))
 val = lambda k: s[k]["median"] if isinstance(s.get(k), dict) else s.get(k)
-print(f"{scene} {sampler} spp={spp} relmse={val('relmse'):.3e} seconds={st['seconds']:.1f}")
+trimmed = val("trimmed_relmse")
+print(f"{scene} {sampler} spp={spp} relmse={val('relmse'):.3e} "
+      + (f"trimmed_relmse={trimmed:.3e} " if trimmed is not None else "")
+      + f"seconds={st['seconds']:.1f}")
 PY
