@@ -179,9 +179,9 @@ for scene, target in PBRT_SEED_TO_SEED.items():
     if not c["default"]:
         continue
     g = lambda k: fmt(c[k]["relmse"]) if c[k] else "—"
-    secs = f"{c["v1"]["seconds"]:.1f} / " if c["v1"] else ""
+    secs = f"{c['v1']['seconds']:.1f} / " if c["v1"] else ""
     P(f"| {scene} | {target} | {g('v1')} | {g('nee')} | {g('independent')} | **{g('default')}** | "
-      f"{fmt(c['default']['trimmed'])} | {secs}{c["default"]["seconds"]:.1f} |")
+      f"{fmt(c['default']['trimmed'])} | {secs}{c['default']['seconds']:.1f} |")
 P("")
 
 # --- Full tables -------------------------------------------------------------------------------
