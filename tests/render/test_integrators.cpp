@@ -95,8 +95,11 @@ TEST(Integrators, DirectEqualsPathDepthOneCornellBox) {
 // A sky dome of 2048 triangles and 42 lamps inside boxes. The visibility-blind power sampler
 // picks a box's own lamp with probability ~1e-5 (the sky's power dwarfs the lamps'), so that
 // NEE alone would see the lamps' light only as rare spikes; the light tree finds the near lamp.
+// 512 spp: with independent points the per-pixel estimates here are heavy-tailed enough that at
+// 128 spp the standard errors from the pixels' spread fell short of the seed-to-seed spread
+// (measured 1.6x over 30 seeds), and the bound below assumes they do not.
 TEST(Integrators, DirectEqualsPathDepthOneUnderSky) {
-  expect_direct_estimators_agree(small_builtin_scene("cornell-boxes-room", 64, 48), "tree", 128);
+  expect_direct_estimators_agree(small_builtin_scene("cornell-boxes-room", 64, 48), "tree", 512);
 }
 
 // Glossy metal under a sun and a sky seen through small windows: light sampling alone is

@@ -10,39 +10,66 @@
 namespace rll {
 
 struct LightBounds {
-  Bounds3 box;               // finite lights only
-  Vec3 axis{0, 0, 1};        // unit cone axis
-  float cos_theta_o = 1;     // spread of the emitter normals around the axis
-  float cos_theta_e = 0;     // spread of emission around each normal (cos(pi/2) for area lights)
-  float power = 0;           // luminance power; for lights without position, pi * irradiance
+  Bounds3 box;         // lights with a position only
+  Vec3 axis{0, 0, 1};  // unit cone axis
+  // Finite lights: spread of the emitter normals around the axis. Infinite ones: spread of the
+  // directions towards the lights.
+  float cos_theta_o = 1;
+  float cos_theta_e = 0;  // spread of emission around each normal (cos(pi/2) for area lights)
+  float power = 0;        // luminance power; for lights without position, pi * irradiance
+  // The power a point can receive from them: a two-sided light shows one side to any point, so
+  // it counts half of its power (importance compares it with one-sided lights').
+  float side_power = 0;
+  // Largest emitted radiance (luminance) of the lights; infinite for point lights.
+  float max_radiance = 0;
   bool two_sided = false;
-  bool infinite = false;     // lights without a position (directional)
+  // Lights seen as directions: directional lights (no position) and sky-dome triangles seen
+  // from afar (distant_light_bounds). The box, where there is one, plays no part in importance.
+  bool infinite = false;
+  bool distant = false;  // sky-dome triangles: importance needs their DistantFrame
+};
+
+// Where a sky dome's triangles may be treated as distant lights: seen from any point within
+// `reach` of `center`, each lies within a narrow cone of directions, at least `distance` away.
+struct DistantFrame {
+  Vec3 center;
+  float reach = 0;
+  float distance = 1;
 };
 
 // LightBounds reduced to what light_importance needs, with its derived terms precomputed (the
 // tree's descents evaluate it twice per level).
 struct ImportanceBounds {
-  Vec3 center;
-  float radius2 = 0;  // squared half-diagonal of the box
+  Vec3 center;          // of the box; of the DistantFrame for distant lights
+  float radius2 = 0;    // squared half-diagonal of the box; squared reach for distant lights
+  float min_dist2 = 0;  // squared distance below which the importance stops growing
   Vec3 axis{0, 0, 1};
   float cos_o = 1;
   float sin_o = 0;
   float cos_e = 0;
-  float power = 0;
-  uint32_t flags = 0;  // kTwoSided | kInfinite
-  static constexpr uint32_t kTwoSided = 1, kInfinite = 2;
+  float power = 0;     // for distant lights, divided by the squared distance
+  uint32_t flags = 0;  // kTwoSided | kInfinite | kDistant | kGroup
+  // kGroup: a light-tree node above the group roots, whose importance is its children's sum.
+  static constexpr uint32_t kTwoSided = 1, kInfinite = 2, kGroup = 4, kDistant = 8;
 };
-ImportanceBounds importance_bounds(const LightBounds& b);
+// `frame` is needed where b.distant.
+ImportanceBounds importance_bounds(const LightBounds& b, const DistantFrame* frame = nullptr);
 float light_importance(const ImportanceBounds& b, const Vec3& p, const Vec3& n);
 
 LightBounds light_bounds(const Light& light);
-// Bounds of the union of two sets of lights of the same kind (finite or infinite).
+// A sky-dome triangle as a distant light: the cone of directions towards it from any point
+// within frame.reach of frame.center (its own directions from the centre, widened by the
+// parallax); box and power as light_bounds gives them.
+LightBounds distant_light_bounds(const Light& light, const DistantFrame& frame);
+// Bounds of the union of two sets of lights. Only sets of the same kind (finite, or infinite
+// and distant) give useful bounds; a union of both kinds is marked infinite.
 LightBounds merge(const LightBounds& a, const LightBounds& b);
 
 // Importance of the lights in `b` at point p with surface normal n (n = 0: no surface). Zero
 // only where none of them can contribute: behind the surface, outside every emission cone, or
 // without power.
-float light_importance(const LightBounds& b, const Vec3& p, const Vec3& n);
+float light_importance(const LightBounds& b, const Vec3& p, const Vec3& n,
+                       const DistantFrame* frame = nullptr);
 
 // Union of two direction cones given as (axis, cos of half-angle); exposed for tests.
 void merge_cones(const Vec3& wa, float cos_a, const Vec3& wb, float cos_b, Vec3& w, float& cos_out);

@@ -1,14 +1,13 @@
 // The visibility-blind light-tree sampler (Conty & Kulla 2018, as pbrt-v4's BVH light sampler):
 // one stochastic descent of the reference tree, each child chosen in proportion to its
-// importance at the shading point.
+// importance at the shading point; above the group roots (local lights, sky dome, directional
+// lights), each group that can contribute at the point gets an equal share.
 #pragma once
 
 #include "rll/lights/light_sampler.h"
 #include "rll/lights/light_tree.h"
 
 namespace rll {
-
-inline constexpr int kMaxTreeDepth = 256;
 
 // The nodes a descent went through and the probability of each step, so that callers can
 // form the probability of any part of the path without evaluating importances again. The
@@ -33,12 +32,14 @@ struct DescentPath {
 
 // Descends the subtree under `from`, returning a light under it and the probability of that
 // choice given that the descent starts at `from`. A child with zero importance is never chosen
-// over a sibling with positive importance; the pmfs of the lights under `from` sum to one.
-SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, const Vec3& n, double u,
-                          DescentPath* path = nullptr);
+// over a sibling with positive importance, and one with positive importance always keeps a
+// positive probability; the pmfs of the lights under `from` sum to one.
+SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, const Vec3& n,
+                          double u, DescentPath* path = nullptr);
 // The probability that tree_descend(tree, from, p, n, .) returns `light`: the same products in
 // the same order, so the two agree exactly. 0 if `light` is not under `from`.
-float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, const Vec3& p, const Vec3& n);
+float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, const Vec3& p,
+                       const Vec3& n);
 
 // The probability that a descent from the root passes through `node` (1 for the root).
 float tree_reach_pmf(const LightTree& tree, uint32_t node, const Vec3& p, const Vec3& n);
