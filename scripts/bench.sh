@@ -19,6 +19,11 @@ if [ "${BENCH_QUICK:-0}" = 1 ]; then
 else
   res=320x240; seconds=10; repeats=3; ref_direct=2048; ref_path=1024; spp_direct=64; spp_path=32; frames=3
 fi
+# BENCH_PARTS picks what runs (default: all of them); a part left out keeps its section of
+# RESULTS.md from the previous run, marked as not re-measured.
+parts=${BENCH_PARTS:-"equal-time equal-spp ablation seed-to-seed rays samplers"}
+want() { [[ " $parts " == *" $1 "* ]]; }
+ref_direct=${BENCH_REF_DIRECT:-$ref_direct}; ref_path=${BENCH_REF_PATH:-$ref_path}
 samplers=power,tree,rll,oracle
 V1_COMMIT=a3cbdd4
 v1="build-v1/rll"
@@ -50,10 +55,13 @@ run_v1() {  # name of a finished comparison, then compare arguments: v1's tree o
 }
 for scene in cornell-boxes-room arch-interior many-lights-open cornell-boxes-dynamic; do
   f=1; [ $scene = cornell-boxes-dynamic ] && f=$frames
+  if want equal-time; then
   run "$scene-direct" builtin:$scene --integrator direct --samplers $samplers --time $seconds --frames $f --reference-spp $ref_direct
   run_v1 "$scene-direct" builtin:$scene --integrator direct --time $seconds --frames $f
   run "$scene-path" builtin:$scene --integrator path --samplers $samplers --time $seconds --frames $f --reference-spp $ref_path
   run_v1 "$scene-path" builtin:$scene --integrator path --time $seconds --frames $f
+  fi
+  want equal-spp || continue
   run "$scene-direct-spp" builtin:$scene --integrator direct --samplers oracle,rll,tree,power --spp $spp_direct --frames $f --reference-spp $ref_direct
   run "$scene-path-spp" builtin:$scene --integrator path --samplers oracle,rll,tree,power --spp $spp_path --frames $f --reference-spp $ref_path
 done
@@ -65,7 +73,7 @@ a3=${a2/prior=power:split_by=power/prior=importance:split_by=importance}
 a4=${a3/defensive=cell/defensive=tree}
 a5=${a4/learning=exponential:/learning=shrinkage:}; a5=${a5/inherit=false/inherit=true}
 ablation="tree,$a0,$a1,$a2,$a3,$a4,$a5,rll"
-for scene in cornell-boxes-room arch-interior; do
+want ablation && for scene in cornell-boxes-room arch-interior; do
   run "ablation-$scene" builtin:$scene --integrator direct --samplers "$ablation" --time $seconds --reference-spp $ref_direct
 done
 # Per-sample noise of `tree`, measured as pbrt-v4's was (shared/PEERS.md): the relMSE of one
@@ -73,7 +81,7 @@ done
 # defaults (MIS, Sobol'), with independent points, with light sampling only (v1's renderer) and
 # v1's own binary.
 s2s_spp=1024; [ "${BENCH_QUICK:-0}" = 1 ] && s2s_spp=16
-for scene in cornell-boxes-room arch-interior; do
+want seed-to-seed && for scene in cornell-boxes-room arch-interior; do
   echo "bench: seed to seed, $scene"
   d="$out/seed-to-seed-$scene"
   SPP=$s2s_spp scripts/seed_to_seed.sh "$rll" "$scene" tree "$d-default" > "$d-default.txt"
@@ -81,12 +89,17 @@ for scene in cornell-boxes-room arch-interior; do
   SPP=$s2s_spp scripts/seed_to_seed.sh "$rll" "$scene" tree "$d-nee" --points independent --set direct.strategy=nee > "$d-nee.txt"
   if [ "${BENCH_V1:-1}" = 1 ]; then SPP=$s2s_spp scripts/seed_to_seed.sh "$v1" "$scene" tree "$d-v1" > "$d-v1.txt"; fi
 done
-echo "bench: ray rate"
-"$build/bench/rll_bench_rays" builtin:cornell-boxes-room power 4 > "$out/rays-power.txt"
-"$build/bench/rll_bench_rays" builtin:cornell-boxes-room rll 4 > "$out/rays-rll.txt"
-echo "bench: sampler costs"
-min_time=0.3; [ "${BENCH_QUICK:-0}" = 1 ] && min_time=0.02
-"$build/bench/rll_bench_samplers" --benchmark_min_time=$min_time --benchmark_repetitions=3 \
-  --benchmark_report_aggregates_only=true --benchmark_format=json > "$out/samplers.json"
-python3 scripts/bench_report.py "$out" bench/RESULTS.md "res=$res seconds=$seconds repeats=$repeats"
+if want rays; then
+  echo "bench: ray rate"
+  "$build/bench/rll_bench_rays" builtin:cornell-boxes-room power 4 > "$out/rays-power.txt"
+  "$build/bench/rll_bench_rays" builtin:cornell-boxes-room rll 4 > "$out/rays-rll.txt"
+fi
+if want samplers; then
+  echo "bench: sampler costs"
+  min_time=0.3; [ "${BENCH_QUICK:-0}" = 1 ] && min_time=0.02
+  "$build/bench/rll_bench_samplers" --benchmark_min_time=$min_time --benchmark_repetitions=3 \
+    --benchmark_report_aggregates_only=true --benchmark_format=json > "$out/samplers.json"
+fi
+python3 scripts/bench_report.py "$out" bench/RESULTS.md \
+  "res=$res seconds=$seconds repeats=$repeats references=${ref_direct}/${ref_path} spp (direct/path) parts=$parts"
 echo "bench: wrote bench/RESULTS.md"
