@@ -80,6 +80,22 @@ PBRT_SEED_TO_SEED = {"cornell-boxes-room": 0.00087, "arch-interior": 0.00015}
 
 lines = []
 P = lines.append
+previous = {}  # sections of the RESULTS.md being replaced, by title
+if os.path.exists(results):
+    for part in re.split(r"(?m)^## ", open(results).read())[1:]:
+        title, _, body = part.partition("\n")
+        previous[title.strip()] = body.strip()
+
+
+def keep_previous(title):
+    """A part this run left out keeps its previous figures, marked as such."""
+    body = previous.get(title)
+    if body is None:
+        return
+    note = "*Not re-measured in this run (`BENCH_PARTS`): the figures below are from the previous run.*"
+    if not body.startswith("*Not re-measured"):
+        body = note + "\n\n" + body
+    P(body + "\n")
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
 cpu = "unknown CPU"
 try:
@@ -162,8 +178,9 @@ for sampler in ("power", "rll"):
     if m:
         goal(f"renderer keeps >= 50% of the bare Embree ray rate (path, cornell-boxes-room, {sampler})",
              f"{m.group(1)}%", float(m.group(1)) >= 50)
-mem = max((med(b["rll"], "seconds") and b["rll"]["memory"]["sampler_bytes"]) for _, _, _, b, _ in goal_rows)
-goal("rll's default memory <= 512 MiB", f"{mem / 2**20:.0f} MiB (sampler state)", mem <= 512 * 2**20)
+if goal_rows:
+    mem = max((med(b["rll"], "seconds") and b["rll"]["memory"]["sampler_bytes"]) for _, _, _, b, _ in goal_rows)
+    goal("rll's default memory <= 512 MiB", f"{mem / 2**20:.0f} MiB (sampler state)", mem <= 512 * 2**20)
 P("")
 
 # --- Seed to seed ------------------------------------------------------------------------------
@@ -208,10 +225,14 @@ for scene, integ, s, b, r in goal_rows:
     P("")
 
 P("## Equal samples per pixel\n")
-P("The gap to the oracle (exhaustive per-cell knowledge, precomputed outside the timing) at equal spp:\n")
-P("| scene | integrator | spp | oracle | rll | tree | power | rll / oracle |")
-P("|---|---|---|---|---|---|---|---|")
-for scene, integ, s in comparisons("-spp"):
+spp_rows = list(comparisons("-spp"))
+if not spp_rows:
+    keep_previous("Equal samples per pixel")
+else:
+    P("The gap to the oracle (exhaustive per-cell knowledge, precomputed outside the timing) at equal spp:\n")
+    P("| scene | integrator | spp | oracle | rll | tree | power | rll / oracle |")
+    P("|---|---|---|---|---|---|---|---|")
+for scene, integ, s in spp_rows:
     r = {x["name"]: med(x, "relmse") for x in s["samplers"]}
     P(f"| {scene} | {integ} | {s['budget']['spp']} | {fmt(r.get('oracle'))} | {fmt(r.get('rll'))} | "
       f"{fmt(r.get('tree'))} | {fmt(r.get('power'))} | {fmt(r['rll'] / r['oracle'])} |")
@@ -228,8 +249,11 @@ names = {
     6: "+ no jitter = rll's defaults",
 }
 P("## Ablation\n")
-P("Equal time, direct lighting; each row adds one correction to the row above. relMSE median, "
-  "and its ratio to tree's in the same run.\n")
+if not any(load(f"ablation-{sc}") for sc in ["cornell-boxes-room", "arch-interior"]):
+    keep_previous("Ablation")
+else:
+    P("Equal time, direct lighting; each row adds one correction to the row above. relMSE median, "
+      "and its ratio to tree's in the same run.\n")
 for scene in ["cornell-boxes-room", "arch-interior"]:
     s = load(f"ablation-{scene}")
     if not s:
