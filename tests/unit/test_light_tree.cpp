@@ -34,8 +34,7 @@ void add_sun(Scene& s) {
 }
 
 bool is_dome(const Scene& s, const Light& l) {
-  return l.type == LightType::Triangle && l.triangle >= s.sky_first_triangle &&
-         l.triangle < s.sky_first_triangle + s.sky_triangle_count;
+  return l.type == LightType::Triangle && s.is_sky_triangle(l.triangle);
 }
 
 LightGroup group_of(const Scene& s, const Light& l) {

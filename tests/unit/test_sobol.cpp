@@ -308,10 +308,10 @@ TEST(Sobol, DifferentSeedsAreDecorrelated) {
 
 TEST(Sobol, ToFloatKeepsTheHighBitsAndNeverReachesOne) {
   int wrong = 0;
-  wrong += sobol_to_float(0xffffffffu) >= 1.0f;
+  wrong += u32_to_unit_float(0xffffffffu) >= 1.0f;
   wrong += sobol_to_double(0xffffffffu) >= 1.0;
-  wrong += sobol_to_float(0x80000000u) != 0.5f;
-  wrong += sobol_to_float(0x000000ffu) != 0.0f;  // below the 24 bits a float keeps
+  wrong += u32_to_unit_float(0x80000000u) != 0.5f;
+  wrong += u32_to_unit_float(0x000000ffu) != 0.0f;  // below the 24 bits a float keeps
   wrong += sobol_to_double(0x00000001u) != 0x1p-32;
   EXPECT_EQ(wrong, 0);
 }

@@ -5,22 +5,11 @@
 #include <cstdint>
 #include <string>
 
+#include "rll/core/hash.h"
 #include "rll/core/math.h"
 #include "rll/core/sobol.h"
 
 namespace rll {
-
-// 64-bit finaliser of splitmix64: a bijective avalanche mix.
-inline uint64_t mix64(uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
-inline float u32_to_unit_float(uint32_t v) {
-  // 24 high bits into [0,1): exactly representable, never 1.
-  return float(v >> 8) * 0x1p-24f;
-}
 
 // PCG32 (O'Neill 2014): a small sequential generator for preprocessing and tests.
 class Pcg32 {
@@ -68,12 +57,14 @@ class SampleStream {
                PointSet points = PointSet::Independent)
       : m_key(mix64(mix64(seed ^ 0x9e3779b97f4a7c15ull) ^ mix64(pixel + 0x632be59bd9b4e019ull) ^
                     mix64(sample_index * 0xd1342543de82ef95ull + 1))),
-        m_scramble(
-            mix64(mix64(seed ^ 0x2545f4914f6cdd1dull) ^ mix64(pixel + 0x632be59bd9b4e019ull))),
         m_index(uint32_t(sample_index)),
         m_dim(0),
         m_points(points) {
-    if (points == PointSet::Sobol) m_shuffled = sobol_shuffled_index(m_index, 0, m_scramble);
+    if (points == PointSet::Sobol) {
+      m_scramble =
+          mix64(mix64(seed ^ 0x2545f4914f6cdd1dull) ^ mix64(pixel + 0x632be59bd9b4e019ull));
+      m_shuffled = sobol_shuffled_index(m_index, 0, m_scramble);
+    }
   }
   float next() { return u32_to_unit_float(next_u32()); }
   // 53 bits, for choices among millions of items (a float has only 24): with Sobol' points the
@@ -104,7 +95,7 @@ class SampleStream {
     return scrambled_sobol_u32(m_index, dim, m_scramble);
   }
   uint64_t m_key = 0;       // (seed, pixel, sample): independent numbers
-  uint64_t m_scramble = 0;  // (seed, pixel): the pixel's Owen scramble
+  uint64_t m_scramble = 0;  // (seed, pixel): the pixel's Owen scramble (Sobol' points only)
   uint32_t m_index = 0;
   uint32_t m_shuffled = 0;  // m_index shuffled for the first block of Sobol' dimensions
   uint32_t m_dim = 0;

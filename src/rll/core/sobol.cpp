@@ -40,18 +40,24 @@ struct SobolMatrices {
   }
 };
 
+const SobolMatrices& sobol_matrices() {
+  static const auto matrices = std::make_unique<SobolMatrices>();  // 128 KiB, built on first use
+  return *matrices;
+}
+
 // Per dimension and byte of the index, the XOR of the columns of that byte's set bits, for all
 // 256 byte values: a point is then four table reads, whatever the index (a shuffled index has
 // about 16 set bits, which the bit-by-bit loop paid for one by one).
 std::vector<uint32_t> make_byte_tables() {
-  const auto matrices = std::make_unique<SobolMatrices>();
+  const SobolMatrices& matrices = sobol_matrices();
   std::vector<uint32_t> t(size_t(kSobolDimensions) * 4 * 256);
   for (uint32_t d = 0; d < kSobolDimensions; ++d)
     for (uint32_t b = 0; b < 4; ++b) {
       uint32_t* row = &t[(size_t(d) * 4 + b) * 256];
       row[0] = 0;
       for (uint32_t x = 1; x < 256; ++x)
-        row[x] = row[x & (x - 1)] ^ detail::reverse_bits(matrices->columns[d][8 * b + std::countr_zero(x)]);
+        row[x] = row[x & (x - 1)] ^
+                 detail::reverse_bits(matrices.columns[d][8 * b + std::countr_zero(x)]);
     }
   return t;
 }
@@ -72,8 +78,7 @@ uint32_t sobol_u32(uint32_t index, uint32_t dim) {
 
 uint32_t sobol_u32_reference(uint32_t index, uint32_t dim) {
   assert(dim < kSobolDimensions);
-  static const auto matrices = std::make_unique<SobolMatrices>();
-  const uint32_t* v = matrices->columns[dim];
+  const uint32_t* v = sobol_matrices().columns[dim];
   uint32_t x = 0;
   for (; index != 0; index &= index - 1) x ^= v[std::countr_zero(index)];
   return x;

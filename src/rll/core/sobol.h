@@ -4,6 +4,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "rll/core/hash.h"
+
 namespace rll {
 
 // Dimensions with their own Joe & Kuo (2008) direction numbers; later ones are padded.
@@ -17,7 +19,8 @@ const uint32_t* sobol_byte_tables();
 inline uint32_t sobol_u32_reversed(uint32_t index, uint32_t dim) {
   static const uint32_t* const tables = sobol_byte_tables();
   const uint32_t* t = tables + size_t(dim) * 1024;
-  return t[index & 255] ^ t[256 + ((index >> 8) & 255)] ^ t[512 + ((index >> 16) & 255)] ^ t[768 + (index >> 24)];
+  return t[index & 255] ^ t[256 + ((index >> 8) & 255)] ^ t[512 + ((index >> 16) & 255)] ^
+         t[768 + (index >> 24)];
 }
 }  // namespace detail
 
@@ -40,13 +43,6 @@ inline uint32_t reverse_bits(uint32_t v) {
   v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
   v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
   return __builtin_bswap32(v);
-}
-
-// splitmix64's finaliser. rng.h includes this header, so its mix64 is not visible here.
-inline uint64_t sobol_mix64(uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
 }
 
 // Laine–Karras style permutation keyed by a well-mixed 64-bit `key`: every step (add, multiply
@@ -75,7 +71,18 @@ inline uint32_t owen_scramble_keyed(uint32_t v, uint64_t key) {
 // scrambling"), keyed by `seed`. A bijection on uint32 for every seed that preserves (t,m,s)-nets.
 inline uint32_t owen_scramble(uint32_t v, uint32_t seed) {
   // Hashed here so that nearby seeds (0, 1, 2...) give unrelated scrambles.
-  return detail::owen_scramble_keyed(v, detail::sobol_mix64(seed ^ 0x6a09e667f3bcc909ull));
+  return detail::owen_scramble_keyed(v, mix64(seed ^ 0x6a09e667f3bcc909ull));
+}
+
+// The index shuffle of a block of kSobolDimensions dimensions (see scrambled_sobol_u32).
+inline uint32_t sobol_shuffled_index(uint32_t index, uint32_t block, uint64_t seed) {
+  return detail::owen_scramble_keyed(index, mix64(seed ^ (0xbb67ae8584caa73bull * block)));
+}
+// Coordinate `dim` of the point whose index was already shuffled for dim's block.
+inline uint32_t scrambled_sobol_u32_shuffled(uint32_t shuffled_index, uint32_t dim, uint64_t seed) {
+  const uint64_t key = mix64(seed + 0x9e3779b97f4a7c15ull * (uint64_t(dim) + 1));
+  return detail::reverse_bits(detail::owen_permute_reversed(
+      detail::sobol_u32_reversed(shuffled_index, dim % kSobolDimensions), key));
 }
 
 // The point generator the renderer uses: coordinate `dim` (any value) of point `index` of an
@@ -84,28 +91,14 @@ inline uint32_t owen_scramble(uint32_t v, uint32_t seed) {
 // `dim` reuses table dimension dim % kSobolDimensions, and each block of kSobolDimensions
 // dimensions shuffles the index by its own nested uniform scramble keyed by (seed, block), so
 // that each padded dimension is still stratified on its own and a block is a Sobol' sequence.
-// The index shuffle of a block of kSobolDimensions dimensions (see scrambled_sobol_u32).
-inline uint32_t sobol_shuffled_index(uint32_t index, uint32_t block, uint64_t seed) {
-  return detail::owen_scramble_keyed(index, detail::sobol_mix64(seed ^ (0xbb67ae8584caa73bull * block)));
-}
-// Coordinate `dim` of the point whose index was already shuffled for dim's block.
-inline uint32_t scrambled_sobol_u32_shuffled(uint32_t shuffled_index, uint32_t dim, uint64_t seed) {
-  const uint64_t key = detail::sobol_mix64(seed + 0x9e3779b97f4a7c15ull * (uint64_t(dim) + 1));
-  return detail::reverse_bits(
-      detail::owen_permute_reversed(detail::sobol_u32_reversed(shuffled_index, dim % kSobolDimensions), key));
-}
-
 inline uint32_t scrambled_sobol_u32(uint32_t index, uint32_t dim, uint64_t seed) {
   // The shuffle is shared by the whole block, unlike the value scramble, so that the block's
   // dimensions keep their joint stratification (2D pairs in particular); each block is shuffled
   // independently.
-  return scrambled_sobol_u32_shuffled(sobol_shuffled_index(index, dim / kSobolDimensions, seed), dim, seed);
+  return scrambled_sobol_u32_shuffled(sobol_shuffled_index(index, dim / kSobolDimensions, seed),
+                                      dim, seed);
 }
 
-// A 32-bit fixed-point coordinate as a float in [0,1): its 24 high bits, so never 1.
-inline float sobol_to_float(uint32_t v) {
-  return float(v >> 8) * 0x1p-24f;
-}
 // A 32-bit fixed-point coordinate as a double in [0,1): exact.
 inline double sobol_to_double(uint32_t v) {
   return double(v) * 0x1p-32;

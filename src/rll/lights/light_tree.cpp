@@ -21,9 +21,7 @@ constexpr int kBins = 12;
 
 LightGroup group_of(const Scene& scene, const Light& l) {
   if (!l.has_position()) return LightGroup::Directional;
-  if (l.type == LightType::Triangle && l.triangle >= scene.sky_first_triangle &&
-      l.triangle < scene.sky_first_triangle + scene.sky_triangle_count)
-    return LightGroup::Dome;
+  if (l.type == LightType::Triangle && scene.is_sky_triangle(l.triangle)) return LightGroup::Dome;
   return LightGroup::Local;
 }
 

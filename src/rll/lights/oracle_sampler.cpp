@@ -100,7 +100,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
             Hit hit;
             if (!accel.intersect(ray, hit)) break;
             SurfaceHit sh = make_surface_hit(scene, hit);
-            if (sh.tri >= scene.sky_first_triangle && sh.tri < scene.sky_first_triangle + scene.sky_triangle_count) break;
+            if (scene.is_sky_triangle(sh.tri)) break;
             LightContext c;
             c.n = face_forward(sh.ng, -ray.d);
             c.ns = dot(sh.ns, c.n) < 0 ? -sh.ns : sh.ns;

@@ -117,7 +117,7 @@ bool use_spherical(float omega) { return omega > kMinSphericalSolidAngle && omeg
 // (a sky dome's triangles, far lamps) the exact formula, with its three normalisations and an
 // arctangent, is skipped. The decision is the same as with the exact angle.
 float spherical_solid_angle(const Light& l, const Vec3& p) {
-  const Vec3 c = (l.p0 + l.p1 + l.p2) * (1.0f / 3.0f);
+  const Vec3 c = l.centroid();
   const float r2 = std::max({length_sq(l.p0 - c), length_sq(l.p1 - c), length_sq(l.p2 - c)});
   const float d2 = length_sq(p - c);
   if (d2 > r2) {

@@ -261,7 +261,7 @@ void Scene::finalize() {
     for (const auto& p : mesh.positions) bounds.expand(p);
   } else {  // finalized before: the dome is in the mesh but stays out of the bounds
     for (size_t t = 0; t < mesh.triangles.size(); ++t)
-      if (t < sky_first_triangle || t >= sky_first_triangle + sky_triangle_count)
+      if (!is_sky_triangle(t))
         for (uint32_t v : mesh.triangles[t]) bounds.expand(mesh.positions[v]);
   }
   for (const auto& l : lights)

@@ -72,6 +72,10 @@ struct Scene {
   Bounds3 bounds;      // all geometry except the sky dome
   float radius = 1;    // radius of the bounding sphere of `bounds`
   size_t sky_first_triangle = 0, sky_triangle_count = 0;
+  // True if mesh triangle t belongs to the sky dome.
+  bool is_sky_triangle(size_t t) const {
+    return t >= sky_first_triangle && t < sky_first_triangle + sky_triangle_count;
+  }
   // The reference light tree over `lights`, which finalize() reorders into tree order.
   std::shared_ptr<LightTree> light_tree;
 
