@@ -65,14 +65,18 @@ for scene in cornell-boxes-room arch-interior many-lights-open cornell-boxes-dyn
   run "$scene-direct-spp" builtin:$scene --integrator direct --samplers oracle,rll,tree,power --spp $spp_direct --frames $f --reference-spp $ref_direct
   run "$scene-path-spp" builtin:$scene --integrator path --samplers oracle,rll,tree,power --spp $spp_path --frames $f --reference-spp $ref_path
 done
-# Ablation: each row adds one of rll's corrections to the paper-faithful settings.
-a0=rll:within=uniform:reward=fullpdf:prior=power:split_by=power:defensive=cell:learning=exponential:jitter=1:footprint_scale=4:inherit=false
+# Ablation: each row adds one of rll's corrections to paper-like settings (the published RLL
+# itself, run as published, is issue 12's `fermat`); the last rows are v1's defensive term from
+# the tree at the point, and the defaults.
+a0=rll:within=uniform:reward=fullpdf:prior=power:split_by=power:defensive=cell:learning=exponential:jitter=1:target=mean:splits=4
 a1=${a0/reward=fullpdf/reward=cluster}
 a2=${a1/within=uniform/within=tree}
 a3=${a2/prior=power:split_by=power/prior=importance:split_by=importance}
-a4=${a3/defensive=cell/defensive=tree}
-a5=${a4/learning=exponential:/learning=shrinkage:}; a5=${a5/inherit=false/inherit=true}
-ablation="tree,$a0,$a1,$a2,$a3,$a4,$a5,rll"
+a4=${a3/learning=exponential/learning=shrinkage}
+a5=${a4/jitter=1/jitter=0}
+a6=${a5/splits=4/splits=0}
+a7=rll:defensive=tree
+ablation="tree,$a0,$a1,$a2,$a3,$a4,$a5,$a6,$a7,rll"
 want ablation && for scene in cornell-boxes-room arch-interior; do
   run "ablation-$scene" builtin:$scene --integrator direct --samplers "$ablation" --time $seconds --reference-spp $ref_direct
 done

@@ -34,6 +34,10 @@ const std::vector<SamplerCase>& sampler_cases() {
       // RLL on a trained state (train_sampler renders passes first), every within-cluster mode.
       {"rll_tree", "rll", {}},
       {"rll_power", "rll", {"rll.within=power"}},
+      // Cuts that start small and grow, a hybrid within-cluster rule, the mean target.
+      {"rll_grow", "rll", {"rll.initial_cut=16", "rll.splits=4", "rll.within=hybrid", "rll.descend_above=8", "rll.target=mean"}},
+      {"rll_tree_defensive", "rll", {"rll.defensive=tree", "rll.within=power", "rll.initial_cut=32", "rll.splits=2"}},
+      {"rll_full_table", "rll", {"rll.capacity=48"}},
       {"rll_uniform", "rll", {"rll.within=uniform"}},
       {"rll_paper",
        "rll",

@@ -103,8 +103,12 @@ TEST(RllLearning, OccludedLampFallsToTheDefensiveFloor) {
       const float reach_b = tree_reach_pmf(tree, node_b, c.p, c.n);
       const float eps = t.sampler->cuts().defensive_weight(c.cell);
       max_reach = std::max(max_reach, reach_b);
-      // P(B) = (1 - eps) q_B + eps reach_B: q_B is what the cell learnt for the hidden lamp.
-      const float q_b = (p_b - eps * reach_b) / std::max(1e-6f, 1 - eps);
+      // P(B) = (1 - eps) q_B + eps prior_B: q_B is what the cell learnt for the hidden lamp.
+      std::vector<double> shares = t.sampler->cuts().learnt_shares(c.cell);
+      ASSERT_EQ(shares.size(), 2u);
+      const float q_b = float(shares[t.sampler->cuts().nodes(c.cell)[0] == node_b ? 0 : 1]);
+      // The defensive floor keeps the hidden lamp's probability positive.
+      EXPECT_GE(p_b, 0.99f * eps * 0.01f);
       // Relative to the tree's own probability of the lamp (what a visibility-blind sampler
       // gives it), the learnt share must fall far below.
       max_ratio = std::max(max_ratio, q_b / reach_b);
@@ -123,9 +127,9 @@ TEST(RllLearning, OccludedLampFallsToTheDefensiveFloor) {
           "%d passes: learnt share / tree share of the hidden lamp: median %.3f, 90%% %.3f, max "
           "%.3f\n",
           passes, median, p90, max_ratio);
-      // Measured at the fixed seed (Sobol' points, MIS direct): 90th percentile 0.42, 0.21, 0.13
-      // after 4, 8, 16 passes, the worst cell 0.62, 0.46, 0.21; a sampler that did not learn
-      // stays near 1. The worst single cell rests on a handful of rewards, so it gets a looser
+      // Measured at the fixed seed (Sobol' points, MIS direct, v2 learning): 90th percentile
+      // below 0.001 after 4, 8, 16 passes, the worst cell 0.83, 0.61, 0.43 (a cell at the edge of
+      // the lamp's box); a sampler that did not learn stays near 1. The worst single cell rests on a handful of rewards, so it gets a looser
       // bound than the 90th percentile.
       const float limit = passes == 4 ? 0.7f : passes == 8 ? 0.35f : 0.25f;
       EXPECT_LT(p90, limit) << passes << " passes";
@@ -188,10 +192,65 @@ TEST(RllLearning, TrainedStateIsStronglyNonUniform) {
               p90 = concentration[concentration.size() * 9 / 10];
   std::printf("K x max cluster probability: median %.1f, 75th percentile %.1f, 90th %.1f\n",
               concentration[concentration.size() / 2], p75, p90);
-  // A quarter of the cells give one cluster over 10 times its uniform share (cells that see the
-  // sky through a window spread theirs over many clusters, rightly).
+  // A quarter of the cells give one cluster over 10 times its uniform share (measured 55; cells
+  // that see the sky through a window spread theirs over many clusters, rightly). A uniform
+  // distribution gives 1.
   EXPECT_GT(p75, 10.0f);
   EXPECT_GT(p90, 25.0f);
+}
+
+TEST(RllLearning, RewardsOfANewCellReachTheClustersOfTheirLights) {
+  // Defect of the first version: a cell created after the coarser cell around it had learnt
+  // inherited that cell's refined cut, while its own first rewards, recorded under the initial
+  // cut's cluster indices, were folded in under the inherited cut's indices: onto the wrong
+  // clusters. Inheritance is gone (bench/RESULTS.md: it almost never fired); a new cell's
+  // rewards must land on the clusters of the lights that earned them.
+  Scene scene = small_builtin_scene("many-lights-open", 32, 24);
+  RllLightSampler rll(scene, rll_settings_from(Params()));
+  const uint32_t L = uint32_t(scene.lights.size()), half = L / 2;
+  LightContext coarse;
+  coarse.p = scene.bounds.center();
+  coarse.p.y = scene.bounds.lo.y;
+  coarse.n = coarse.ns = Vec3(0, 1, 0);
+  coarse.footprint = 0.013f * scene.radius;  // a fractional level: u picks the coarser or finer
+  LightContext fine = coarse;
+  Pcg32 rng(5);
+  // The coarse cell learns that only the first half of the lights matters, and refines there.
+  for (int pass = 0; pass < 8; ++pass) {
+    rll.prepare(coarse, 0.0f);
+    ASSERT_NE(coarse.cell, kNoCell);
+    for (int i = 0; i < 2000; ++i) {
+      SampledLight s = rll.sample(coarse, rng.next_double());
+      if (s.pmf > 0) rll.record(coarse, s, s.light < half ? 1.0f : 0.0f);
+    }
+    rll.end_pass();
+  }
+  // A finer cell inside it sees only the second half.
+  rll.prepare(fine, 0.9999f);
+  ASSERT_NE(fine.cell, kNoCell);
+  ASSERT_NE(fine.cell, coarse.cell);
+  ASSERT_FALSE(rll.cuts().active(fine.cell));
+  for (int i = 0; i < 4000; ++i) {
+    SampledLight s = rll.sample(fine, rng.next_double());
+    if (s.pmf > 0) rll.record(fine, s, s.light >= half ? 1.0f : 0.0f);
+  }
+  rll.end_pass();
+  rll.prepare(coarse, 0.0f);
+  rll.prepare(fine, 0.9999f);
+  std::vector<double> shares = rll.cuts().learnt_shares(fine.cell);
+  ASSERT_FALSE(shares.empty());
+  double second_half = 0, first_half = 0;
+  for (size_t k = 0; k < shares.size(); ++k) {
+    const LightTreeNode& nd = scene.light_tree->node(rll.cuts().nodes(fine.cell)[k]);
+    (nd.end > half ? second_half : first_half) += shares[k];  // holds lights of the second half
+  }
+  EXPECT_GT(second_half, 0.95) << "first half " << first_half;
+  // And the coarse cell keeps what it learnt.
+  std::vector<double> coarse_shares = rll.cuts().learnt_shares(coarse.cell);
+  double coarse_first = 0;
+  for (size_t k = 0; k < coarse_shares.size(); ++k)
+    if (scene.light_tree->node(rll.cuts().nodes(coarse.cell)[k]).end <= half) coarse_first += coarse_shares[k];
+  EXPECT_GT(coarse_first, 0.95);
 }
 
 TEST(RllLearning, FullTableEvictsAndStaysCorrect) {

@@ -52,6 +52,7 @@ TEST(SplitCollapse, InvariantsAfterManyRandomPasses) {
   const LightTree& tree = *s.light_tree;
   CutSettings cs;
   cs.cut_size = 24;  // small, so that collapses happen constantly
+  cs.initial_size = 16;
   cs.splits = 6;
   cs.threshold = 1.1f;
   const uint32_t cells = 16;
@@ -67,7 +68,7 @@ TEST(SplitCollapse, InvariantsAfterManyRandomPasses) {
       for (int i = 0; i < 40; ++i) {
         uint32_t k = rng.next_bounded(K);
         float r = (k + pass / 50) % 5 == 0 ? 10 * rng.next_float() : (rng.next_float() < 0.7f ? 0.0f : rng.next_float());
-        store.record(c, k, r, r);
+        store.record(c, k, r);
       }
       CutStore::PassStats st = store.end_pass(c);
       splits += st.splits;
@@ -87,6 +88,7 @@ TEST(SplitCollapse, SplitsTheLargestAndCollapsesTheSmallest) {
   cut.nodes = initial_cut(tree, 8);
   const size_t K = cut.nodes.size();
   cut.q.assign(K, 1.0f);
+  cut.m2.assign(K, 1.0f);
   cut.weight.assign(K, 1.0f);
   cut.n.assign(K, 1.0f);
   // Find a sibling pair to be the smallest, and a splittable cluster elsewhere to be the largest.
@@ -100,9 +102,11 @@ TEST(SplitCollapse, SplitsTheLargestAndCollapsesTheSmallest) {
   cut.q[pair] = cut.q[pair + 1] = 0.01f;
   cut.q[big] = 100;
   const uint32_t parent = tree.node(cut.nodes[pair]).parent, split = cut.nodes[big];
-  std::vector<float> qe = cut.q;
+  std::vector<float> qe = cut.q, score = cut.q;
   SplitCollapse sc(tree, int(K), 2.0f);
-  EXPECT_EQ(sc.step(cut, qe, [](uint32_t) { return 1.0f; }, [](uint32_t) { return 1.0f; }), 1);
+  EXPECT_EQ(sc.step(cut, qe, score, [](uint32_t) { return 1.0f; }, [](uint32_t) { return 1.0f; }), 1);
+  EXPECT_EQ(cut.m2.size(), K);
+  EXPECT_EQ(score.size(), K);
   EXPECT_TRUE(is_valid_cut(tree, cut.nodes));
   EXPECT_EQ(cut.nodes.size(), K);
   EXPECT_NE(std::find(cut.nodes.begin(), cut.nodes.end(), parent), cut.nodes.end());
@@ -112,8 +116,117 @@ TEST(SplitCollapse, SplitsTheLargestAndCollapsesTheSmallest) {
   Cut flat;
   flat.nodes = initial_cut(tree, 8);
   flat.q.assign(flat.nodes.size(), 1.0f);
+  flat.m2.assign(flat.nodes.size(), 1.0f);
   flat.weight.assign(flat.nodes.size(), 1.0f);
   flat.n.assign(flat.nodes.size(), 1.0f);
-  std::vector<float> qf = flat.q;
-  EXPECT_EQ(sc.step(flat, qf, [](uint32_t) { return 1.0f; }, [](uint32_t) { return 1.0f; }), 0);
+  std::vector<float> qf = flat.q, sf = flat.q;
+  EXPECT_EQ(sc.step(flat, qf, sf, [](uint32_t) { return 1.0f; }, [](uint32_t) { return 1.0f; }), 0);
+}
+
+// Defect of the first version: rewards were fixed point with 2^-24 of the brightest light's
+// scale per step, so a cell lit only by lights 1e-8 as bright learnt nothing (every reward
+// rounded to zero), and a cluster's int64 sum wrapped after ~2000 saturated rewards in a pass.
+TEST(CutStore, DimRewardsAreLearntBesideAVeryBrightLight) {
+  Scene s = many_lights();
+  const LightTree& tree = *s.light_tree;
+  CutSettings cs;
+  cs.splits = 0;
+  CutStore store(tree, 1, cs, /*reward_scale=*/1e9);  // one light 1e9 brighter than these rewards
+  store.set_anchor(0, {Vec3(0), Vec3(0, 1, 0), -4});
+  for (int i = 0; i < 100; ++i) store.record(0, 0, i % 2 ? 1.0f : 3.0f);  // mean 2, M2 5
+  store.record(0, 1, 1e-3f);
+  store.end_pass(0);
+  ASSERT_TRUE(store.active(0));
+  // Shrinkage from the prior estimate (4 pseudo-rewards) towards the rewards' mean.
+  const float q0 = store.q(0)[0], m0 = store.m2(0)[0];
+  EXPECT_GT(q0, 1.5f);
+  EXPECT_LT(q0, 2.5f);
+  EXPECT_GT(m0, 3.5f);
+  EXPECT_GT(store.q(0)[1], 0.0f);
+  // A cluster rewarded only with 1e-3 ends near it (the prior estimate pulls it towards the
+  // prior share of the cell's total), never at zero.
+  for (int pass = 0; pass < 20; ++pass) {
+    for (int i = 0; i < 50; ++i) store.record(0, 1, 1e-3f);
+    store.end_pass(0);
+  }
+  EXPECT_NEAR(store.q(0)[1], 1e-3f, 1e-5f);
+  EXPECT_NEAR(store.m2(0)[1], 1e-6f, 1e-8f);
+}
+
+TEST(CutStore, SaturatedRewardsNeverWrapAround) {
+  Scene s = many_lights();
+  const LightTree& tree = *s.light_tree;
+  CutSettings cs;
+  cs.splits = 0;
+  CutStore store(tree, 1, cs, 1.0);
+  store.set_anchor(0, {Vec3(0), Vec3(0, 1, 0), -4});
+  for (int i = 0; i < 100000; ++i) store.record(0, 0, 1e30f);  // far past saturation
+  store.record(0, 1, 1.0f);
+  store.end_pass(0);
+  const float q0 = store.q(0)[0], m0 = store.m2(0)[0];
+  EXPECT_TRUE(std::isfinite(q0) && std::isfinite(m0));
+  // Saturated at 2^36 of the scale, squares at 2^36 too: positive, and the largest cluster.
+  EXPECT_GT(q0, 1e10f);
+  EXPECT_GT(m0, 1e10f);
+  EXPECT_GT(q0, store.q(0)[1]);
+}
+
+TEST(ExactSum, OrderDoesNotMatterAndTheRangeIsWide) {
+  std::vector<double> xs;
+  Pcg32 rng(7);
+  for (int i = 0; i < 10000; ++i) xs.push_back(std::ldexp(double(rng.next_float()), int(rng.next_bounded(70)) - 40));
+  ExactSum a, b;
+  for (double x : xs) a.add(x);
+  for (size_t i = xs.size(); i-- > 0;) b.add(xs[i]);
+  EXPECT_EQ(a.value(), b.value());
+  double exact = 0;
+  for (double x : xs) exact += x;
+  EXPECT_NEAR(a.value(), exact, exact * 1e-12 + 1e-8);
+  ExactSum tiny;
+  tiny.add(1e-11);
+  EXPECT_NEAR(tiny.value(), 1e-11, 1e-12);
+}
+
+namespace {
+// One cell of a cut of the three root-level clusters' rewards after 30 passes: cluster 0 always
+// 1 (fully visible), cluster 1 alternately 2 and 0 (half its lights hidden: the same mean, twice
+// the second moment), cluster 2 always 0 (fully hidden).
+std::vector<double> shares_after(LearnTarget target, const LightTree& tree, std::vector<float>* cdf) {
+  CutSettings cs;
+  cs.cut_size = 3;
+  cs.initial_size = 3;
+  cs.splits = 0;
+  cs.target = target;
+  CutStore store(tree, 1, cs, 1.0);
+  store.set_anchor(0, {Vec3(0, 5, 0), Vec3(0, -1, 0), -4});
+  for (int pass = 0; pass < 30; ++pass) {
+    for (int i = 0; i < 64; ++i) {
+      store.record(0, 0, 1.0f);
+      store.record(0, 1, i % 2 ? 2.0f : 0.0f);
+      store.record(0, 2, 0.0f);
+    }
+    store.end_pass(0);
+  }
+  cdf->assign(store.cdf(0), store.cdf(0) + 3);
+  return store.learnt_shares(0);
+}
+}  // namespace
+
+TEST(CutStore, HalfHiddenClusterGetsMoreUnderMomentAndHiddenFallsToTheFloor) {
+  Scene s = many_lights();
+  const LightTree& tree = *s.light_tree;
+  std::vector<float> cdf_moment, cdf_mean;
+  std::vector<double> moment = shares_after(LearnTarget::Moment, tree, &cdf_moment);
+  std::vector<double> mean = shares_after(LearnTarget::Mean, tree, &cdf_mean);
+  ASSERT_EQ(moment.size(), 3u);
+  ASSERT_EQ(mean.size(), 3u);
+  // Mean: the two visible clusters are alike. Moment: sqrt(2) : 1.
+  EXPECT_NEAR(mean[1] / mean[0], 1.0, 0.02);
+  EXPECT_NEAR(moment[1] / moment[0], std::sqrt(2.0), 0.03);
+  EXPECT_GT(cdf_moment[1] - cdf_moment[0], cdf_mean[1] - cdf_mean[0]);
+  // The hidden cluster learns nothing but keeps the defensive floor in the baked table.
+  EXPECT_LT(moment[2], 1e-3);
+  const float p_hidden = cdf_moment[2] - cdf_moment[1];
+  EXPECT_GT(p_hidden, 0.0f);
+  EXPECT_LT(p_hidden, 0.2f);
 }

@@ -83,15 +83,18 @@ bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes) {
 CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, double reward_scale)
     : m_tree(tree), m_s(s), m_m(s.cut_size) {
   if (m_m < 2 || m_m > 4096) fail("rll.cut_size must be in [2, 4096] (got {})", m_m);
+  if (s.initial_size < 1 || s.initial_size > m_m)
+    fail("rll.initial_cut must be in [1, rll.cut_size = {}] (got {})", m_m, s.initial_size);
   if (!(s.alpha > 0 && s.alpha <= 1)) fail("rll.alpha must be in (0, 1] (got {})", s.alpha);
   if (!(s.epsilon > 0 && s.epsilon <= 1))
     fail("rll.epsilon must be in (0, 1] (got {}): it keeps the estimator unbiased", s.epsilon);
   if (!(s.threshold >= 1)) fail("rll.T must be at least 1 (got {})", s.threshold);
   if (s.splits < 0) fail("rll.splits must not be negative (got {})", s.splits);
-  // Fixed point with 2^-24 of the reward scale per step.
-  m_scale = std::max(reward_scale, 1e-30) * 0x1p-24;
+  // The accumulators' unit: the brightest light's largest irradiance (ExactSum spans 2^-40 to
+  // 2^36 of it).
+  m_scale = std::max(reward_scale, 1e-30);
   m_log_keep = std::log1p(-double(s.alpha));
-  m_initial = initial_cut(tree, m_m);
+  m_initial = initial_cut(tree, s.initial_size);
   for (uint32_t n : m_initial) m_initial_ends.push_back(tree.node(n).end);
 
   const size_t n = size_t(cells) * m_m;
@@ -99,29 +102,27 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   m_node.assign(n, 0);
   m_end.assign(n, 0);
   m_q.assign(n, 0.0f);
+  m_m2.assign(n, 0.0f);
   m_n.assign(n, 0.0f);
   m_weight.assign(n, 0.0f);
   m_cdf.assign(n, 0.0f);
-  m_total.assign(cells, -1.0f);
   m_learnt.assign(cells, 0);
   m_seen.assign(cells, 0.0f);
   m_eps.assign(cells, 1.0f);
   m_anchor.assign(cells, CellAnchor{});
-  m_sum = std::make_unique<std::atomic<int64_t>[]>(n);
+  m_inv_unit.assign(cells, 1 / m_scale);
+  m_sum = std::make_unique<ExactSum[]>(n);
+  m_sq = std::make_unique<ExactSum[]>(n);
   m_count = std::make_unique<std::atomic<uint32_t>[]>(n);
-  m_cell_sum = std::make_unique<std::atomic<int64_t>[]>(cells);
-  for (size_t i = 0; i < n; ++i) {
-    m_sum[i].store(0, std::memory_order_relaxed);
-    m_count[i].store(0, std::memory_order_relaxed);
-  }
-  for (uint32_t c = 0; c < cells; ++c) m_cell_sum[c].store(0, std::memory_order_relaxed);
+  for (size_t i = 0; i < n; ++i) m_count[i].store(0, std::memory_order_relaxed);
 }
 
-size_t CutStore::bytes() const {
-  const size_t n = m_node.size();
-  return n * (2 * sizeof(uint32_t) + 4 * sizeof(float) + sizeof(int64_t) + sizeof(uint32_t)) +
-         m_size.size() * (sizeof(uint32_t) + sizeof(float) + sizeof(int64_t) + sizeof(CellAnchor));
+size_t CutStore::bytes_per_cell(int cut_size) {
+  return size_t(cut_size) * (2 * sizeof(uint32_t) + 5 * sizeof(float) + 2 * sizeof(ExactSum) + sizeof(uint32_t)) +
+         sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t) + sizeof(double) + sizeof(CellAnchor);
 }
+
+size_t CutStore::bytes() const { return m_size.size() * bytes_per_cell(m_m); }
 
 float CutStore::weight_of(uint32_t cell, uint32_t node) const {
   if (m_s.prior == ClusterWeight::Power) return m_tree.node(node).bounds.power;
@@ -136,46 +137,72 @@ void CutStore::prior(const Cut& cut, std::vector<double>& out) const {
       [&](size_t k) { return double(cut.weight[k]); }, out);
 }
 
-void CutStore::record(uint32_t cell, uint32_t k, float reward, float weighted) {
-  auto fixed = [&](float v) {
-    double x = double(v) / m_scale;
-    return int64_t(std::min(x, 0x1p52) + 0.5);  // saturate: sums of 2048 maximal rewards still fit
-  };
-  const size_t i = size_t(cell) * m_m + k;
-  m_sum[i].fetch_add(fixed(reward), std::memory_order_relaxed);
-  m_count[i].fetch_add(1, std::memory_order_relaxed);
-  m_cell_sum[cell].fetch_add(fixed(weighted), std::memory_order_relaxed);
+void CutStore::values(const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const {
+  const size_t K = cut.nodes.size();
+  const bool moment = m_s.target == LearnTarget::Moment;
+  out.resize(K);
+  // What the visited clusters say the cell's total is: their values over their prior share (a
+  // share below a quarter is taken as a quarter, so that one bright, rarely chosen cluster
+  // does not inflate every unvisited one).
+  double v_sum = 0, p_sum = 0;
+  for (size_t k = 0; k < K; ++k) {
+    if (cut.q[k] < 0) continue;
+    out[k] = moment ? std::sqrt(std::max(cut.m2[k], 0.0f)) : cut.q[k];
+    v_sum += out[k];
+    p_sum += pri[k];
+  }
+  const double total = v_sum / std::max(p_sum, 0.25);
+  for (size_t k = 0; k < K; ++k)
+    if (cut.q[k] < 0) out[k] = float(total * pri[k]);
+}
+
+std::vector<double> CutStore::learnt_shares(uint32_t cell) const {
+  if (!active(cell) || !learnt(cell)) return {};
+  Cut cut;
+  load(cell, cut);
+  std::vector<double> pri;
+  std::vector<float> val;
+  prior(cut, pri);
+  values(cut, pri, val);
+  double sum = 0;
+  for (float v : val) sum += v;
+  std::vector<double> out(val.size());
+  for (size_t k = 0; k < val.size(); ++k) out[k] = val[k] / sum;
+  return out;
 }
 
 void CutStore::load(uint32_t cell, Cut& cut) const {
   const size_t base = size_t(cell) * m_m, K = m_size[cell];
-  cut.nodes.assign(m_node.begin() + long(base), m_node.begin() + long(base + K));
-  cut.q.assign(m_q.begin() + long(base), m_q.begin() + long(base + K));
-  cut.n.assign(m_n.begin() + long(base), m_n.begin() + long(base + K));
-  cut.weight.assign(m_weight.begin() + long(base), m_weight.begin() + long(base + K));
+  auto take = [&](const auto& from, auto& to) { to.assign(from.begin() + long(base), from.begin() + long(base + K)); };
+  take(m_node, cut.nodes);
+  take(m_q, cut.q);
+  take(m_m2, cut.m2);
+  take(m_n, cut.n);
+  take(m_weight, cut.weight);
 }
 
 void CutStore::store(uint32_t cell, const Cut& cut) {
   thread_local std::vector<double> pri;
+  thread_local std::vector<float> val;
   const size_t base = size_t(cell) * m_m, K = cut.nodes.size();
   m_size[cell] = uint32_t(K);
   prior(cut, pri);
-  // P(s) = (1 - eps) Q(s) / sum Q + eps prior(s); Q of unvisited clusters is the cell's total
-  // shared by the prior; without any learnt value yet, the prior alone.
-  const double total = std::max(0.0f, m_total[cell]);
-  double q_sum = 0;
-  auto q_eff = [&](size_t k) { return cut.q[k] >= 0 ? double(cut.q[k]) : total * pri[k]; };
-  for (size_t k = 0; k < K; ++k) q_sum += q_eff(k);
-  m_learnt[cell] = q_sum > 0;
-  m_eps[cell] = q_sum > 0 ? m_s.epsilon + (1 - m_s.epsilon) * m_s.trust / (m_s.trust + m_seen[cell]) : 1.0f;
-  const double eps = q_sum > 0 ? (m_s.prior_in_cdf ? m_s.epsilon : 0.0) : 1.0;
+  values(cut, pri, val);
+  // The baked table: P(s) = (1 - e) V(s) / sum V + e prior(s), e the cell's defensive weight
+  // (folded in here when the prior lives in the CDF); without any learnt value, the prior alone.
+  double v_sum = 0;
+  for (size_t k = 0; k < K; ++k) v_sum += val[k];
+  m_learnt[cell] = v_sum > 0;
+  m_eps[cell] = v_sum > 0 ? m_s.epsilon + (1 - m_s.epsilon) * m_s.trust / (m_s.trust + m_seen[cell]) : 1.0f;
+  const double eps = v_sum > 0 ? (m_s.prior_in_cdf ? m_eps[cell] : 0.0) : 1.0;
   double acc = 0;
   for (size_t k = 0; k < K; ++k) {
-    acc += (1 - eps) * (q_sum > 0 ? q_eff(k) / q_sum : 0.0) + eps * pri[k];
+    acc += (1 - eps) * (v_sum > 0 ? val[k] / v_sum : 0.0) + eps * pri[k];
     m_cdf[base + k] = float(acc);
     m_end[base + k] = m_tree.node(cut.nodes[k]).end;
     m_node[base + k] = cut.nodes[k];
     m_q[base + k] = cut.q[k];
+    m_m2[base + k] = cut.m2[k];
     m_n[base + k] = cut.n[k];
     m_weight[base + k] = cut.weight[k];
   }
@@ -186,30 +213,29 @@ void CutStore::store(uint32_t cell, const Cut& cut) {
 void CutStore::clear(uint32_t cell) {
   const size_t base = size_t(cell) * m_m;
   m_size[cell] = 0;
-  m_total[cell] = -1;
   m_learnt[cell] = 0;
   m_seen[cell] = 0;
   m_eps[cell] = 1;
+  m_inv_unit[cell] = 1 / m_scale;
   for (int k = 0; k < m_m; ++k) {
-    m_sum[base + k].store(0, std::memory_order_relaxed);
+    m_sum[base + k].reset();
+    m_sq[base + k].reset();
     m_count[base + k].store(0, std::memory_order_relaxed);
   }
-  m_cell_sum[cell].store(0, std::memory_order_relaxed);
 }
 
 void CutStore::assign(uint32_t cell, const std::vector<uint32_t>& nodes, const std::vector<float>& q) {
   Cut cut;
   cut.nodes = nodes;
   cut.q = q;
+  cut.m2.resize(nodes.size());
   cut.n.assign(nodes.size(), 1.0f / m_s.alpha);
   cut.weight.resize(nodes.size());
-  double total = 0;
   for (size_t k = 0; k < nodes.size(); ++k) {
     cut.weight[k] = weight_of(cell, nodes[k]);
-    total += std::max(0.0f, q[k]);
+    cut.m2[k] = q[k] * q[k];  // known exactly: the mean is the target whatever rll.target says
   }
-  m_total[cell] = float(total);
-  m_seen[cell] = 1e30f;  // known exactly: only the configured defensive weight
+  m_seen[cell] = 1e30f;  // only the configured defensive weight
   store(cell, cut);
 }
 
@@ -221,7 +247,7 @@ void CutStore::refresh(uint32_t cell) {
   store(cell, cut);
 }
 
-CutStore::PassStats CutStore::end_pass(uint32_t cell, uint32_t parent) {
+CutStore::PassStats CutStore::end_pass(uint32_t cell) {
   PassStats st;
   thread_local Cut cut;
   const size_t base = size_t(cell) * m_m;
@@ -231,64 +257,76 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell, uint32_t parent) {
   if (active(cell) && n_total == 0) return st;  // nothing new: the cut and CDF stand
   if (active(cell)) {
     load(cell, cut);
-  } else if (parent != ~0u && active(parent) && m_learnt[parent]) {
-    // Coarse to fine: a new cell inherits what the coarser cell around it has learnt (its Q
-    // are averages over a region that contains this cell), with its own prior weights.
-    load(parent, cut);
-    for (size_t k = 0; k < cut.nodes.size(); ++k) cut.weight[k] = weight_of(cell, cut.nodes[k]);
-    m_total[cell] = m_total[parent];
-    m_seen[cell] = m_seen[parent];
   } else {
     cut.nodes = m_initial;
     cut.q.assign(m_initial.size(), -1.0f);
+    cut.m2.assign(m_initial.size(), 0.0f);
     cut.n.assign(m_initial.size(), 0.0f);
     cut.weight.resize(m_initial.size());
     for (size_t k = 0; k < m_initial.size(); ++k) cut.weight[k] = weight_of(cell, m_initial[k]);
   }
   const size_t K = cut.nodes.size();
 
-  // Fold this pass's rewards. Applying the paper's rule Q := (1-a) Q + a r once per reward,
-  // each reward replaced by the pass mean, gives Q := b Q + (1-b) mean with b = (1-a)^n: the
-  // same whatever order the threads delivered the rewards in. (A plain running mean was tried
-  // and lost 3x: the rule's long memory of the prior estimate is a useful shrinkage.)
+  // Fold this pass's rewards into Q and M2. Shrinkage: a running mean over at most 1/alpha
+  // rewards, started from the prior estimate counted as prior_samples rewards. Exponential: the
+  // paper's rule Q := (1-a) Q + a r once per reward, each reward replaced by the pass mean,
+  // gives Q := b Q + (1-b) mean with b = (1-a)^n. Either way the result does not depend on the
+  // order the threads delivered the rewards in.
   if (n_total > 0) {
     st.touched = true;
     m_seen[cell] += float(n_total);
-    double estimate = double(m_cell_sum[cell].load(std::memory_order_relaxed)) * m_scale / double(n_total);
-    double b = std::exp(double(n_total) * m_log_keep);
-    m_total[cell] = m_total[cell] < 0 ? float(estimate) : float(b * m_total[cell] + (1 - b) * estimate);
     thread_local std::vector<double> pri;
+    thread_local std::vector<float> val;
     prior(cut, pri);
+    values(cut, pri, val);
+    const bool moment = m_s.target == LearnTarget::Moment;
+    const double unit = 1 / m_inv_unit[cell];
+    double largest = 0;
     for (size_t k = 0; k < K; ++k) {
       uint32_t n = m_count[base + k].load(std::memory_order_relaxed);
       if (n == 0) continue;
-      double mean = double(m_sum[base + k].load(std::memory_order_relaxed)) * m_scale / n;
-      double old = cut.q[k] >= 0 ? cut.q[k] : m_total[cell] * pri[k];
+      double mean = m_sum[base + k].value() * unit / n;
+      // E[r^2] >= E[r]^2 also where squares fell below the resolution.
+      double mean2 = std::max(m_sq[base + k].value() * unit * unit / n, mean * mean);
+      // The prior estimate of a cluster never visited: its effective value, without variance.
+      double old_q = cut.q[k] >= 0 ? cut.q[k] : val[k];
+      double old_m2 = cut.q[k] >= 0 ? cut.m2[k] : double(val[k]) * val[k];
       if (m_s.rule == LearningRule::Exponential) {
         double bk = std::exp(double(n) * m_log_keep);
-        cut.q[k] = float(bk * old + (1 - bk) * mean);
+        cut.q[k] = float(bk * old_q + (1 - bk) * mean);
+        cut.m2[k] = float(bk * old_m2 + (1 - bk) * mean2);
       } else {
         double w = cut.q[k] >= 0 ? std::min(double(cut.n[k]), 1.0 / m_s.alpha) : double(m_s.prior_samples);
-        cut.q[k] = float((w * old + n * mean) / (w + n));
+        cut.q[k] = float((w * old_q + n * mean) / (w + n));
+        cut.m2[k] = float((w * old_m2 + n * mean2) / (w + n));
         cut.n[k] = float(std::min(w + n, 1.0 / m_s.alpha));
       }
-    }
-    for (size_t k = 0; k < K; ++k) {
-      m_sum[base + k].store(0, std::memory_order_relaxed);
+      largest = std::max(largest, std::sqrt(double(cut.m2[k])));
+      m_sum[base + k].reset();
+      m_sq[base + k].reset();
       m_count[base + k].store(0, std::memory_order_relaxed);
     }
-    m_cell_sum[cell].store(0, std::memory_order_relaxed);
+    // The next pass's unit: the largest learnt sqrt(M2).
+    if (largest > 0 && std::isfinite(largest)) m_inv_unit[cell] = 1 / largest;
+    // Split-collapse on the new values: split by the cluster's share of the cell's variance
+    // (the standard deviation of its reward) under target=moment, by value (the paper's Q)
+    // under target=mean.
+    prior(cut, pri);
+    values(cut, pri, val);
+    thread_local std::vector<float> score;
+    score.resize(K);
+    for (size_t k = 0; k < K; ++k)
+      score[k] = !moment ? val[k]
+                 : cut.q[k] >= 0 ? float(std::sqrt(std::max(0.0, double(cut.m2[k]) - double(cut.q[k]) * cut.q[k])))
+                                 : val[k];
     SplitCollapse sc(m_tree, m_m, m_s.threshold);
-    thread_local std::vector<float> qe;
-    qe.resize(K);
-    for (size_t k = 0; k < K; ++k) qe[k] = cut.q[k] >= 0 ? cut.q[k] : float(std::max(0.0f, m_total[cell]) * pri[k]);
     auto prior_weight = [&](uint32_t node) { return weight_of(cell, node); };
     auto share = [&](uint32_t node) {
       return m_s.split == ClusterWeight::Power ? m_tree.node(node).bounds.power
                                                : m_tree.importance(node, m_anchor[cell].p, m_anchor[cell].n);
     };
     for (int i = 0; i < m_s.splits; ++i) {
-      int r = sc.step(cut, qe, prior_weight, share);
+      int r = sc.step(cut, val, score, prior_weight, share);
       if (r == 0) break;
       ++st.splits;
       if (r == 1) ++st.collapses;

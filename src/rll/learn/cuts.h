@@ -1,8 +1,9 @@
 // RLL's per-cell state: a cut of K <= M nodes of the light tree (clusters whose light ranges
-// partition all lights, stored sorted as node ids and range ends), the learnt value Q of each
-// cluster, a defensive prior per cluster, the sampling CDF frozen during a pass, and the
-// reward accumulators of the pass. All of it is flat arrays indexed by cell * M + k
-// (structure of arrays, nothing allocated per sample).
+// partition all lights, stored sorted as node ids and range ends), the learnt mean Q and second
+// moment M2 of each cluster's reward, a prior weight per cluster, the sampling CDF baked at the
+// end of each pass with the defensive prior folded in, and the reward accumulators of the pass.
+// All of it is flat arrays indexed by cell * M + k (structure of arrays, nothing allocated per
+// sample).
 #pragma once
 
 #include <algorithm>
@@ -16,11 +17,15 @@
 
 namespace rll {
 
-// How Q follows the rewards. Exponential: the paper's Q := (1-a) Q + a r per reward. Shrinkage:
-// a mean of the rewards and of the prior estimate counted as `prior_samples` rewards, over at
-// most the last ~1/a rewards; an occluded cluster's Q then halves after prior_samples zero
-// rewards instead of after ~0.7/a of them.
+// How Q and M2 follow the rewards. Shrinkage: the mean of the rewards and of the prior estimate
+// counted as `prior_samples` rewards, over at most the last 1/alpha rewards (a learning rate
+// that starts at 1/n and settles at the floor alpha, so that moving lights are followed).
+// Exponential: the paper's Q := (1-a) Q + a r per reward.
 enum class LearningRule { Shrinkage, Exponential };
+
+// What a cell samples clusters in proportion to: sqrt(M2), the variance-optimal target of a
+// one-sample estimator (DESIGN 2b), or the mean Q (the paper).
+enum class LearnTarget { Moment, Mean };
 
 // How a cluster's prior weight and a split's share of Q are estimated: from the light tree's
 // importance of the node at the cell's anchor (spatial, visibility-blind), or from the node's
@@ -28,20 +33,22 @@ enum class LearningRule { Shrinkage, Exponential };
 enum class ClusterWeight { Importance, Power };
 
 struct CutSettings {
-  int cut_size = 128;      // M
-  float alpha = 0.02f;     // per-sample learning rate of Q
-  float threshold = 2;     // T: split l_max and collapse p_min if Q(l_max) > T Q(p_min)
-  int splits = 4;          // split-collapse steps per cell and pass
-  float epsilon = 0.1f;    // weight of the defensive prior in the cluster CDF
+  int cut_size = 128;      // M, the most clusters of a cell
+  int initial_size = 128;  // clusters of a new cell's cut (the shared initial cut), <= M
+  float alpha = 0.02f;     // floor of the per-reward learning rate
+  float threshold = 2;     // T: split l_max and collapse p_min if score(l_max) > T value(p_min)
+  int splits = 0;          // split-collapse steps per cell and pass (0: the cut stays as it started)
+  float epsilon = 0.1f;    // weight of the defensive prior once a cell is trusted
+  LearnTarget target = LearnTarget::Moment;
   ClusterWeight prior = ClusterWeight::Importance;
-  // True: the CDF is (1-eps) Q/sum Q + eps prior (the defensive prior per cell). False: the CDF
-  // holds the learnt distribution alone, the sampler mixing in its own defensive term.
-  bool prior_in_cdf = false;
+  // True: the CDF is (1-e) V/sum V + e prior (the defensive prior per cell, folded in). False:
+  // the CDF holds the learnt distribution alone, the sampler mixing in its own defensive term.
+  bool prior_in_cdf = true;
   LearningRule rule = LearningRule::Shrinkage;
   float prior_samples = 4;  // n0 of the shrinkage rule
   // Rewards a cell must have seen before its learnt distribution gets half the weight the
   // defensive term does not take: the cell's defensive weight is
-  // eps + (1 - eps) * trust / (trust + rewards seen).
+  // e + (1 - e) * trust / (trust + rewards seen).
   float trust = 256;
   ClusterWeight split = ClusterWeight::Importance;
 };
@@ -49,28 +56,32 @@ struct CutSettings {
 // A cut being edited (split-collapse), outside the flat store.
 struct Cut {
   std::vector<uint32_t> nodes;  // tree nodes sorted by range
-  std::vector<float> q;         // learnt value; < 0: never visited (the prior estimate applies)
-  std::vector<float> n;         // shrinkage rule: rewards (and prior) behind q
+  std::vector<float> q;         // learnt mean; < 0: never visited (the prior estimate applies)
+  std::vector<float> m2;        // learnt second moment (meaningful where q >= 0)
+  std::vector<float> n;         // shrinkage rule: rewards (and prior) behind q and m2
   std::vector<float> weight;    // prior weight of each cluster (importance or power)
 };
 
 // The shared initial cut: breadth-first refinement of the tree, always splitting the node with
-// the most lights, until M nodes (or every node is a leaf).
-std::vector<uint32_t> initial_cut(const LightTree& tree, int cut_size);
+// the most lights, until `size` nodes (or every node is a leaf).
+std::vector<uint32_t> initial_cut(const LightTree& tree, int size);
 
 // True if the nodes partition [0, light_count) into contiguous ranges in order.
 bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes);
 
-// Split-collapse on a cut (DESIGN 2), with `qe` the effective Q of every cluster (the learnt
-// value, or for a cluster never visited its prior share of the cell's total), kept in step.
+// Split-collapse on a cut (DESIGN 2b point 4). `value[k]` is the effective target value of
+// cluster k (sqrt(M2) or Q, or for a cluster never visited its prior estimate): a collapsed pair
+// gets the sum, a split shares it. `score[k]` chooses the cluster to split: its share of the
+// cell's variance (the standard deviation of its reward) or its value. Both are kept in step.
 class SplitCollapse {
  public:
   SplitCollapse(const LightTree& tree, int max_size, float threshold) : m_tree(tree), m_max(max_size), m_t(threshold) {}
   // One step: returns 1 for a split with a collapse, 2 for a pure split (K < M), 0 if nothing
   // changed. `weight_of(node)` is the prior weight of a node entering the cut; `share_of(node)`
-  // splits a cluster's Q between its children.
+  // splits a cluster's values between its children.
   template <typename WeightOf, typename ShareOf>
-  int step(Cut& cut, std::vector<float>& qe, const WeightOf& weight_of, const ShareOf& share_of) const;
+  int step(Cut& cut, std::vector<float>& value, std::vector<float>& score, const WeightOf& weight_of,
+           const ShareOf& share_of) const;
 
  private:
   const LightTree& m_tree;
@@ -79,16 +90,17 @@ class SplitCollapse {
 };
 
 template <typename WeightOf, typename ShareOf>
-inline int SplitCollapse::step(Cut& cut, std::vector<float>& qe, const WeightOf& weight_of, const ShareOf& share_of) const {
+inline int SplitCollapse::step(Cut& cut, std::vector<float>& value, std::vector<float>& score,
+                               const WeightOf& weight_of, const ShareOf& share_of) const {
   const size_t K = cut.nodes.size();
-  // l_max: the splittable cluster (more than one light) with the largest Q.
+  // l_max: the splittable cluster (more than one light) with the largest score.
   long best = -1;
   for (size_t k = 0; k < K; ++k)
-    if (!m_tree.node(cut.nodes[k]).is_leaf() && (best < 0 || qe[k] > qe[best])) best = long(k);
-  if (best < 0) return 0;
-  // p_min: among parents whose two children are both in the cut (the minimum of Q over all
-  // nodes above the cut is always attained at such a parent), the one with the smallest Q,
-  // not the parent of l_max.
+    if (!m_tree.node(cut.nodes[k]).is_leaf() && (best < 0 || score[k] > score[best])) best = long(k);
+  if (best < 0 || !(score[best] > 0)) return 0;
+  // p_min: among parents whose two children are both in the cut (the minimum over all nodes
+  // above the cut is always attained at such a parent), the one with the smallest value, not
+  // the parent of l_max: the darkest sibling pair.
   long pmin = -1;
   if (int(K) >= m_max) {
     for (size_t k = 0; k + 1 < K; ++k) {
@@ -97,43 +109,79 @@ inline int SplitCollapse::step(Cut& cut, std::vector<float>& qe, const WeightOf&
       if (a.parent == LightTree::kNone || m_tree.node(a.parent).child != cut.nodes[k] ||
           cut.nodes[k + 1] != cut.nodes[k] + 1)
         continue;
-      if (pmin < 0 || qe[k] + qe[k + 1] < qe[pmin] + qe[pmin + 1]) pmin = long(k);
+      if (pmin < 0 || value[k] + value[k + 1] < value[pmin] + value[pmin + 1]) pmin = long(k);
     }
-    if (pmin < 0 || !(qe[best] > m_t * (qe[pmin] + qe[pmin + 1]))) return 0;
-    // Collapse: the parent replaces its two children, Q summed.
+    if (pmin < 0 || !(score[best] > m_t * (value[pmin] + value[pmin + 1]))) return 0;
+    // Collapse: the parent replaces its two children. Values add; the second moment is the one
+    // the parent has when its two halves are drawn in proportion to sqrt(M2):
+    // sqrt(M2_parent) = sqrt(M2_a) + sqrt(M2_b).
     uint32_t parent = m_tree.node(cut.nodes[pmin]).parent;
-    bool unvisited = cut.q[pmin] < 0 && cut.q[pmin + 1] < 0;
-    qe[pmin] += qe[pmin + 1];
-    cut.q[pmin] = unvisited ? -1.0f : qe[pmin];
-    cut.n[pmin] += cut.n[pmin + 1];
-    cut.nodes[pmin] = parent;
-    cut.weight[pmin] = weight_of(parent);
-    cut.nodes.erase(cut.nodes.begin() + pmin + 1);
-    cut.q.erase(cut.q.begin() + pmin + 1);
-    cut.n.erase(cut.n.begin() + pmin + 1);
-    cut.weight.erase(cut.weight.begin() + pmin + 1);
-    qe.erase(qe.begin() + pmin + 1);
+    const size_t a = size_t(pmin), b = a + 1;
+    bool unvisited = cut.q[a] < 0 && cut.q[b] < 0;
+    float qa = std::max(cut.q[a], 0.0f), qb = std::max(cut.q[b], 0.0f);
+    float sa = std::sqrt(std::max(cut.m2[a], 0.0f)), sb = std::sqrt(std::max(cut.m2[b], 0.0f));
+    value[a] += value[b];
+    score[a] += score[b];
+    cut.q[a] = unvisited ? -1.0f : qa + qb;
+    cut.m2[a] = unvisited ? 0.0f : (sa + sb) * (sa + sb);
+    cut.n[a] += cut.n[b];
+    cut.nodes[a] = parent;
+    cut.weight[a] = weight_of(parent);
+    cut.nodes.erase(cut.nodes.begin() + long(b));
+    cut.q.erase(cut.q.begin() + long(b));
+    cut.m2.erase(cut.m2.begin() + long(b));
+    cut.n.erase(cut.n.begin() + long(b));
+    cut.weight.erase(cut.weight.begin() + long(b));
+    value.erase(value.begin() + long(b));
+    score.erase(score.begin() + long(b));
     if (best > pmin) --best;
   }
-  // Split: l_max's two children replace it, Q shared in proportion to share_of.
+  // Split: l_max's two children replace it, values shared in proportion to share_of (a guess:
+  // each child keeps half the evidence behind it; sqrt(M2) is shared like Q).
   const LightTreeNode& nd = m_tree.node(cut.nodes[best]);
   float s0 = share_of(nd.child), s1 = share_of(nd.child + 1);
-  float f0 = s0 + s1 > 0 ? s0 / (s0 + s1) : 0.5f;
-  float q = cut.q[best], e = qe[best];
-  // The split of Q is a guess: each child keeps half the evidence behind it.
-  float n = 0.5f * cut.n[best];
-  cut.nodes[best] = nd.child;
-  cut.n[best] = n;
-  cut.n.insert(cut.n.begin() + best + 1, n);
-  cut.q[best] = q >= 0 ? q * f0 : -1.0f;
-  qe[best] = e * f0;
-  cut.weight[best] = weight_of(nd.child);
-  cut.nodes.insert(cut.nodes.begin() + best + 1, nd.child + 1);
-  cut.q.insert(cut.q.begin() + best + 1, q >= 0 ? q * (1 - f0) : -1.0f);
-  qe.insert(qe.begin() + best + 1, e * (1 - f0));
-  cut.weight.insert(cut.weight.begin() + best + 1, weight_of(nd.child + 1));
+  float f0 = s0 + s1 > 0 ? s0 / (s0 + s1) : 0.5f, f1 = 1 - f0;
+  const size_t i = size_t(best);
+  float q = cut.q[i], m2 = cut.m2[i], v = value[i], sc = score[i];
+  float n = 0.5f * cut.n[i];
+  cut.nodes[i] = nd.child;
+  cut.nodes.insert(cut.nodes.begin() + long(i) + 1, nd.child + 1);
+  cut.q[i] = q >= 0 ? q * f0 : -1.0f;
+  cut.q.insert(cut.q.begin() + long(i) + 1, q >= 0 ? q * f1 : -1.0f);
+  cut.m2[i] = m2 * f0 * f0;
+  cut.m2.insert(cut.m2.begin() + long(i) + 1, m2 * f1 * f1);
+  cut.n[i] = n;
+  cut.n.insert(cut.n.begin() + long(i) + 1, n);
+  cut.weight[i] = weight_of(nd.child);
+  cut.weight.insert(cut.weight.begin() + long(i) + 1, weight_of(nd.child + 1));
+  value[i] = v * f0;
+  value.insert(value.begin() + long(i) + 1, v * f1);
+  score[i] = sc * f0;
+  score.insert(score.begin() + long(i) + 1, sc * f1);
   return pmin < 0 ? 2 : 1;
 }
+
+// A sum of non-negative values that is exact and independent of the order of additions, over a
+// wide range: values are fixed point with 2^-40 of the unit per step, up to 2^36 units (larger
+// values saturate), held in two 64-bit words (units of 2^-8 and 2^-40) so that 2^19 saturated
+// values or 2^31 ordinary ones fit in a pass. Resolution and range together span 2^76 (1e23).
+struct ExactSum {
+  static constexpr double kMax = 0x1p36;
+  std::atomic<int64_t> hi{0}, lo{0};
+  void add(double x) {  // x: the value in units of scale, >= 0
+    x = std::min(x, kMax);
+    double h = std::floor(x * 0x1p8);
+    hi.fetch_add(int64_t(h), std::memory_order_relaxed);
+    lo.fetch_add(int64_t((x * 0x1p8 - h) * 0x1p32 + 0.5), std::memory_order_relaxed);
+  }
+  double value() const {
+    return double(hi.load(std::memory_order_relaxed)) * 0x1p-8 + double(lo.load(std::memory_order_relaxed)) * 0x1p-40;
+  }
+  void reset() {
+    hi.store(0, std::memory_order_relaxed);
+    lo.store(0, std::memory_order_relaxed);
+  }
+};
 
 class CutStore {
  public:
@@ -153,65 +201,85 @@ class CutStore {
   const uint32_t* nodes(uint32_t cell) const { return &m_node[size_t(cell) * m_m]; }
   const float* cdf(uint32_t cell) const { return &m_cdf[size_t(cell) * m_m]; }
   const float* q(uint32_t cell) const { return &m_q[size_t(cell) * m_m]; }
-  // False while the cell has learnt nothing (every Q zero): its CDF is then the prior's.
+  const float* m2(uint32_t cell) const { return &m_m2[size_t(cell) * m_m]; }
+  // False while the cell has learnt nothing (every value zero): its CDF is then the prior's.
   bool learnt(uint32_t cell) const { return m_learnt[cell] != 0; }
   // The weight of the defensive term for this cell during this pass (1 before it learnt).
   float defensive_weight(uint32_t cell) const { return m_eps[cell]; }
+  // The learnt distribution of the cell's clusters, V(s) / sum V (V = sqrt(M2) or Q), before the
+  // defensive prior is mixed in; empty while the cell has learnt nothing. For tests and tools.
+  std::vector<double> learnt_shares(uint32_t cell) const;
+  // Rewards the cell has received in all passes so far.
+  float seen(uint32_t cell) const { return m_seen[cell]; }
 
   // Called when a cell is created, from any thread: its anchor for prior weights.
   void set_anchor(uint32_t cell, const CellAnchor& a) { m_anchor[cell] = a; }
+  const CellAnchor& anchor(uint32_t cell) const { return m_anchor[cell]; }
 
-  // Adds one reward to cluster k of `cell`; `weighted` is the sample's contribution divided by
-  // its full pmf (an estimate of the cell's total). Thread-safe and never loses an update: sums
-  // are fixed-point integers, so the result does not depend on the order of additions.
-  void record(uint32_t cell, uint32_t k, float reward, float weighted);
+  // Adds one reward to cluster k of `cell` (an index in the cell's cut, or in the initial cut
+  // for a cell without one). Thread-safe and never loses an update: sums are exact, so the
+  // result does not depend on the order threads deliver rewards in. The unit of a cell's sums
+  // is its own largest learnt sqrt(M2) (the brightest light's largest irradiance until it has
+  // one), fixed during a pass: rewards from 2^-40 to 2^36 of it and squares from 2^-20 to 2^18
+  // are resolved, whatever other lights of the scene emit.
+  void record(uint32_t cell, uint32_t k, float reward) {
+    const size_t i = size_t(cell) * m_m + k;
+    const double x = double(reward) * m_inv_unit[cell];
+    m_sum[i].add(x);
+    m_sq[i].add(std::min(x, kMaxRootOfSquare) * std::min(x, kMaxRootOfSquare));
+    m_count[i].fetch_add(1, std::memory_order_relaxed);
+  }
 
   struct PassStats {
     uint32_t splits = 0, collapses = 0;
     bool touched = false;
   };
   // End of pass for one cell (cells are independent: call in parallel). A cell without a cut
-  // gets the initial one; rewards are folded into Q, split-collapse runs, the CDF is rebuilt.
-  // `parent`: a coarser cell around this one whose learnt state a new cell starts from (kNone:
-  // the initial cut with the prior).
-  PassStats end_pass(uint32_t cell, uint32_t parent = ~0u);
-  const CellAnchor& anchor(uint32_t cell) const { return m_anchor[cell]; }
+  // gets the initial one; rewards are folded into Q and M2, split-collapse runs, the CDF is
+  // baked.
+  PassStats end_pass(uint32_t cell);
   // Light powers or positions changed: recompute prior weights and the CDF of a cell.
   void refresh(uint32_t cell);
   // Forgets a cell (eviction).
   void clear(uint32_t cell);
-  // Gives a cell a cut with known values (the oracle): prior weights from the cell's anchor.
+  // Gives a cell a cut with known values (the oracle; value = mean): prior weights from the
+  // cell's anchor, and only the configured defensive weight.
   void assign(uint32_t cell, const std::vector<uint32_t>& nodes, const std::vector<float>& q);
 
   size_t bytes() const;
+  // Bytes of state per cell at M clusters (for memory checks before allocating).
+  static size_t bytes_per_cell(int cut_size);
 
  private:
+  static constexpr double kMaxRootOfSquare = 0x1p18;  // squares saturate at 2^36 too
   void load(uint32_t cell, Cut& cut) const;
   void store(uint32_t cell, const Cut& cut);
   float weight_of(uint32_t cell, uint32_t node) const;
   // The normalized prior of every cluster: mostly weight, with a floor proportional to power.
   void prior(const Cut& cut, std::vector<double>& out) const;
   double power_floor() const;
+  // The effective target value of every cluster: sqrt(M2) or Q where visited, else the prior's
+  // share of what the visited clusters say the cell's total is.
+  void values(const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const;
 
   const LightTree& m_tree;
   CutSettings m_s;
   int m_m;
-  double m_scale;     // fixed point: reward units per integer step
-  double m_log_keep;  // log(1 - alpha)
+  double m_scale;                  // the unit of a cell's sums before it has learnt anything
+  std::vector<double> m_inv_unit;  // per cell: 1 / the unit of its sums during this pass
+  double m_log_keep;            // log(1 - alpha)
 
   std::vector<uint32_t> m_initial, m_initial_ends;
 
   std::vector<uint32_t> m_size;  // K per cell; 0: no cut yet
   std::vector<uint32_t> m_node, m_end;
-  std::vector<float> m_q, m_n, m_weight, m_cdf;
-  std::vector<uint8_t> m_learnt;  // per cell: sum of Q > 0
+  std::vector<float> m_q, m_m2, m_n, m_weight, m_cdf;
+  std::vector<uint8_t> m_learnt;  // per cell: sum of values > 0
   std::vector<float> m_seen;      // per cell: rewards received so far
   std::vector<float> m_eps;       // per cell: defensive weight, frozen during a pass
-  std::vector<float> m_total;  // per cell: learnt estimate of the total contribution (< 0: none)
   std::vector<CellAnchor> m_anchor;
-  std::unique_ptr<std::atomic<int64_t>[]> m_sum;       // per cluster: fixed-point reward sum
-  std::unique_ptr<std::atomic<uint32_t>[]> m_count;    // per cluster: rewards this pass
-  std::unique_ptr<std::atomic<int64_t>[]> m_cell_sum;  // per cell: fixed-point weighted sum
+  std::unique_ptr<ExactSum[]> m_sum, m_sq;            // per cluster: rewards and their squares
+  std::unique_ptr<std::atomic<uint32_t>[]> m_count;  // per cluster: rewards this pass
 };
 
 }  // namespace rll

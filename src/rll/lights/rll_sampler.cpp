@@ -13,6 +13,8 @@ namespace rll {
 RllSettings rll_settings_from(const Params& p) {
   RllSettings s;
   s.cut.cut_size = int(p.get_int("rll.cut_size", s.cut.cut_size));
+  s.cut.initial_size = int(p.get_int("rll.initial_cut", s.cut.cut_size));
+  s.cut.target = p.get_choice("rll.target", "moment", {"moment", "mean"}) == "moment" ? LearnTarget::Moment : LearnTarget::Mean;
   s.cut.alpha = p.get_float("rll.alpha", s.cut.alpha);
   s.cut.threshold = p.get_float("rll.T", s.cut.threshold);
   s.cut.splits = int(p.get_int("rll.splits", s.cut.splits));
@@ -23,9 +25,15 @@ RllSettings rll_settings_from(const Params& p) {
   };
   s.cut.prior = weight("rll.prior");
   s.cut.split = weight("rll.split_by");
-  std::string within = p.get_choice("rll.within", "tree", {"uniform", "power", "tree"});
-  s.within = within == "uniform" ? WithinCluster::Uniform : within == "power" ? WithinCluster::Power : WithinCluster::Tree;
-  std::string defensive = p.get_choice("rll.defensive", "tree", {"tree", "cell"});
+  std::string within = p.get_choice("rll.within", "tree", {"uniform", "power", "tree", "hybrid"});
+  s.within = within == "uniform" ? WithinCluster::Uniform
+             : within == "power" ? WithinCluster::Power
+             : within == "tree"  ? WithinCluster::Tree
+                                 : WithinCluster::Hybrid;
+  long descend = p.get_int("rll.descend_above", s.descend_above);
+  if (descend < 1 || descend > (1l << 30)) fail("--set rll.descend_above={}: must be in [1, 2^30]", descend);
+  s.descend_above = uint32_t(descend);
+  std::string defensive = p.get_choice("rll.defensive", "cell", {"tree", "cell"});
   s.defensive = defensive == "tree" ? Defensive::Tree : Defensive::Cell;
   s.cut.prior_in_cdf = s.defensive == Defensive::Cell;
   std::string reward = p.get_choice("rll.reward", "cluster", {"cluster", "fullpdf"});
@@ -37,7 +45,6 @@ RllSettings rll_settings_from(const Params& p) {
   s.grid.max_cell = p.get_float("rll.max_cell", s.grid.max_cell);
   s.grid.normal_bins = int(p.get_int("rll.normal_bins", s.grid.normal_bins));
   s.grid.jitter = p.get_float("rll.jitter", s.grid.jitter);
-  s.inherit = p.get_bool("rll.inherit", s.inherit);
   s.cut.rule = p.get_choice("rll.learning", "shrinkage", {"shrinkage", "exponential"}) == "shrinkage"
                    ? LearningRule::Shrinkage
                    : LearningRule::Exponential;
@@ -53,8 +60,8 @@ RllSettings rll_settings_from(const Params& p) {
 }
 
 namespace {
-// Rewards are luminances of irradiance-like quantities; the fixed-point scale follows the
-// brightest light so that every scene gets the same relative resolution.
+// Rewards are luminances of irradiance-like quantities; the unit of the exact accumulators is
+// the brightest light's largest irradiance, so that every scene gets the same relative range.
 double reward_scale(const Scene& scene) {
   double s = 0;
   for (const auto& l : scene.lights) {
@@ -75,6 +82,10 @@ RllLightSampler::RllLightSampler(const Scene& scene, const RllSettings& s)
   m_cuts = std::make_unique<CutStore>(m_tree, s.capacity, s.cut, reward_scale(scene));
   m_last_used = std::make_unique<std::atomic<uint32_t>[]>(s.capacity);
   for (uint32_t c = 0; c < s.capacity; ++c) m_last_used[c].store(0, std::memory_order_relaxed);
+  m_points = std::make_unique<std::atomic<int64_t>[]>(size_t(s.capacity) * kPointWords);
+  for (size_t i = 0; i < size_t(s.capacity) * kPointWords; ++i) m_points[i].store(0, std::memory_order_relaxed);
+  m_origin = scene.bounds.lo;
+  m_extent = std::max(1e-20f, length(scene.bounds.hi - scene.bounds.lo));
   refresh_light_powers(scene);
   m_keyer.set_pass(0, 0);
 }
@@ -86,7 +97,8 @@ void RllLightSampler::refresh_light_powers(const Scene& scene) {
 }
 
 size_t RllLightSampler::bytes() const {
-  return m_table->bytes() + m_cuts->bytes() + m_s.capacity * sizeof(uint32_t) + m_power_prefix.size() * sizeof(double);
+  return m_table->bytes() + m_cuts->bytes() + m_s.capacity * (sizeof(uint32_t) + kPointWords * sizeof(int64_t)) +
+         m_power_prefix.size() * sizeof(double);
 }
 
 void RllLightSampler::prepare(LightContext& ctx, float u) const {
@@ -97,8 +109,17 @@ void RllLightSampler::prepare(LightContext& ctx, float u) const {
   uint32_t cell = m_table->find_or_insert(m_keyer.key(coord), &created);
   if (cell == CellTable::kNone) return;  // table full: no cell until eviction makes room
   if (created) m_cuts->set_anchor(cell, m_keyer.anchor(coord));
-  m_last_used[cell].store(uint32_t(m_pass), std::memory_order_relaxed);
+  // Stamp the pass of last use; a write only when it changes (no cache-line traffic per sample).
+  if (m_last_used[cell].load(std::memory_order_relaxed) != uint32_t(m_pass))
+    m_last_used[cell].store(uint32_t(m_pass), std::memory_order_relaxed);
   ctx.cell = cell;
+  if (!m_cuts->active(cell)) {  // the cell's first pass: its points make its anchor
+    std::atomic<int64_t>* w = &m_points[size_t(cell) * kPointWords];
+    const Vec3 q = (ctx.p - m_origin) * (0x1p24f / m_extent);
+    const float v[6] = {q.x, q.y, q.z, ctx.n.x * 0x1p24f, ctx.n.y * 0x1p24f, ctx.n.z * 0x1p24f};
+    for (int i = 0; i < 6; ++i) w[i].fetch_add(int64_t(std::llround(v[i])), std::memory_order_relaxed);
+    w[6].fetch_add(1, std::memory_order_relaxed);
+  }
 }
 
 bool RllLightSampler::has_cut(uint32_t cell) const { return cell != kNoCell && m_cuts->active(cell); }
@@ -108,45 +129,40 @@ RllLightSampler::View RllLightSampler::view(uint32_t cell) const {
   return {m_cuts->initial_size(), m_cuts->initial_ends(), m_cuts->initial_nodes(), nullptr};
 }
 
+bool RllLightSampler::descends(uint32_t begin, uint32_t end) const {
+  return m_s.within == WithinCluster::Tree || (m_s.within == WithinCluster::Hybrid && end - begin > m_s.descend_above);
+}
+
 SampledLight RllLightSampler::sample_within(const LightContext& ctx, uint32_t node, uint32_t begin, uint32_t end,
                                             double u) const {
   const uint32_t count = end - begin;
   if (count == 1) return {begin, 1.0f};
-  switch (m_s.within) {
-    case WithinCluster::Tree: return tree_descend(m_tree, node, ctx.p, ctx.n, u);
-    case WithinCluster::Power: {
-      double lo = m_power_prefix[begin], total = m_power_prefix[end] - lo;
-      if (total > 0) {
-        double target = lo + u * total;
-        auto it = std::upper_bound(m_power_prefix.begin() + begin + 1, m_power_prefix.begin() + end + 1, target);
-        uint32_t l = std::min(uint32_t(it - m_power_prefix.begin()) - 1, end - 1);
-        while (l > begin && m_power_prefix[l + 1] == m_power_prefix[l]) --l;  // never a zero-power light
-        return {l, pmf_within(ctx, node, begin, end, l)};
-      }
-      [[fallthrough]];
-    }
-    case WithinCluster::Uniform: {
-      uint32_t l = begin + std::min(count - 1, uint32_t(u * count));
-      return {l, 1.0f / float(count)};
+  if (descends(begin, end)) return tree_descend(m_tree, node, ctx.p, ctx.n, u);
+  if (m_s.within != WithinCluster::Uniform) {
+    // The static table: light powers in tree order as a prefix sum.
+    double lo = m_power_prefix[begin], total = m_power_prefix[end] - lo;
+    if (total > 0) {
+      double target = lo + u * total;
+      auto it = std::upper_bound(m_power_prefix.begin() + begin + 1, m_power_prefix.begin() + end + 1, target);
+      uint32_t l = std::min(uint32_t(it - m_power_prefix.begin()) - 1, end - 1);
+      while (l > begin && m_power_prefix[l + 1] == m_power_prefix[l]) --l;  // never a zero-power light
+      return {l, float((m_power_prefix[l + 1] - m_power_prefix[l]) / total)};
     }
   }
-  return {};
+  uint32_t l = begin + std::min(count - 1, uint32_t(u * count));
+  return {l, 1.0f / float(count)};
 }
 
 float RllLightSampler::pmf_within(const LightContext& ctx, uint32_t node, uint32_t begin, uint32_t end,
                                   uint32_t light) const {
   const uint32_t count = end - begin;
   if (count == 1) return 1.0f;
-  switch (m_s.within) {
-    case WithinCluster::Tree: return tree_descend_pmf(m_tree, node, light, ctx.p, ctx.n);
-    case WithinCluster::Power: {
-      double total = m_power_prefix[end] - m_power_prefix[begin];
-      if (total > 0) return float((m_power_prefix[light + 1] - m_power_prefix[light]) / total);
-      [[fallthrough]];
-    }
-    case WithinCluster::Uniform: return 1.0f / float(count);
+  if (descends(begin, end)) return tree_descend_pmf(m_tree, node, light, ctx.p, ctx.n);
+  if (m_s.within != WithinCluster::Uniform) {
+    double total = m_power_prefix[end] - m_power_prefix[begin];
+    if (total > 0) return float((m_power_prefix[light + 1] - m_power_prefix[light]) / total);
   }
-  return 0;
+  return 1.0f / float(count);
 }
 
 float RllLightSampler::mixture_pmf(const LightContext& ctx, const View& v, uint32_t k, uint32_t l, float within,
@@ -164,7 +180,8 @@ float RllLightSampler::mixture_pmf(const LightContext& ctx, const View& v, uint3
   int at = path ? path->index_of(node) : -1;
   float reach = at >= 0 ? path->product(0, at) : tree_reach_pmf(m_tree, node, ctx.p, ctx.n);
   *cluster_pmf = (1 - eps) * q + eps * reach;
-  if (m_s.within == WithinCluster::Tree) return *cluster_pmf * within;
+  const uint32_t begin = k > 0 ? v.ends[k - 1] : 0;
+  if (descends(begin, v.ends[k])) return *cluster_pmf * within;
   // Another within-cluster rule: mix the two distributions over lights.
   float tree = path ? path->product(0, path->length - 1) : tree_descend_pmf(m_tree, LightTree::kRoot, l, ctx.p, ctx.n);
   return (1 - eps) * q * within + eps * tree;
@@ -173,8 +190,6 @@ float RllLightSampler::mixture_pmf(const LightContext& ctx, const View& v, uint3
 float RllLightSampler::cdf_width(const View& v, uint32_t k) const {
   return float(double(v.cdf[k]) - (k > 0 ? double(v.cdf[k - 1]) : 0.0));
 }
-
-bool RllLightSampler::learnt(uint32_t cell) const { return m_cuts->learnt(cell); }
 
 SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
   View v = view(ctx.cell);
@@ -201,10 +216,11 @@ SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
     if (!(t.pmf > 0)) return {};
     l = t.light;
     k = cluster_of(v, l);
-    if (m_s.within == WithinCluster::Tree)
+    const uint32_t begin = k > 0 ? v.ends[k - 1] : 0;
+    if (descends(begin, v.ends[k]))
       within = path.product(path.index_of(v.nodes[k]), path.length - 1);
     else
-      within = pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], l);
+      within = pmf_within(ctx, v.nodes[k], begin, v.ends[k], l);
     descent = &path;
   } else {
     // The learnt branch: a cluster from the cell's CDF (first entry above u; zero-width
@@ -252,50 +268,40 @@ void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, flo
   // DESIGN 2: the cluster reward estimates the cluster's total contribution I(s):
   // r = estimate / P(l|s). The original code divided by the full pdf (fixed point P ~ sqrt(I)).
   float reward = m_s.reward == RewardKind::Cluster ? estimate / within : estimate / s.pmf;
-  m_cuts->record(ctx.cell, s.cluster, reward, estimate / s.pmf);
+  m_cuts->record(ctx.cell, s.cluster, reward);
 }
 
 void RllLightSampler::end_pass() {
   if (m_frozen) return;
   const uint32_t cap = m_s.capacity;
   std::atomic<uint32_t> splits{0}, collapses{0}, touched{0};
-  auto run = [&](const std::vector<uint32_t>& cells, bool with_parent) {
-    parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
-      uint32_t sp = 0, co = 0, to = 0;
-      for (size_t i = b; i < e; ++i) {
-        uint32_t c = cells[i];
-        uint32_t parent = ~0u;
-        if (with_parent) {
-          const CellAnchor& a = m_cuts->anchor(c);
-          parent = m_table->find(m_keyer.key(m_keyer.locate_at_level(a.p, a.n, a.level + 1)));
-          if (parent != CellTable::kNone && !m_was_active[parent]) parent = ~0u;
-        }
-        CutStore::PassStats st = m_cuts->end_pass(c, parent);
-        sp += st.splits;
-        co += st.collapses;
-        to += st.touched;
+  std::vector<uint32_t> cells;
+  for (uint32_t c = 0; c < cap; ++c)
+    if (m_table->in_use(c)) cells.push_back(c);
+  parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
+    uint32_t sp = 0, co = 0, to = 0;
+    for (size_t i = b; i < e; ++i) {
+      const uint32_t c = cells[i];
+      std::atomic<int64_t>* w = &m_points[size_t(c) * kPointWords];
+      if (const int64_t count = w[6].load(std::memory_order_relaxed); count > 0 && !m_cuts->active(c)) {
+        double sum[6];
+        for (int j = 0; j < 6; ++j) sum[j] = double(w[j].load(std::memory_order_relaxed)) / double(count) * 0x1p-24;
+        CellAnchor a = m_cuts->anchor(c);
+        a.p = m_origin + Vec3(float(sum[0]), float(sum[1]), float(sum[2])) * m_extent;
+        Vec3 n{float(sum[3]), float(sum[4]), float(sum[5])};
+        if (length_sq(n) > 1e-6f) a.n = normalize(n);
+        m_cuts->set_anchor(c, a);
       }
-      splits += sp;
-      collapses += co;
-      touched += to;
-    });
-  };
-  // Cells with a cut first; then the cells new in this pass, which may start from a coarser
-  // cell's state: only from one that had its cut before this pass (no cell is read while
-  // another thread writes it).
-  std::vector<uint32_t> old_cells, new_cells;
-  m_was_active.assign(cap, 0);
-  for (uint32_t c = 0; c < cap; ++c) {
-    if (!m_table->in_use(c)) continue;
-    if (m_cuts->active(c)) {
-      old_cells.push_back(c);
-      m_was_active[c] = 1;
-    } else {
-      new_cells.push_back(c);
+      for (int j = 0; j < kPointWords; ++j) w[j].store(0, std::memory_order_relaxed);
+      CutStore::PassStats st = m_cuts->end_pass(c);
+      sp += st.splits;
+      co += st.collapses;
+      to += st.touched;
     }
-  }
-  run(old_cells, false);
-  run(new_cells, m_s.inherit);
+    splits += sp;
+    collapses += co;
+    touched += to;
+  });
   m_splits_per_pass.push_back(splits);
   m_collapses_per_pass.push_back(collapses);
   m_touched_per_pass.push_back(touched);
@@ -342,7 +348,7 @@ nlohmann::json RllLightSampler::describe() const {
       mean_cut += m_cuts->size(c);
       ++active;
     }
-  const char* within[] = {"uniform", "power", "tree"};
+  const char* within[] = {"uniform", "power", "tree", "hybrid"};
   nlohmann::json j = {
       {"name", name()},
       {"parameters",
@@ -361,7 +367,9 @@ nlohmann::json RllLightSampler::describe() const {
         {"max_cell", m_s.grid.max_cell},
         {"normal_bins", m_s.grid.normal_bins},
         {"jitter", m_s.grid.jitter},
-        {"inherit", m_s.inherit},
+        {"initial_cut", m_s.cut.initial_size},
+        {"target", m_s.cut.target == LearnTarget::Moment ? "moment" : "mean"},
+        {"descend_above", m_s.descend_above},
         {"learning", m_s.cut.rule == LearningRule::Shrinkage ? "shrinkage" : "exponential"},
         {"prior_samples", m_s.cut.prior_samples},
         {"trust", m_s.cut.trust}}},

@@ -1,8 +1,9 @@
-// Reinforcement Lightcuts Learning (Pantaleoni), as specified in DESIGN.md section 2: per cell
-// of a jittered 5D hash grid, a learnt cut of the light tree with a value per cluster; NEE
-// picks a cluster from the cell's CDF (mixed with a defensive prior), then a light inside it.
-// Every NEE sample rewards its cluster; between passes Q is folded, cuts are adapted by
-// split-collapse and CDFs rebuilt.
+// Reinforcement Lightcuts Learning (Pantaleoni), rebuilt to DESIGN.md section 2b: per cell of
+// a 5D hash grid, a learnt cut of the light tree with the mean and second moment of each
+// cluster's reward; NEE picks a cluster from the cell's baked table (the defensive prior folded
+// in), then a light inside it from a static table or a short descent. Every NEE sample rewards
+// its cluster; between passes the rewards are folded in, cuts grow where the variance is, and
+// the tables are baked again.
 #pragma once
 
 #include <atomic>
@@ -16,20 +17,24 @@
 
 namespace rll {
 
-enum class WithinCluster { Uniform, Power, Tree };
+// How a light is drawn inside a cluster: uniformly (the paper), by power (a static table), by a
+// descent of the light tree below the cluster, or by power in small clusters and by descent in
+// clusters of more than `descend_above` lights (Hybrid).
+enum class WithinCluster { Uniform, Power, Tree, Hybrid };
 enum class RewardKind { Cluster, FullPdf };
-// The defensive term of the cluster distribution: the light tree's probability of the cluster
-// at the shading point itself, or a per-cell prior mixed into the cell's CDF (the paper).
-enum class Defensive { Tree, Cell };
+// The defensive term of the cluster distribution: a per-cell prior folded into the cell's baked
+// table (constant cost), or the light tree's probability of the cluster at the shading point
+// itself (a walk from the root per sample and per pmf).
+enum class Defensive { Cell, Tree };
 
 struct RllSettings {
   CutSettings cut;
   CellGridSettings grid;
   uint32_t capacity = 32768;  // cells
   WithinCluster within = WithinCluster::Tree;
+  uint32_t descend_above = 16;  // Hybrid: clusters of more lights than this are descended
   RewardKind reward = RewardKind::Cluster;
-  Defensive defensive = Defensive::Tree;
-  bool inherit = true;  // new cells start from the learnt state of the coarser cell around them
+  Defensive defensive = Defensive::Cell;
 };
 
 // Reads rll.* parameters (see docs/rll.md for each).
@@ -66,7 +71,7 @@ class RllLightSampler final : public LightSampler {
     const float* cdf;
   };
   bool has_cut(uint32_t cell) const;
-  bool learnt(uint32_t cell) const;
+  bool descends(uint32_t begin, uint32_t end) const;
   uint32_t cluster_of(const View& v, uint32_t light) const;
   // Probability of cluster k in the cell's CDF: the exact width of its interval.
   float cdf_width(const View& v, uint32_t k) const;
@@ -87,8 +92,14 @@ class RllLightSampler final : public LightSampler {
   std::unique_ptr<CellTable> m_table;
   std::unique_ptr<CutStore> m_cuts;
   std::unique_ptr<std::atomic<uint32_t>[]> m_last_used;  // pass of last lookup, per cell
+  // A new cell's anchor is the mean of the points that used it in its first pass (a point on
+  // the surfaces it covers, where the box centre may lie behind a wall or above a lamp): exact
+  // fixed-point sums of position (units of 2^-24 of the scene diameter) and normal, and a count.
+  static constexpr int kPointWords = 7;
+  std::unique_ptr<std::atomic<int64_t>[]> m_points;
+  Vec3 m_origin;
+  float m_extent = 1;
   std::vector<double> m_power_prefix;                    // per light, tree order
-  std::vector<uint8_t> m_was_active;  // end_pass scratch: cells that had a cut before the pass
   uint64_t m_pass = 0;
   bool m_frozen = false;
   // Statistics.
