@@ -8,7 +8,8 @@
 # built once under build-v1/ and run beside the current samplers, on the same reference.
 # Rewrites bench/RESULTS.md; every report stays under out/bench/. Takes about 80 minutes on 2
 # cores; BENCH_QUICK=1 checks the pipeline in a few minutes (its figures mean nothing);
-# BENCH_V1=0 skips the first version.
+# BENCH_V1=0 skips the first version; BENCH_RES, BENCH_SECONDS, BENCH_REF_DIRECT, BENCH_REF_PATH and
+# BENCH_REF_SAMPLER (default rll) override the resolution, the budget and the references.
 set -euo pipefail
 build=${1:-build}
 rll="$build/rll"
@@ -24,6 +25,7 @@ fi
 parts=${BENCH_PARTS:-"equal-time equal-spp ablation seed-to-seed rays samplers"}
 want() { [[ " $parts " == *" $1 "* ]]; }
 ref_direct=${BENCH_REF_DIRECT:-$ref_direct}; ref_path=${BENCH_REF_PATH:-$ref_path}
+res=${BENCH_RES:-$res}; seconds=${BENCH_SECONDS:-$seconds}; ref_sampler=${BENCH_REF_SAMPLER:-rll}
 samplers=power,tree,rll,oracle
 V1_COMMIT=a3cbdd4
 v1="build-v1/rll"
@@ -39,7 +41,7 @@ fi
 # noise adds the same variance to every sampler's error and favours none; rll is used because,
 # at the same cost, its reference is the least noisy on the occluded scenes, which keeps the
 # ratios from being compressed towards 1 by reference noise.
-common=(--res "$res" --repeats "$repeats" --reference-sampler rll --quiet)
+common=(--res "$res" --repeats "$repeats" --reference-sampler "$ref_sampler" --quiet)
 run() {  # name, then compare arguments
   local name=$1; shift
   echo "bench: $name"
