@@ -117,12 +117,11 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   for (size_t i = 0; i < n; ++i) m_count[i].store(0, std::memory_order_relaxed);
 }
 
-size_t CutStore::bytes_per_cell(int cut_size) {
-  return size_t(cut_size) * (2 * sizeof(uint32_t) + 5 * sizeof(float) + 2 * sizeof(ExactSum) + sizeof(uint32_t)) +
-         sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t) + sizeof(double) + sizeof(CellAnchor);
+size_t CutStore::bytes() const {
+  const size_t per_cell = size_t(m_m) * (2 * sizeof(uint32_t) + 5 * sizeof(float) + 2 * sizeof(ExactSum) + sizeof(uint32_t)) +
+                          sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t) + sizeof(double) + sizeof(CellAnchor);
+  return m_size.size() * per_cell;
 }
-
-size_t CutStore::bytes() const { return m_size.size() * bytes_per_cell(m_m); }
 
 float CutStore::weight_of(uint32_t cell, uint32_t node) const {
   if (m_s.prior == ClusterWeight::Power) return m_tree.node(node).bounds.power;
@@ -310,8 +309,7 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
     if (largest > 0 && std::isfinite(largest)) m_inv_unit[cell] = 1 / largest;
     // Split-collapse on the new values: split by the cluster's share of the cell's variance
     // (the standard deviation of its reward) under target=moment, by value (the paper's Q)
-    // under target=mean.
-    prior(cut, pri);
+    // under target=mean. (The prior is unchanged: folding touches no node or weight.)
     values(cut, pri, val);
     thread_local std::vector<float> score;
     score.resize(K);

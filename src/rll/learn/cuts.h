@@ -209,8 +209,6 @@ class CutStore {
   // The learnt distribution of the cell's clusters, V(s) / sum V (V = sqrt(M2) or Q), before the
   // defensive prior is mixed in; empty while the cell has learnt nothing. For tests and tools.
   std::vector<double> learnt_shares(uint32_t cell) const;
-  // Rewards the cell has received in all passes so far.
-  float seen(uint32_t cell) const { return m_seen[cell]; }
 
   // Called when a cell is created, from any thread: its anchor for prior weights.
   void set_anchor(uint32_t cell, const CellAnchor& a) { m_anchor[cell] = a; }
@@ -247,8 +245,6 @@ class CutStore {
   void assign(uint32_t cell, const std::vector<uint32_t>& nodes, const std::vector<float>& q);
 
   size_t bytes() const;
-  // Bytes of state per cell at M clusters (for memory checks before allocating).
-  static size_t bytes_per_cell(int cut_size);
 
  private:
   static constexpr double kMaxRootOfSquare = 0x1p18;  // squares saturate at 2^36 too
@@ -265,9 +261,8 @@ class CutStore {
   const LightTree& m_tree;
   CutSettings m_s;
   int m_m;
-  double m_scale;                  // the unit of a cell's sums before it has learnt anything
-  std::vector<double> m_inv_unit;  // per cell: 1 / the unit of its sums during this pass
-  double m_log_keep;            // log(1 - alpha)
+  double m_scale;     // the unit of a cell's sums before it has learnt anything
+  double m_log_keep;  // log(1 - alpha)
 
   std::vector<uint32_t> m_initial, m_initial_ends;
 
@@ -278,6 +273,7 @@ class CutStore {
   std::vector<float> m_seen;      // per cell: rewards received so far
   std::vector<float> m_eps;       // per cell: defensive weight, frozen during a pass
   std::vector<CellAnchor> m_anchor;
+  std::vector<double> m_inv_unit;  // per cell: 1 / the unit of its sums during this pass
   std::unique_ptr<ExactSum[]> m_sum, m_sq;            // per cluster: rewards and their squares
   std::unique_ptr<std::atomic<uint32_t>[]> m_count;  // per cluster: rewards this pass
 };
