@@ -24,6 +24,13 @@ using namespace rll::test;
 
 namespace {
 
+// A next-event record with only the estimate (what rll's default reward reads).
+NeeRecord nee(float estimate) {
+  NeeRecord r;
+  r.estimate = r.unoccluded = r.max_rgb = estimate;
+  return r;
+}
+
 // A floor under two small lamps facing down. Lamp B sits inside a closed box: it lights the
 // box's inside only, though a visibility-blind sampler rates it as highly as lamp A.
 Scene two_lamps() {
@@ -221,7 +228,7 @@ TEST(RllLearning, RewardsOfANewCellReachTheClustersOfTheirLights) {
     ASSERT_NE(coarse.cell, kNoCell);
     for (int i = 0; i < 2000; ++i) {
       SampledLight s = rll.sample(coarse, rng.next_double());
-      if (s.pmf > 0) rll.record(coarse, s, s.light < half ? 1.0f : 0.0f);
+      if (s.pmf > 0) rll.record(coarse, s, nee(s.light < half ? 1.0f : 0.0f));
     }
     rll.end_pass();
   }
@@ -232,7 +239,7 @@ TEST(RllLearning, RewardsOfANewCellReachTheClustersOfTheirLights) {
   ASSERT_FALSE(rll.cuts().active(fine.cell));
   for (int i = 0; i < 4000; ++i) {
     SampledLight s = rll.sample(fine, rng.next_double());
-    if (s.pmf > 0) rll.record(fine, s, s.light >= half ? 1.0f : 0.0f);
+    if (s.pmf > 0) rll.record(fine, s, nee(s.light >= half ? 1.0f : 0.0f));
   }
   rll.end_pass();
   rll.prepare(coarse, 0.0f);

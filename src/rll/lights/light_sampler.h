@@ -36,6 +36,24 @@ struct SampledLight {
   float cluster_pmf = 0;    // probability of that cluster
 };
 
+// What the integrator reports of one next-event sample to a learning sampler. Each learner makes
+// its own reward of these: rll the cluster's contribution (estimate / P(l | cluster)), Fermat's
+// RLL the largest channel of the full weighted contribution over the full pdf, Wang et al. a
+// second moment.
+struct NeeRecord {
+  // Luminance of f * Le * G * V / pdf(y | light): the sample's contribution before dividing by
+  // the light's pmf, without the path throughput or the MIS weight.
+  float estimate = 0;
+  // The same without the shadow ray's verdict (V = 1): zero when the light cannot contribute
+  // here at all (behind the surface, outside its emission cone, a black BSDF).
+  float unoccluded = 0;
+  // MIS weight of the light sample against the BSDF's (1 without MIS).
+  float mis_weight = 1;
+  // Largest RGB component of throughput * f * Le * G * V * mis_weight / pdf(y | light) (divide
+  // by the light's pmf for the full pdf).
+  float max_rgb = 0;
+};
+
 class LightSampler {
  public:
   virtual ~LightSampler() = default;
@@ -55,14 +73,13 @@ class LightSampler {
   // Probability that sample(ctx, .) returns `light`.
   virtual float pmf(const LightContext& ctx, uint32_t light) const = 0;
 
-  // Learning samplers only. One call per next-event sample, zeros included: `estimate` is the
-  // luminance of f * Le * G * V / pdf(y | light), the sample's contribution before dividing by
-  // the light's pmf; safe to call from many threads at once.
+  // Learning samplers only. One call per next-event sample, zeros included (see NeeRecord);
+  // safe to call from many threads at once.
   virtual bool learns() const { return false; }
-  virtual void record(const LightContext& ctx, const SampledLight& s, float estimate) {
+  virtual void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) {
     (void)ctx;
     (void)s;
-    (void)estimate;
+    (void)r;
   }
   // Between passes: adapt to what was recorded (no sample/record calls run concurrently).
   virtual void end_pass() {}

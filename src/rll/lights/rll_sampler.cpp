@@ -261,8 +261,9 @@ float RllLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
   return mixture_pmf(ctx, v, k, light, within, nullptr, &cluster_pmf);
 }
 
-void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, float estimate) {
+void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) {
   if (m_frozen) return;
+  const float estimate = r.estimate;
   if (ctx.cell == kNoCell || !(s.pmf > 0) || !(estimate >= 0) || !std::isfinite(estimate)) return;
   const float within = s.pmf / s.cluster_pmf;
   // DESIGN 2: the cluster reward estimates the cluster's total contribution I(s):

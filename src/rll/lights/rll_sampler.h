@@ -49,7 +49,7 @@ class RllLightSampler final : public LightSampler {
   SampledLight sample(const LightContext& ctx, double u) const override;
   float pmf(const LightContext& ctx, uint32_t light) const override;
   bool learns() const override { return !m_frozen; }
-  void record(const LightContext& ctx, const SampledLight& s, float estimate) override;
+  void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) override;
   void end_pass() override;
   void lights_changed(const Scene& scene) override;
   nlohmann::json describe() const override;

@@ -87,8 +87,8 @@ inline void seek(SampleStream& stream, int depth, VertexDim d) {
 }
 }  // namespace
 
-Rgb Integrator::sample_light(const Vertex& v, SampleStream& stream, RayCounters& counters,
-                             bool mis) const {
+Rgb Integrator::sample_light(const Vertex& v, const Rgb& beta, SampleStream& stream,
+                             RayCounters& counters, bool mis) const {
   seek(stream, v.depth, kLightChoice);
   double u_light = stream.next_double();
   Vec2 u_pos = stream.next2();
@@ -96,10 +96,11 @@ Rgb Integrator::sample_light(const Vertex& v, SampleStream& stream, RayCounters&
   if (sl.pmf <= 0) return Rgb(0);
   const Light& light = m_scene.lights[sl.light];
   LightLiSample ls = sample_li(light, v.ctx.p, u_pos);
-  Rgb contribution(0);
+  Rgb contribution(0), unoccluded(0);
   if (ls.pdf > 0) {
     Rgb f = v.bsdf->eval(v.wo, ls.wi) * absdot(ls.wi, v.bsdf->shading_normal());
     if (!is_black(f)) {
+      unoccluded = f * ls.L / ls.pdf;
       Ray shadow;
       if (std::isfinite(ls.dist)) {
         Vec3 ny = light.type == LightType::Triangle ? light.n : Vec3(0);
@@ -109,16 +110,23 @@ Rgb Integrator::sample_light(const Vertex& v, SampleStream& stream, RayCounters&
                            length(v.ctx.p - m_scene.bounds.center()) + 1.01f * m_scene.radius);
       }
       ++counters.shadow;
-      if (!m_accel.occluded(shadow)) contribution = f * ls.L / ls.pdf;
+      if (!is_black(unoccluded) && !m_accel.occluded(shadow)) contribution = unoccluded;
     }
   }
-  if (m_learns) m_sampler.record(v.ctx, sl, luminance(contribution));
-  if (is_black(contribution)) return contribution;
   float w = 1;
-  if (mis && !light.is_delta()) {
+  if (mis && !light.is_delta() && !is_black(contribution)) {
     float bsdf_pdf = v.bsdf->pdf(v.wo, ls.wi);
     w = power_heuristic(sl.pmf * ls.pdf, bsdf_pdf);
   }
+  if (m_learns) {
+    NeeRecord r;
+    r.estimate = luminance(contribution);
+    r.unoccluded = luminance(unoccluded);
+    r.mis_weight = w;
+    r.max_rgb = max_component(beta * contribution) * w;
+    m_sampler.record(v.ctx, sl, r);
+  }
+  if (is_black(contribution)) return contribution;
   return contribution * (w / sl.pmf);
 }
 
@@ -176,7 +184,7 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
       m_sampler.prepare(v.ctx, stream.next());
     }
 
-    if (strategy != LightStrategy::Bsdf) L += beta * sample_light(v, stream, counters, mis);
+    if (strategy != LightStrategy::Bsdf) L += beta * sample_light(v, beta, stream, counters, mis);
     // The last vertex's BSDF ray only finds emission, which light sampling alone leaves out.
     const bool last = depth + 1 >= max_depth;
     if (last && strategy == LightStrategy::Nee) break;

@@ -53,7 +53,8 @@ class Integrator {
   struct Vertex;
   // One next-event sample at a vertex: returns its contribution (MIS-weighted for `path`),
   // already divided by the light pmf, before the path throughput.
-  Rgb sample_light(const Vertex& v, SampleStream& stream, RayCounters& counters, bool mis) const;
+  Rgb sample_light(const Vertex& v, const Rgb& beta, SampleStream& stream, RayCounters& counters,
+                   bool mis) const;
 
   const Scene& m_scene;
   const Accel& m_accel;
