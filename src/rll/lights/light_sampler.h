@@ -24,6 +24,7 @@ struct LightContext {
   Vec3 p;
   Vec3 n;   // geometric normal on the side the path arrived from (zero: no surface)
   Vec3 ns;  // shading normal, same side as n
+  Vec3 wo;  // direction towards where the path came from (zero: unknown)
   float footprint = 0;     // ray footprint radius at this vertex, world units
   uint32_t cell = kNoCell;  // per-point sampler state (an RLL cell), set by prepare()
 };

@@ -175,6 +175,7 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     v.ctx.p = sh.p;
     v.ctx.n = bsdf.geometric_normal();
     v.ctx.ns = bsdf.shading_normal();
+    v.ctx.wo = wo;
     v.ctx.footprint = footprint;
     v.wo = wo;
     v.bsdf = &bsdf;
