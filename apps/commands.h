@@ -2,7 +2,9 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -17,18 +19,55 @@ void add_reference_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_convert_command(CLI::App& app);
 
-// Set by SIGINT: renders stop at the next tile and still write what they have.
+// SIGINT, SIGTERM and SIGHUP: before begin_work() nothing would be lost, so the program ends at
+// once; after it, renders stop at the next tile, the command writes what it has and exits with
+// 128 + the signal. Further signals only say that it is stopping: they never cut a write short.
 bool interrupted();
+int interrupt_exit_code();
 const std::atomic<bool>* interrupt_flag();
 void install_interrupt_handler();
+void begin_work();
+
+// Ends a command stopped by a signal once what it had is written: main prints the message and
+// exits with interrupt_exit_code().
+struct Interrupted : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Checks of numeric flags, shared by every command so that each rejects the same things: the
+// whole text must be a number (no wrap-around of an integer past its type, no NaN or infinity),
+// within [lo, hi].
+CLI::Validator integer_in(long long lo, long long hi);
+CLI::Validator unsigned_integer();  // any value of a uint64_t (seeds)
+// `positive`: lo itself is refused (a time of 0 seconds).
+CLI::Validator number_in(double lo, double hi, bool positive = false);
+
+// Limits shared by the commands' flags.
+inline constexpr long long kMaxSpp = (1 << 30) - 1;
+inline constexpr long long kMaxPassSpp = 1024;  // passes double from it 20 times at most
+inline constexpr long long kMaxThreads = 4096;
+inline constexpr long long kMaxFrames = 1000000;
+inline constexpr double kMaxSeconds = 1e7;
+inline constexpr double kMaxExposure = 64;
 
 // The options of every command that renders a scene: the scene, --integrator, --max-depth,
-// --res and --set.
+// --res, --points and --set.
 void add_session_options(CLI::App* cmd, SessionSettings& settings);
-// Checks an output file's extension before any work is done, and creates its folder.
+
+// The files a scene reads: the scene file itself and, followed through text formats (JSON,
+// OBJ, MTL, glTF, pbrt), every existing file they name (meshes, material libraries, buffers,
+// textures, includes). Empty for builtin:NAME.
+std::vector<std::filesystem::path> scene_inputs(const std::string& spec);
+// Throws rll::Error naming both when `out` is one of `inputs`: no command writes over its input.
+void refuse_input(const std::filesystem::path& out, const std::string& flag,
+                  const std::vector<std::filesystem::path>& inputs);
+
+// Checks an output file's extension (any case) before any work is done, creates its folder and
+// checks that a file can be created there.
 void prepare_output(const std::filesystem::path& p, const char* flag,
                     const std::vector<std::string>& extensions);
-// Creates an output folder (and its parents); throws rll::Error naming the flag.
+// Creates an output folder (and its parents) and checks that a file can be created in it;
+// throws rll::Error naming the flag.
 void prepare_output_dir(const std::filesystem::path& dir, const char* flag);
 
 }  // namespace rll::cli

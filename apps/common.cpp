@@ -1,12 +1,76 @@
 // Options and output checks shared by the rendering subcommands.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <set>
 
 #include "commands.h"
 #include "rll/core/error.h"
 
 namespace rll::cli {
 namespace fs = std::filesystem;
+
+namespace {
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// The whole of `text` as a decimal integer; false on anything else, an overflow included.
+template <typename T>
+bool parse_integer(const std::string& text, T& value) {
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  return ec == std::errc() && ptr == end && !text.empty();
+}
+
+}  // namespace
+
+CLI::Validator integer_in(long long lo, long long hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        long long v = 0;
+        if (!parse_integer(text, v) || v < lo || v > hi)
+          return fmt::format("'{}' is not a whole number in [{}, {}]", text, lo, hi);
+        return {};
+      },
+      fmt::format("INT in [{}, {}]", lo, hi));
+}
+
+CLI::Validator unsigned_integer() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        uint64_t v = 0;
+        if (!parse_integer(text, v))
+          return fmt::format("'{}' is not a whole number in [0, {}]", text, UINT64_MAX);
+        return {};
+      },
+      "UINT64");
+}
+
+CLI::Validator number_in(double lo, double hi, bool positive) {
+  return CLI::Validator(
+      [lo, hi, positive](std::string& text) -> std::string {
+        errno = 0;
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        const bool ok = !text.empty() && end == text.c_str() + text.size() && errno == 0 &&
+                        std::isfinite(v) && v <= hi && (positive ? v > lo : v >= lo);
+        if (!ok)
+          return fmt::format("'{}' is not a finite number in {}{}, {}]", text, positive ? "(" : "[",
+                             lo, hi);
+        return {};
+      },
+      fmt::format("NUMBER in {}{}, {}]", positive ? "(" : "[", lo, hi));
+}
 
 void add_session_options(CLI::App* cmd, SessionSettings& s) {
   cmd->add_option("scene", s.scene,
@@ -19,8 +83,12 @@ void add_session_options(CLI::App* cmd, SessionSettings& s) {
       ->capture_default_str();
   cmd->add_option("--max-depth", s.max_depth,
                   "Path length limit (path integrator; 1 = direct light)")
-      ->capture_default_str();
-  cmd->add_option("--res", s.resolution, "Film resolution WIDTHxHEIGHT (default: the scene's)");
+      ->capture_default_str()
+      ->check(integer_in(1, 10000));
+  cmd->add_option("--res", s.resolution,
+                  fmt::format("Film resolution WIDTHxHEIGHT, each from 1 to {}, at most {} pixels "
+                              "(default: the scene's)",
+                              kMaxFilmSide, kMaxFilmPixels));
   cmd->add_option(
          "--points", s.points,
          "Sample points: sobol (Owen-scrambled Sobol', per pixel) or independent (a hash per "
@@ -31,24 +99,143 @@ void add_session_options(CLI::App* cmd, SessionSettings& s) {
       ->take_all();
 }
 
+namespace {
+
+// Formats whose text names other files that a scene reads.
+bool names_files(const std::string& ext) {
+  return ext == ".json" || ext == ".obj" || ext == ".mtl" || ext == ".gltf" || ext == ".pbrt";
+}
+
+bool is_file_reference(const std::string& token) {
+  static const std::set<std::string> kExtensions = {
+      ".json", ".obj",  ".mtl", ".gltf", ".glb", ".bin", ".ply", ".pbrt", ".exr", ".png",
+      ".jpg",  ".jpeg", ".hdr", ".tga",  ".bmp", ".pfm", ".ppm", ".pgm",  ".tif", ".tiff"};
+  return kExtensions.count(lower(fs::path(token).extension().string())) > 0;
+}
+
+// Candidate file names in one line: quoted strings whole, and words.
+void add_candidates(const std::string& line, std::vector<std::string>& out) {
+  for (size_t q = line.find('"'); q != std::string::npos;) {
+    size_t e = line.find('"', q + 1);
+    if (e == std::string::npos) break;
+    out.push_back(line.substr(q + 1, e - q - 1));
+    q = line.find('"', e + 1);
+  }
+  std::string word;
+  for (char c : line + " ") {
+    if (std::isspace(static_cast<unsigned char>(c)) || c == '"' || c == ',' || c == '[' ||
+        c == ']' || c == '{' || c == '}') {
+      if (!word.empty()) out.push_back(word);
+      word.clear();
+    } else {
+      word += c;
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<fs::path> scene_inputs(const std::string& spec) {
+  std::vector<fs::path> inputs;
+  if (spec.rfind("builtin:", 0) == 0) return inputs;
+  std::error_code ec;
+  if (!fs::is_regular_file(spec, ec)) return inputs;  // the loader reports a missing scene
+  const fs::path root_dir = fs::path(spec).parent_path();
+  std::set<fs::path> seen;
+  std::vector<fs::path> todo = {fs::path(spec)};
+  // A scene's files are few; the bound keeps a pathological one from taking long.
+  constexpr size_t kMaxFiles = 10000;
+  constexpr std::streamoff kMaxScanBytes = std::streamoff(64) << 20;
+  while (!todo.empty() && inputs.size() < kMaxFiles) {
+    const fs::path file = todo.back();
+    todo.pop_back();
+    const fs::path canonical = fs::weakly_canonical(file, ec);
+    if (ec || !seen.insert(canonical).second) continue;
+    inputs.push_back(file);
+    const std::string ext = lower(file.extension().string());
+    if (!names_files(ext)) continue;
+    std::ifstream in(file, std::ios::binary);
+    std::string line;
+    std::vector<std::string> candidates;
+    while (std::getline(in, line) && in.tellg() < kMaxScanBytes) {
+      // OBJ names other files only in mtllib lines; the vertex lines are most of a large one.
+      if (ext == ".obj" && line.rfind("mtllib", 0) != 0) continue;
+      candidates.clear();
+      add_candidates(line, candidates);
+      for (const auto& c : candidates) {
+        if (!is_file_reference(c)) continue;
+        // Relative names resolve against the naming file's folder (pbrt: the first file's).
+        for (const fs::path& base : {file.parent_path(), root_dir}) {
+          const fs::path p = fs::path(c).is_absolute() ? fs::path(c) : base / c;
+          if (fs::is_regular_file(p, ec)) {
+            todo.push_back(p);
+            break;
+          }
+        }
+      }
+    }
+  }
+  return inputs;
+}
+
+void refuse_input(const fs::path& out, const std::string& flag,
+                  const std::vector<fs::path>& inputs) {
+  std::error_code ec;
+  for (const auto& in : inputs) {
+    // Writes replace the file's folder entry (write, then rename), so only the same entry, by
+    // whatever path, loses the input: other hard links keep their content.
+    if (out.filename() != in.filename()) continue;
+    if (fs::equivalent(out, in, ec))
+      fail("{} {} is the input file '{}': refusing to write over it (choose another output)", flag,
+           out.string(), in.string());
+  }
+}
+
+namespace {
+
+// Creates and removes a file in `dir`, so that a folder that cannot be written is reported
+// before the render rather than after it.
+void check_writable(const fs::path& dir, const std::string& what) {
+  const fs::path probe =
+      (dir.empty() ? fs::path(".") : dir) / fmt::format(".rll-write-test-{}", ::getpid());
+  std::FILE* f = std::fopen(probe.c_str(), "wb");
+  int err = f ? 0 : errno;
+  if (f) {
+    if (std::fputc('x', f) == EOF) err = errno;
+    if (std::fclose(f) != 0 && !err) err = errno;
+    std::error_code ec;
+    fs::remove(probe, ec);
+  }
+  if (err)
+    fail("{}: cannot write in folder '{}': {}", what, dir.empty() ? "." : dir.string(),
+         std::strerror(err));
+}
+
+}  // namespace
+
 void prepare_output(const fs::path& p, const char* flag,
                     const std::vector<std::string>& extensions) {
-  std::string ext = p.extension().string();
+  const std::string ext = lower(p.extension().string());
   if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end())
     fail("{} {}: the file must end in {}", flag, p.string(), fmt::join(extensions, " or "));
   std::error_code ec;
+  if (fs::is_directory(p, ec)) fail("{} {}: is a folder, not a file", flag, p.string());
   if (p.has_parent_path() && !fs::exists(p.parent_path()) &&
       !fs::create_directories(p.parent_path(), ec))
     fail("{} {}: cannot create folder '{}': {}", flag, p.string(), p.parent_path().string(),
          ec.message());
+  if (p.has_parent_path() && !fs::is_directory(p.parent_path(), ec))
+    fail("{} {}: '{}' is not a folder", flag, p.string(), p.parent_path().string());
+  check_writable(p.parent_path(), fmt::format("{} {}", flag, p.string()));
 }
 
 void prepare_output_dir(const fs::path& dir, const char* flag) {
   std::error_code ec;
-  if (fs::is_directory(dir, ec)) return;
-  if (fs::exists(dir, ec)) fail("{} {}: exists and is not a folder", flag, dir.string());
-  if (!fs::create_directories(dir, ec))
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    fail("{} {}: exists and is not a folder", flag, dir.string());
+  if (!fs::is_directory(dir, ec) && !fs::create_directories(dir, ec))
     fail("{} {}: cannot create folder: {}", flag, dir.string(), ec.message());
+  check_writable(dir, fmt::format("{} {}", flag, dir.string()));
 }
 
 }  // namespace rll::cli

@@ -4,7 +4,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
+#include <fstream>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -41,11 +44,12 @@ struct CompareOptions {
   std::string cache_dir;
   std::string out;
   float exposure = 0;
+  std::string plot_metric = "relmse";
   bool quiet = false;
 };
 
-// A reference should have many more samples than the runs: its own noise adds to every
-// sampler's measured error alike and squeezes the ratios towards 1.
+// A reference whose noise cannot be subtracted should have many more samples than the runs: its
+// own noise adds to every sampler's measured error alike and squeezes the ratios towards 1.
 constexpr double kReferenceSppFactor = 8;
 
 std::vector<std::string> parse_sampler_list(const std::string& list) {
@@ -87,6 +91,10 @@ std::string budget_text(const CompareOptions& o) {
 bool is_run_seed(const CompareOptions& o, uint64_t s) {
   return s >= o.seed && s - o.seed < uint64_t(o.repeats);
 }
+// A reference's halves use its seed and the next one.
+bool reference_shares_a_run_seed(const CompareOptions& o, uint64_t s) {
+  return is_run_seed(o, s) || is_run_seed(o, s + 1);
+}
 
 // Checks every flag that can be checked before the scene (perhaps slow to load) is read.
 std::vector<std::string> check_flags(const CompareOptions& o) {
@@ -101,11 +109,12 @@ std::vector<std::string> check_flags(const CompareOptions& o) {
   if (o.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
   if (o.reference.empty() && o.reference_request.spp < 1)
     fail("--reference-spp must be at least 1");
-  if (o.reference.empty() && is_run_seed(o, o.reference_request.seed))
+  if (o.reference.empty() && reference_shares_a_run_seed(o, o.reference_request.seed))
     fail(
-        "--reference-seed {} is also the seed of a run (--seed {} with {} repeats): the reference "
-        "would share their noise",
-        o.reference_request.seed, o.seed, o.repeats);
+        "--reference-seed {} (and {}, its second half) overlaps the seeds of the runs (--seed {} "
+        "with {} repeats): the reference would share their noise",
+        o.reference_request.seed, o.reference_request.seed + 1, o.seed, o.repeats);
+  metric_label(o.plot_metric);  // throws for an unknown name
   if (o.out.empty()) fail("--out DIR is required");
   return samplers;
 }
@@ -124,9 +133,34 @@ void check_samplers(const CompareOptions& o, const RenderSession& session,
 
 struct ChosenReference {
   Image image;
+  Image variance;       // per pixel and channel; empty when unknown
   nlohmann::json json;  // for summary.json
   std::string caption;
 };
+
+// A reference file must be a linear, high-dynamic-range image with finite pixels.
+void check_reference_file(const std::string& path, const Image& image) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".png")
+    fail("--reference {}: a PNG holds 8-bit sRGB values clamped at 1, not a rendering's radiance; "
+         "give the reference as .exr (or .hdr)",
+         path);
+  size_t bad = 0;
+  for (size_t i = 0; i < image.pixel_count(); ++i) bad += !is_finite(image[i]);
+  if (bad)
+    fail("--reference {}: {} pixels are NaN or infinite; every error against it would be NaN",
+         path, bad);
+}
+
+// The reference's own noise, in relMSE units: the mean of Var(ref) / (ref^2 + eps).
+double reference_noise_relmse(const Image& ref, const Image& variance) {
+  double sum = 0;
+  for (size_t i = 0; i < ref.pixel_count(); ++i)
+    for (int c = 0; c < 3; ++c)
+      sum += double(variance[i][c]) / (double(ref[i][c]) * ref[i][c] + kRelMseEpsilon);
+  return sum / (3.0 * double(ref.pixel_count()));
+}
 
 // --reference, or the cache's reference, or a new one rendered into the cache.
 ChosenReference choose_reference(const CompareOptions& o, const RenderSession& session) {
@@ -134,6 +168,7 @@ ChosenReference choose_reference(const CompareOptions& o, const RenderSession& s
   const Scene& scene = session.scene();
   if (!o.reference.empty()) {
     ref.image = read_image(o.reference);
+    check_reference_file(o.reference, ref.image);
     if (ref.image.width() != scene.width || ref.image.height() != scene.height)
       fail("--reference {}: the image is {}x{} but the scene renders at {}x{}", o.reference,
            ref.image.width(), ref.image.height(), scene.width, scene.height);
@@ -145,13 +180,15 @@ ChosenReference choose_reference(const CompareOptions& o, const RenderSession& s
   ReferenceRequest request = o.reference_request;
   request.pass_spp = o.pass_spp;
   request.max_pass_spp = o.max_pass_spp;
-  request.seed_allowed = [&](uint64_t s) { return !is_run_seed(o, s); };
+  request.seed_allowed = [&](uint64_t s) { return !reference_shares_a_run_seed(o, s); };
   ObtainedReference got = obtain_reference(session, cache, request, !o.quiet, interrupt_flag());
-  if (!got.complete) fail("interrupted while rendering the reference; nothing was written");
+  if (!got.complete)
+    throw Interrupted("interrupted while rendering the reference; nothing was written");
   fmt::print(stderr, "reference: {} {} ({} spp, sampler {})\n",
              got.from_cache ? "reused" : "rendered and cached", got.info.image.string(),
              got.info.spp, got.info.sampler);
   ref.image = std::move(got.image);
+  ref.variance = std::move(got.variance);
   ref.json = {{"source", got.from_cache ? "cache" : "rendered"},
               {"cache_entry", got.info.image.string()},
               {"sampler", got.info.sampler},
@@ -159,13 +196,27 @@ ChosenReference choose_reference(const CompareOptions& o, const RenderSession& s
               {"seed", got.info.seed},
               {"seconds", got.info.seconds}};
   ref.caption = fmt::format("{} spp, {}", got.info.spp, got.info.sampler);
+  if (ref.variance.pixel_count()) {
+    const double noise = reference_noise_relmse(ref.image, ref.variance);
+    ref.json["noise_relmse"] = noise;
+    ref.caption += fmt::format(", its noise {:.2e} (relMSE) subtracted from every error", noise);
+  } else {
+    ref.caption += ", made without halves: its noise is not subtracted";
+  }
   return ref;
+}
+
+std::string interrupted_text(const CompareOptions& o, const std::string& name) {
+  return fmt::format(
+      "interrupted during the run of '{}'; {} holds the reference and the images of the runs "
+      "that finished, but no summary or report",
+      name, o.out);
 }
 
 // One render of one sampler, fresh (a learning sampler starts cold every run), with relMSE
 // checkpoints; the image is returned in `image`.
 RunResult run_once(const CompareOptions& o, RenderSession& session, const std::string& name,
-                   int repeat, const Image& reference, Image& image) {
+                   int repeat, const ChosenReference& reference, Image& image) {
   reset_peak_rss();
   const auto t0 = std::chrono::steady_clock::now();
   auto sampler = session.make_sampler(name);
@@ -189,17 +240,16 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
     rf.frame = f;
     session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1), !o.quiet,
                    interrupt_flag());
-    if (interrupted())
-      fail("interrupted during the run of '{}'; the summary and report were not written", name);
+    if (interrupted()) throw Interrupted(interrupted_text(o, name));
   }
   session.set_frame(o.frames - 1, sampler.get());
   rs.frame = o.frames - 1;
-  ConvergenceRecorder recorder(reference);
+  ConvergenceRecorder recorder(reference.image,
+                               reference.variance.pixel_count() ? &reference.variance : nullptr);
   const RenderProgress p =
       session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag(),
                      [&](const RenderProgress& pr, const Film& f) { recorder.after_pass(pr, f); });
-  if (p.cancelled)
-    fail("interrupted during the run of '{}'; the summary and report were not written", name);
+  if (p.cancelled) throw Interrupted(interrupted_text(o, name));
   image = film.resolve();
   recorder.finish(p, image);
 
@@ -211,9 +261,11 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
   run.seconds = p.seconds;
   run.setup_seconds = setup_seconds;
   run.checkpoints = recorder.checkpoints();
-  run.relmse = run.checkpoints.back().relmse;
-  run.mse = run.checkpoints.back().mse;
-  run.trimmed_relmse = trimmed_relmse(image, reference);
+  const Checkpoint& last = run.checkpoints.back();
+  run.relmse = last.relmse;
+  run.mse = last.mse;
+  run.trimmed_relmse = last.trimmed_relmse;
+  run.mrse = last.mrse;
   run.describe = sampler->describe();
   if (run.describe.is_object() && run.describe.contains("bytes") &&
       run.describe["bytes"].is_number())
@@ -227,16 +279,17 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
   return run;
 }
 
-LogLogPlot convergence_plot(const Scene& scene, const std::vector<SamplerSummary>& summaries) {
+LogLogPlot convergence_plot(const Scene& scene, const std::vector<SamplerSummary>& summaries,
+                            const std::string& metric) {
   LogLogPlot plot;
-  plot.title = fmt::format("relMSE against render time ({})", scene.source);
+  plot.title = fmt::format("{} against render time ({})", metric_label(metric), scene.source);
   plot.x_label = "render time (s)";
-  plot.y_label = "relMSE";
+  plot.y_label = metric_label(metric);
   for (size_t i = 0; i < summaries.size(); ++i) {
     PlotSeries series{summaries[i].name, series_colour(i), {}};
     for (const RunResult* r : summaries[i].runs) {
       std::vector<std::pair<double, double>> curve;
-      for (const auto& c : r->checkpoints) curve.emplace_back(c.seconds, c.relmse);
+      for (const auto& c : r->checkpoints) curve.emplace_back(c.seconds, checkpoint_metric(c, metric));
       series.curves.push_back(std::move(curve));
     }
     plot.series.push_back(std::move(series));
@@ -244,22 +297,54 @@ LogLogPlot convergence_plot(const Scene& scene, const std::vector<SamplerSummary
   return plot;
 }
 
-// The samplers' first-repeat images and then the reference in one row, 4 white pixels apart:
-// a picture to publish. Its PNG is tone-mapped with the report's exposure.
-Image side_by_side(const std::vector<const Image*>& images) {
-  constexpr int kGap = 4;
-  const int w = images.front()->width(), h = images.front()->height();
-  const int n = int(images.size());
-  Image row(n * w + (n - 1) * kGap, h, Rgb(1e6f));
-  for (int i = 0; i < n; ++i)
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) row.at(i * (w + kGap) + x, y) = images[size_t(i)]->at(x, y);
-  return row;
-}
-
 std::string integrator_text(const IntegratorSettings& is) {
   return fmt::format("{} (max depth {}, {})", integrator_name(is.type), is.max_depth,
                      strategy_name(is.strategy));
+}
+
+// Every file that compare writes into --out (a new file written there must be listed here: a
+// later compare into the same folder removes exactly these).
+std::vector<std::string> output_files(const CompareOptions& o,
+                                      const std::vector<std::string>& samplers) {
+  std::vector<std::string> files = {"reference.exr", "reference.variance.exr"};
+  for (const auto& name : samplers) {
+    for (int r = 0; r < o.repeats; ++r) files.push_back(image_name(name, r));
+    files.push_back(file_stem(name) + ".error.exr");
+  }
+  for (const char* f : {"side-by-side.png", "convergence.png", "report.html", "summary.json"})
+    files.push_back(f);
+  return files;
+}
+
+// Refuses outputs that are inputs, removes the files an earlier compare listed in the folder's
+// summary.json (its samplers' images would otherwise sit beside the new report; nothing else is
+// ever removed), then lists this compare's files there, so that an interrupted one is cleared
+// as well.
+void prepare_folder(const CompareOptions& o, const std::vector<std::string>& samplers) {
+  const fs::path out(o.out);
+  std::vector<fs::path> inputs = scene_inputs(o.session.scene);
+  if (!o.reference.empty()) inputs.push_back(o.reference);
+  const std::vector<std::string> files = output_files(o, samplers);
+  for (const auto& f : files) refuse_input(out / f, "--out", inputs);
+  std::error_code ec;
+  if (fs::is_regular_file(out / "summary.json", ec)) {
+    std::ifstream in(out / "summary.json");
+    const nlohmann::json old = nlohmann::json::parse(in, nullptr, false);
+    if (old.is_object() && old.contains("outputs") && old["outputs"].is_array())
+      for (const auto& f : old["outputs"]) {
+        if (!f.is_string()) continue;
+        const std::string name = f.get<std::string>();
+        const fs::path p = out / name;
+        const std::string ext = fs::path(name).extension().string();
+        const bool ours = fs::path(name).filename() == name && name[0] != '.' &&
+                          (ext == ".exr" || ext == ".png" || ext == ".html" || ext == ".json");
+        bool is_input = false;
+        for (const auto& in : inputs) is_input = is_input || fs::equivalent(p, in, ec);
+        if (ours && !is_input && fs::is_regular_file(p, ec)) fs::remove(p, ec);
+      }
+  }
+  write_file_atomic(out / "summary.json",
+                    nlohmann::json{{"complete", false}, {"outputs", files}}.dump(2) + "\n");
 }
 
 void run(const CompareOptions& o) {
@@ -273,8 +358,13 @@ void run(const CompareOptions& o) {
   check_samplers(o, session, samplers);
   session.set_frame(o.frames - 1, nullptr);  // the measured frame, for the reference
 
+  // Only now, when every check has passed, may an earlier compare's files go.
+  prepare_folder(o, samplers);
+  begin_work();
   const ChosenReference ref = choose_reference(o, session);
   write_image(out / "reference.exr", ref.image);
+  // The reference's per-pixel variance, so that the errors can be recomputed from the files.
+  if (ref.variance.pixel_count()) write_image(out / "reference.variance.exr", ref.variance);
 
   // Repeat by repeat, every sampler once, starting one further along each repeat so that no
   // sampler always runs first (on a cold cache) or last (on a machine warmed by the others).
@@ -288,7 +378,7 @@ void run(const CompareOptions& o) {
       const std::string& name = samplers[size_t((k + r) % n)];
       order.back().push_back(name);
       Image image;
-      runs.push_back(run_once(o, session, name, r, ref.image, image));
+      runs.push_back(run_once(o, session, name, r, ref, image));
       write_image(out / image_name(name, r), image);
       if (r == 0) first_images.emplace(name, std::move(image));
     }
@@ -296,7 +386,18 @@ void run(const CompareOptions& o) {
   const std::vector<SamplerSummary> summaries = summarize(samplers, runs);
 
   std::vector<std::string> warnings;
-  if (ref.json.contains("spp")) {
+  if (ref.json.contains("noise_relmse")) {
+    // Subtracted, the reference's noise leaves the errors unbiased; where it is larger than a
+    // sampler's own error, that error is a small difference of large numbers.
+    double least = std::numeric_limits<double>::infinity();
+    for (const auto& s : summaries) least = std::min(least, s.relmse.median);
+    const double noise = ref.json["noise_relmse"].get<double>();
+    if (noise > least)
+      warnings.push_back(fmt::format(
+          "The reference's own noise (relMSE {:.2e}, subtracted) exceeds the smallest measured "
+          "error ({:.2e}): those errors are uncertain; use a larger --reference-spp.",
+          noise, least));
+  } else if (ref.json.contains("spp")) {
     double most = 0;
     for (const auto& s : summaries) most = std::max(most, s.spp.max);
     if (ref.json["spp"].get<double>() < kReferenceSppFactor * most)
@@ -314,10 +415,18 @@ void run(const CompareOptions& o) {
                 grey_image(errors[name], scene.width, scene.height));
   }
   std::vector<const Image*> row;
-  for (const auto& name : samplers) row.push_back(&first_images.at(name));
+  std::vector<std::string> captions;
+  for (const auto& s : summaries) {
+    const RunResult& first = *s.runs.front();
+    row.push_back(&first_images.at(s.name));
+    captions.push_back(fmt::format("{}\nrelMSE {:.3e}, trimmed {:.3e}\n{} spp, {}", s.name,
+                                   first.relmse, first.trimmed_relmse, first.spp,
+                                   format_duration(first.seconds)));
+  }
   row.push_back(&ref.image);
-  write_image(out / "side-by-side.png", side_by_side(row), o.exposure);
-  LogLogPlot plot = convergence_plot(scene, summaries);
+  captions.push_back("reference\n" + ref.caption);
+  write_file_atomic(out / "side-by-side.png", side_by_side_png(row, captions, o.exposure));
+  LogLogPlot plot = convergence_plot(scene, summaries, o.plot_metric);
   write_file_atomic(out / "convergence.png", plot_png(plot));
 
   Report report;
@@ -331,10 +440,19 @@ void run(const CompareOptions& o) {
                                  : fmt::format("{} (seeds {}..{}), runs interleaved", o.repeats,
                                                o.seed, o.seed + o.repeats - 1)},
       {"threads", fmt::format("{}", o.threads > 0 ? o.threads : hardware_threads())},
+      {"machine", machine_description()},
+      {"commit", build_commit()},
       {"reference", ref.caption},
       {"metrics",
-       "relMSE = mean of (x - ref)^2 / (ref^2 + 0.01) over pixels and channels; efficiency = 1 / "
-       "(relMSE x seconds); ratio = relMSE / first sampler's, per repeat"}};
+       fmt::format(
+           "means over pixels and channels: relMSE of (x - ref)^2 / (ref^2 + 0.01); trimmed relMSE "
+           "the same without the worst 0.1% of pixels; MRSE of (x - ref)^2 / (ref + 0.01)^2; MSE "
+           "of (x - ref)^2; {}. Efficiency = 1 / (relMSE x seconds), with setup: x (seconds + "
+           "setup); ratios are to the first sampler's, per repeat",
+           ref.variance.pixel_count()
+               ? "each with the reference's own variance, estimated from its two halves, "
+                 "subtracted from every squared difference"
+               : "the reference's noise is NOT subtracted (it has no halves)")}};
   report.warnings = warnings;
   report.reference = &ref.image;
   report.reference_caption = ref.caption;
@@ -344,7 +462,12 @@ void run(const CompareOptions& o) {
     report.entries.push_back({s.name,
                               fmt::format("relMSE {:.3e}, {} spp, {}", first.relmse, first.spp,
                                           format_duration(first.seconds)),
-                              series_colour(i), &first_images.at(s.name), &errors.at(s.name)});
+                              series_colour(i), &first_images.at(s.name), &errors.at(s.name),
+                              fmt::format("repeat 1 of {}, seed {}", o.repeats, o.seed)});
+    report.samplers.push_back({s.name, s.describe.is_object() && s.describe.contains("parameters")
+                                           ? s.describe["parameters"].dump(2)
+                                           : std::string("(no parameters)"),
+                               s.setup_seconds.median, s.seconds.median});
   }
   report.table = table_cells(summaries);
   report.exposure = o.exposure;
@@ -368,6 +491,12 @@ void run(const CompareOptions& o) {
   j["set"] = o.session.set;
   j["reference"] = ref.json;
   j["reference"]["image"] = "reference.exr";
+  if (ref.variance.pixel_count()) j["reference"]["variance_image"] = "reference.variance.exr";
+  j["metric_notes"] =
+      ref.variance.pixel_count()
+          ? "errors have the reference's own variance (reference.variance.exr, from its two "
+            "halves) subtracted from every squared difference"
+          : "errors include the reference's own noise (it has no halves)";
   j["order"] = order;
   j["warnings"] = warnings;
   j["samplers"] = nlohmann::json::array();
@@ -380,6 +509,7 @@ void run(const CompareOptions& o) {
   j["files"] = {{"report", "report.html"},
                 {"convergence", "convergence.png"},
                 {"side_by_side", "side-by-side.png"}};
+  j["outputs"] = output_files(o, samplers);
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 
   fmt::print("{}", format_table(summaries));
@@ -402,7 +532,9 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("--samplers", o->samplers,
                   "Comma-separated light samplers; ratios are to the first")
       ->capture_default_str();
-  auto* time = cmd->add_option("--time", o->time, "Equal time: seconds per run");
+  auto* time = cmd->add_option("--time", o->time,
+                               "Equal time: seconds per run (positive; every run takes at least "
+                               "one sample per pixel)");
   auto* spp = cmd->add_option("--spp", o->spp, "Equal samples: samples per pixel per run");
   time->excludes(spp);
   cmd->add_option(
@@ -437,10 +569,28 @@ void add_compare_command(CLI::App& app) {
       ->excludes(ref);
   cmd->add_option("--cache-dir", o->cache_dir,
                   "Reference cache folder (default: $RLL_CACHE_DIR, else out/cache)");
-  cmd->add_option("--out", o->out, "Output folder")->required();
+  cmd->add_option("--out", o->out,
+                  "Output folder; the files an earlier compare wrote there (listed in its "
+                  "summary.json) are removed first, nothing else")
+      ->required();
   cmd->add_option("--exposure", o->exposure, "Initial exposure of the report's images, in stops")
       ->capture_default_str();
+  cmd->add_option("--plot-metric", o->plot_metric,
+                  "Metric of the convergence plot: relmse, trimmed_relmse, mrse or mse")
+      ->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "No progress output");
+  // Numbers are checked as every command checks them (commands.h).
+  time->check(number_in(0, kMaxSeconds, true));
+  spp->check(integer_in(1, kMaxSpp));
+  cmd->get_option("--frames")->check(integer_in(1, kMaxFrames));
+  cmd->get_option("--repeats")->check(integer_in(1, 10000));
+  cmd->get_option("--pass-spp")->check(integer_in(1, kMaxPassSpp));
+  cmd->get_option("--max-pass-spp")->check(integer_in(1, kMaxSpp));
+  cmd->get_option("--seed")->check(unsigned_integer());
+  cmd->get_option("--threads")->check(integer_in(0, kMaxThreads));
+  cmd->get_option("--reference-spp")->check(integer_in(1, kMaxSpp));
+  cmd->get_option("--reference-seed")->check(unsigned_integer());
+  cmd->get_option("--exposure")->check(number_in(-kMaxExposure, kMaxExposure));
   cmd->callback([o] { run(*o); });
 }
 

@@ -2,6 +2,7 @@
 // so that a scene made elsewhere can be inspected and edited.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "commands.h"
@@ -14,6 +15,23 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// Whether `name` is a file that the writer for `ext` puts beside <stem><ext> (see save.h).
+bool is_side_file(const std::string& name, const std::string& stem, const std::string& ext) {
+  if (name.compare(0, stem.size(), stem) != 0) return false;
+  const std::string rest = name.substr(stem.size());
+  auto numbered = [&](const std::string& prefix, const std::string& suffix) {
+    if (rest.size() <= prefix.size() + suffix.size() || rest.compare(0, prefix.size(), prefix) ||
+        rest.compare(rest.size() - suffix.size(), suffix.size(), suffix))
+      return false;
+    const std::string digits =
+        rest.substr(prefix.size(), rest.size() - prefix.size() - suffix.size());
+    return std::all_of(digits.begin(), digits.end(), [](char c) { return std::isdigit(c); });
+  };
+  if (ext == ".json") return rest == ".obj" || rest == ".mtl" || numbered("_tex", ".exr");
+  if (ext == ".gltf") return numbered("_tex", ".png");
+  return rest == "_sky.exr" || numbered("_tex", ".exr") || numbered("_mesh", ".ply");
+}
+
 void convert(const std::string& in, const std::string& out) {
   const fs::path target(out);
   std::string ext = target.extension().string();
@@ -22,6 +40,21 @@ void convert(const std::string& in, const std::string& out) {
     fail("{}: rll writes .json (with .obj and .mtl beside it), .gltf and .pbrt", out);
   if (target.has_parent_path() && !fs::is_directory(target.parent_path()))
     fail("{}: folder '{}' does not exist", out, target.parent_path().string());
+  // The output and the files written beside it must not replace what is being converted.
+  const std::vector<fs::path> inputs = scene_inputs(in);
+  refuse_input(target, "convert", inputs);
+  const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  std::error_code ec;
+  for (const auto& input : inputs) {
+    const fs::path folder = input.parent_path().empty() ? fs::path(".") : input.parent_path();
+    if (is_side_file(input.filename().string(), target.stem().string(), ext) &&
+        fs::equivalent(folder, dir, ec))
+      fail(
+          "convert {}: would write over the input file '{}', which the {} output writes "
+          "beside it (choose another output name or folder)",
+          out, input.string(), ext);
+  }
+  prepare_output(target, "convert", {".json", ".gltf", ".pbrt"});
   Scene scene = read_scene(in);
   for (const auto& w : scene.warnings) fmt::print(stderr, "rll: warning: {}\n", w);
   std::vector<std::string> lost;
@@ -42,7 +75,11 @@ void add_convert_command(CLI::App& app) {
       "Convert a scene (.json .obj .gltf .glb .ply .pbrt) to .json + .obj, .gltf or .pbrt");
   auto in = std::make_shared<std::string>(), out = std::make_shared<std::string>();
   cmd->add_option("input", *in, "scene to read")->required();
-  cmd->add_option("output", *out, "file to write; its extension chooses the format")->required();
+  cmd->add_option(
+         "output", *out,
+         "file to write; its extension chooses the format; neither it nor the files written "
+         "beside it may be one of the input's files")
+      ->required();
   cmd->callback([in, out] { convert(*in, *out); });
 }
 

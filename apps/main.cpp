@@ -1,8 +1,11 @@
 // rll: a path tracer for importance sampling of many lights with learnt visibility.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <csignal>
+#include <cstring>
 
 #include "commands.h"
 #include "rll/core/error.h"
@@ -11,22 +14,89 @@ namespace rll::cli {
 
 namespace {
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) {
-  if (g_interrupted.exchange(true)) {
-    std::signal(SIGINT, SIG_DFL);  // a second Ctrl-C ends the program at once
-    std::raise(SIGINT);
+std::atomic<int> g_signal{0};  // the first signal received
+std::atomic<bool> g_working{false};
+
+// Only async-signal-safe calls here: write(2) and _exit(2).
+void say(const char* text) {
+  [[maybe_unused]] ssize_t n = ::write(STDERR_FILENO, text, std::strlen(text));
+}
+
+extern "C" void on_signal(int sig) {
+  if (!g_working.load()) {
+    say("\nrll: interrupted before rendering began; nothing was written\n");
+    ::_exit(128 + sig);
   }
+  int none = 0;
+  if (g_signal.compare_exchange_strong(none, sig)) {
+    g_interrupted.store(true);
+    return;
+  }
+  // Cutting the program short now could lose what a second of patience saves.
+  say("\nrll: already stopping: writing what has been rendered, then exiting\n");
 }
 }  // namespace
 
-bool interrupted() { return g_interrupted.load(); }
-const std::atomic<bool>* interrupt_flag() { return &g_interrupted; }
-void install_interrupt_handler() { std::signal(SIGINT, on_sigint); }
+bool interrupted() {
+  return g_interrupted.load();
+}
+int interrupt_exit_code() {
+  return 128 + g_signal.load();
+}
+const std::atomic<bool>* interrupt_flag() {
+  return &g_interrupted;
+}
+void begin_work() {
+  g_working.store(true);
+}
 
+void install_interrupt_handler() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+}
+
+namespace {
+
+// "unknown command 'x' (commands: ...)" for a first word that names no subcommand; CLI11 would
+// only say that a subcommand is required.
+bool unknown_command(const CLI::App& app, int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.empty() || arg[0] == '-') continue;
+    std::vector<std::string> names;
+    for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+      names.push_back(sub->get_name());
+    if (std::find(names.begin(), names.end(), arg) != names.end()) return false;
+    fmt::print(stderr, "rll: error: unknown command '{}' (commands: {})\n", arg,
+               fmt::join(names, ", "));
+    return true;
+  }
+  return false;
+}
+
+// The arguments that no option of the parsed command took. CLI11 checks required options before
+// it reports these, and so blamed a typo on a missing --out.
+std::vector<std::string> unknown_arguments(const CLI::App& app, const CLI::App** where) {
+  for (const CLI::App* sub : app.get_subcommands()) {
+    std::vector<std::string> rest = sub->remaining();
+    if (!rest.empty()) {
+      *where = sub;
+      return rest;
+    }
+  }
+  *where = &app;
+  return app.remaining();
+}
+
+}  // namespace
 }  // namespace rll::cli
 
 int main(int argc, char** argv) {
-  CLI::App app{"rll: a path tracer that learns which lights are visible (Reinforcement Lightcuts Learning)"};
+  CLI::App app{
+      "rll: a path tracer that learns which lights are visible (Reinforcement Lightcuts Learning)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "rll 0.1");
   rll::cli::add_render_command(app);
@@ -35,10 +105,25 @@ int main(int argc, char** argv) {
   rll::cli::add_reference_command(app);
   rll::cli::add_compare_command(app);
   rll::cli::add_convert_command(app);
+  if (rll::cli::unknown_command(app, argc, argv)) return int(CLI::ExitCodes::ExtrasError);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    const CLI::App* where = nullptr;
+    const std::vector<std::string> rest = rll::cli::unknown_arguments(app, &where);
+    if (e.get_exit_code() != 0 && !rest.empty()) {
+      const std::string& a = rest.front();
+      const std::string command = where == &app ? std::string("rll") : "rll " + where->get_name();
+      if (a.size() > 1 && a[0] == '-')
+        fmt::print(stderr, "rll: error: unknown option {} (see `{} --help`)\n", a, command);
+      else
+        fmt::print(stderr, "rll: error: unexpected argument '{}' (see `{} --help`)\n", a, command);
+      return int(CLI::ExitCodes::ExtrasError);
+    }
     return app.exit(e);
+  } catch (const rll::cli::Interrupted& e) {
+    fmt::print(stderr, "rll: {}\n", e.what());
+    return rll::cli::interrupt_exit_code();
   } catch (const rll::Error& e) {
     fmt::print(stderr, "rll: error: {}\n", e.what());
     return 1;
@@ -49,5 +134,5 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "rll: error: {}\n", e.what());
     return 1;
   }
-  return rll::cli::interrupted() ? 130 : 0;
+  return rll::cli::interrupted() ? rll::cli::interrupt_exit_code() : 0;
 }

@@ -19,26 +19,30 @@ struct ReferenceOptions {
   int threads = 0;
   std::string cache_dir;
   std::string output;
+  float exposure = 0;
   bool quiet = false;
 };
 
 void run(const ReferenceOptions& o) {
   install_interrupt_handler();
   ThreadLimit limit(o.threads);
-  if (o.request.spp < 1) fail("--spp must be at least 1");
-  if (o.request.pass_spp < 1) fail("--pass-spp must be at least 1");
-  if (o.request.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
-  if (!o.output.empty()) prepare_output(o.output, "-o", {".exr", ".png"});
+  // The numbers were checked as they were parsed.
+  parse_resolution(o.session.resolution);
+  if (!o.output.empty()) {
+    prepare_output(o.output, "-o", {".exr", ".png"});
+    refuse_input(o.output, "-o", scene_inputs(o.session.scene));
+  }
 
   RenderSession session(o.session);
   session.make_sampler(o.request.sampler);  // an unknown name or parameter fails before rendering
   session.check_params_used();
   ReferenceCache cache(o.cache_dir.empty() ? default_cache_dir() : fs::path(o.cache_dir));
+  begin_work();
   ObtainedReference ref = obtain_reference(session, cache, o.request, !o.quiet, interrupt_flag());
   if (!ref.complete) {
     fmt::print(stderr, "rll: interrupted after {} spp; the reference was not cached\n",
                ref.info.spp);
-    if (!o.output.empty()) write_image(o.output, ref.image);
+    if (!o.output.empty()) write_image(o.output, ref.image, o.exposure);
     return;
   }
   if (ref.from_cache)
@@ -48,7 +52,7 @@ void run(const ReferenceOptions& o) {
     fmt::print(stderr, "reference: rendered {} spp in {}, cached as {}\n", ref.info.spp,
                format_duration(ref.info.seconds), ref.info.image.string());
   if (!o.output.empty()) {
-    write_image(o.output, ref.image);
+    write_image(o.output, ref.image, o.exposure);
     fmt::print(stderr, "wrote {}\n", o.output);
   }
 }
@@ -64,24 +68,33 @@ void add_reference_command(CLI::App& app) {
   add_session_options(cmd, o->session);
   cmd->add_option("--spp", o->request.spp,
                   "Samples per pixel (a cached reference with at least as many is reused)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxSpp));
   cmd->add_option("--sampler", o->request.sampler, "Light sampler to render it with")
       ->capture_default_str();
   cmd->add_option("--seed", o->request.seed,
                   "Random seed (keep it apart from the seeds of compared renders)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(unsigned_integer());
   cmd->add_option("--pass-spp", o->request.pass_spp,
                   "Samples per pixel of the first passes; passes double every two passes up to "
                   "--max-pass-spp")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxPassSpp));
   cmd->add_option("--max-pass-spp", o->request.max_pass_spp, "Largest pass, in samples per pixel")
-      ->capture_default_str();
-  cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxSpp));
+  cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")
+      ->capture_default_str()
+      ->check(integer_in(0, kMaxThreads));
   cmd->add_option("--cache-dir", o->cache_dir,
                   "Reference cache folder (default: $RLL_CACHE_DIR, else out/cache)");
   cmd->add_flag("--force", o->request.force, "Render even when the cache holds a reference");
   cmd->add_option("-o,--output", o->output,
-                  "Also write the reference here, .exr (linear) or .png (sRGB)");
+                  "Also write the reference here, .exr (linear) or .png (sRGB), any case");
+  cmd->add_option("--exposure", o->exposure, "Exposure in stops for a .png -o")
+      ->capture_default_str()
+      ->check(number_in(-kMaxExposure, kMaxExposure));
   cmd->add_flag("--quiet", o->quiet, "No progress bar");
   cmd->callback([o] { run(*o); });
 }

@@ -51,18 +51,18 @@ fs::path frame_path(const fs::path& p, int frame, int frames) {
 void run(const RenderOptions& o) {
   install_interrupt_handler();
   ThreadLimit limit(o.threads);
-  // Bad flags are reported before the scene (perhaps slow to load) is read.
+  // Bad flags are reported before the scene (perhaps slow to load) is read; the numbers were
+  // checked as they were parsed.
   parse_resolution(o.session.resolution);
-  if (o.spp < 1) fail("--spp must be at least 1");
-  if (o.time < 0) fail("--time must not be negative");
-  if (o.frames < 1) fail("--frames must be at least 1");
-  if (o.pass_spp < 1) fail("--pass-spp must be at least 1");
-  if (o.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
   Params::parse(o.session.set);
   fs::path output =
       o.output.empty() ? fs::path(default_output(o.session.scene)) : fs::path(o.output);
   prepare_output(output, "-o", {".exr", ".png"});
   if (!o.stats.empty()) prepare_output(o.stats, "--stats", {".json"});
+  const std::vector<fs::path> inputs = scene_inputs(o.session.scene);
+  for (int f = 0; f < o.frames && !inputs.empty(); ++f)
+    refuse_input(frame_path(output, f, o.frames), "-o", inputs);
+  if (!o.stats.empty()) refuse_input(o.stats, "--stats", inputs);
 
   RenderSession session(o.session);
   Scene& scene = session.scene();
@@ -79,6 +79,7 @@ void run(const RenderOptions& o) {
   const int frames = o.frames;
   nlohmann::json frame_stats = nlohmann::json::array();
   RenderProgress total;
+  begin_work();
   for (int f = 0; f < frames && !interrupted(); ++f) {
     session.set_frame(f, sampler.get());
     rs.frame = f;
@@ -143,28 +144,40 @@ void add_render_command(CLI::App& app) {
                   fmt::format("Light sampler: {}", fmt::join(light_sampler_names(), ", ")))
       ->capture_default_str();
   cmd->add_option("--spp", o->spp, "Samples per pixel (an upper limit when --time is given)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxSpp));
   cmd->add_option("--time", o->time,
-                  "Time budget in seconds; stops at whichever of --spp and --time comes first");
+                  "Time budget in seconds (positive; leave it out for no limit); stops at "
+                  "whichever of --spp and --time comes first, but always after at least one "
+                  "sample per pixel")
+      ->check(number_in(0, kMaxSeconds, true));
   cmd->add_option("--seed", o->seed,
                   "Random seed; the same seed gives the same image with any --threads")
-      ->capture_default_str();
-  cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
+      ->capture_default_str()
+      ->check(unsigned_integer());
+  cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")
+      ->capture_default_str()
+      ->check(integer_in(0, kMaxThreads));
   cmd->add_option("--pass-spp", o->pass_spp,
                   "Samples per pixel of the first passes; passes double every two passes up to "
                   "--max-pass-spp "
                   "(learning samplers adapt between passes)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxPassSpp));
   cmd->add_option("--max-pass-spp", o->max_pass_spp, "Largest pass, in samples per pixel")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxSpp));
   cmd->add_option("--frames", o->frames,
                   "Frames to render; animated scenes move between frames, learning persists")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxFrames));
   cmd->add_option("-o,--output", o->output,
-                  "Output image, .exr (linear) or .png (sRGB); default out/<scene>.png");
+                  "Output image, .exr (linear) or .png (sRGB), any case; default out/<scene>.png; "
+                  "never one of the scene's files");
   cmd->add_option("--stats", o->stats, "Write render statistics to this JSON file");
   cmd->add_option("--exposure", o->exposure, "Exposure in stops for .png output")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in(-kMaxExposure, kMaxExposure));
   cmd->add_flag("--quiet", o->quiet, "No progress bar");
   cmd->callback([o] { run(*o); });
 }

@@ -1,9 +1,14 @@
 // Appended to a copy of a compare report by test_compare.cpp: drives the report's controls the
-// way a user would and records the outcome in <body data-selftest="ok" | "fail: ...">.
+// way a user would (exposure, zoom, flip with the reference) and checks the layout (the colour
+// scale's labels, the repeat labels); records the outcome in the body's data-selftest attribute,
+// "ok" or "fail: why". (Not spelled out as markup here: this text is in the dumped DOM too.)
 (function () {
   'use strict';
   var root = document.getElementById('report');
   var tries = 0;
+  var errors = [];
+  window.addEventListener('error', function (ev) { errors.push(ev.message); });
+  window.addEventListener('unhandledrejection', function (ev) { errors.push(String(ev.reason)); });
   function fail(msg) { document.body.dataset.selftest = 'fail: ' + msg; }
   function checksum(c) {
     var d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data, h = 0;
@@ -14,6 +19,58 @@
     var d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data, s = 0;
     for (var i = 0; i < d.length; i += 4) s += d[i] + d[i + 1] + d[i + 2];
     return s;
+  }
+  function overlap(a, b) {
+    return a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom;
+  }
+  function describe(r) {
+    return '[' + [r.left, r.top, r.right, r.bottom].map(Math.round).join(', ') + ']';
+  }
+  // The colour scale's end labels: on one line each, inside the page, clear of every view.
+  function checkLegend(views) {
+    var page = document.documentElement;
+    var ids = ['scale-min', 'scale-max'], rects = [];
+    for (var i = 0; i < ids.length; ++i) {
+      var el = document.getElementById(ids[i]);
+      if (!el) return 'no #' + ids[i];
+      var r = el.getBoundingClientRect(), lines = el.getClientRects().length;
+      var lineHeight = parseFloat(getComputedStyle(el).fontSize) * 1.6;
+      if (!(r.width > 0 && r.height > 0)) return '#' + ids[i] + ' is not shown';
+      if (lines !== 1 || r.height > lineHeight) return '#' + ids[i] + ' wraps: ' + describe(r);
+      if (r.left < 0 || r.top < 0 || r.right > page.clientWidth || r.bottom > page.scrollHeight)
+        return '#' + ids[i] + ' ' + describe(r) + ' is outside the page, ' + page.clientWidth + ' wide';
+      for (var k = 0; k < views.length; ++k)
+        if (overlap(r, views[k].getBoundingClientRect()))
+          return '#' + ids[i] + ' ' + describe(r) + ' overlaps view ' + k + ' ' + describe(views[k].getBoundingClientRect());
+      rects.push(r);
+    }
+    if (overlap(rects[0], rects[1])) return 'the scale labels overlap each other';
+    return '';
+  }
+  function flipButton(view) { return view.closest('figure').querySelector('button.flip'); }
+  function pressF() {
+    document.dispatchEvent(new KeyboardEvent('keydown', { key: 'f', bubbles: true, cancelable: true }));
+  }
+  // Flips, with the views zoomed: a flipped view shows the reference's pixels exactly (same zoom,
+  // pan and exposure), and flipping back restores its own.
+  function checkFlip(views) {
+    if (flipButton(views[0])) return 'the reference view has a flip button';
+    var ref = checksum(views[0]), own = checksum(views[1]);
+    if (own === ref) return 'view 1 already shows the reference before the flip';
+    flipButton(views[1]).click();
+    if (checksum(views[1]) !== ref) return 'the flip button did not show the reference in view 1';
+    if (!views[1].closest('figure').classList.contains('flipped')) return 'a flipped view is not marked';
+    if (checksum(views[2]) === ref) return 'flipping view 1 flipped view 2 too';
+    flipButton(views[1]).click();
+    if (checksum(views[1]) !== own) return 'flipping view 1 back did not restore its image';
+    var sums = Array.prototype.map.call(views, checksum);
+    pressF();
+    for (var i = 1; i < views.length; ++i)
+      if (checksum(views[i]) !== ref) return 'F did not flip view ' + i + ' with the reference';
+    pressF();
+    for (var k = 0; k < views.length; ++k)
+      if (checksum(views[k]) !== sums[k]) return 'a second F did not flip view ' + k + ' back';
+    return '';
   }
   function run() {
     if (root.dataset.ready !== '1') {
@@ -37,9 +94,21 @@
     if (document.getElementById('zoom-value').textContent === '1.00x') return fail('the wheel did not zoom');
     for (var i = 0; i < views.length; ++i)
       if (checksum(views[i]) === sums[i]) return fail('view ' + i + ' did not follow the zoom');
+    var flip = checkFlip(views);
+    if (flip) return fail(flip);
     document.getElementById('reset-view').click();
     for (var k = 0; k < views.length; ++k)
       if (checksum(views[k]) !== sums[k]) return fail('view ' + k + ' did not return to the full image');
+    var legend = checkLegend(views);
+    if (legend) return fail(legend);
+    // Every sampler's image and map says which repeat it shows (the comparison has 2 repeats).
+    var captions = document.querySelectorAll('figure canvas.view:not([data-source="reference"])');
+    for (var j = 0; j < captions.length; ++j) {
+      var label = captions[j].closest('figure').querySelector('figcaption .repeat');
+      if (!label || !/repeat/.test(label.textContent))
+        return fail('view ' + captions[j].dataset.source + ' does not say which repeat it shows');
+    }
+    if (errors.length) return fail('script errors: ' + errors.join('; '));
     document.body.dataset.selftest = 'ok';
   }
   run();

@@ -1,5 +1,7 @@
-// Ctrl-C (SIGINT) stops a render at the next tile and still writes the image so far, with a
-// non-zero exit; the image is complete (written atomically), never a partial file.
+// Ctrl-C (SIGINT), SIGTERM and SIGHUP stop a render at the next tile and still write the image
+// so far, with the exit code 128 + signal; the image is complete (written atomically), never a
+// partial file. A second signal does not cut the write short.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
@@ -7,6 +9,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "rll/core/image.h"
@@ -20,8 +24,10 @@ using namespace rll::test;
 TEST(Interrupt, SigintWritesTheImageSoFar) {
   TempDir dir;
   const std::string image = (dir / "partial.exr").string(), stats = (dir / "stats.json").string();
-  std::vector<std::string> args = {RLL_BINARY, "render", "builtin:cornell-box", "--res", "64x64", "--spp", "1000000",
-                                   "--quiet", "-o", image, "--stats", stats};
+  std::vector<std::string> args = {RLL_BINARY, "render",  "builtin:cornell-box",
+                                   "--res",    "64x64",   "--spp",
+                                   "1000000",  "--quiet", "-o",
+                                   image,      "--stats", stats};
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -42,5 +48,92 @@ TEST(Interrupt, SigintWritesTheImageSoFar) {
   EXPECT_GT(sum, 0) << "the samples rendered before the interrupt must be in the image";
   EXPECT_TRUE(std::filesystem::exists(stats));
   for (const auto& e : std::filesystem::directory_iterator(dir.path()))
-    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << "temporary file left: " << e.path();
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos)
+        << "temporary file left: " << e.path();
+}
+
+namespace {
+
+// Starts rll with `args`, its stderr and stdout into `log`.
+pid_t spawn_rll(std::vector<std::string> args, const std::string& log) {
+  args.insert(args.begin(), RLL_BINARY);
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 2, 1);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, RLL_BINARY, &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  return rc == 0 ? pid : -1;
+}
+
+// Sends `signals` in turn (no pause between them) after `delay`, and returns the wait status.
+int signal_and_wait(pid_t pid, std::chrono::milliseconds delay,
+                    std::initializer_list<int> signals) {
+  std::this_thread::sleep_for(delay);
+  for (int sig : signals) EXPECT_EQ(::kill(pid, sig), 0);
+  int status = 0;
+  EXPECT_EQ(::waitpid(pid, &status, 0), pid);
+  return status;
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::vector<std::string> long_render(const std::string& image) {
+  return {"render", "builtin:cornell-box", "--res", "64x64", "--spp", "1000000", "--quiet", "-o",
+          image};
+}
+
+}  // namespace
+
+TEST(Interrupt, SigtermAndSighupWriteTheImageSoFar) {
+  for (int sig : {SIGTERM, SIGHUP}) {
+    SCOPED_TRACE(sig);
+    TempDir dir;
+    const std::string image = (dir / "partial.exr").string(), log = (dir / "log.txt").string();
+    const pid_t pid = spawn_rll(long_render(image), log);
+    ASSERT_GT(pid, 0);
+    const int status = signal_and_wait(pid, std::chrono::milliseconds(1500), {sig});
+    ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal: the image so far is lost";
+    EXPECT_EQ(WEXITSTATUS(status), 128 + sig);
+    EXPECT_GT(image_mean(read_image(image)), 0);
+    expect_mentions(read_text(log), {"interrupted after", "partial.exr"});
+  }
+}
+
+TEST(Interrupt, ASecondSignalStillWritesTheImage) {
+  TempDir dir;
+  const std::string image = (dir / "partial.exr").string(), log = (dir / "log.txt").string();
+  const pid_t pid = spawn_rll(long_render(image), log);
+  ASSERT_GT(pid, 0);
+  // Two different signals, so that the second is not merged into the first while pending.
+  const int status = signal_and_wait(pid, std::chrono::milliseconds(1500), {SIGINT, SIGTERM});
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by the second signal";
+  EXPECT_TRUE(WEXITSTATUS(status) == 128 + SIGINT || WEXITSTATUS(status) == 128 + SIGTERM)
+      << WEXITSTATUS(status);
+  EXPECT_GT(image_mean(read_image(image)), 0);
+  expect_mentions(read_text(log), {"already stopping", "partial.exr"});
+}
+
+TEST(Interrupt, CompareExits130AfterWritingWhatItHas) {
+  TempDir dir;
+  const std::string out = (dir / "cmp").string(), log = (dir / "log.txt").string();
+  const pid_t pid = spawn_rll({"compare", "builtin:cornell-box", "--samplers", "power,tree",
+                               "--time", "60", "--res", "32x24", "--reference-spp", "4",
+                               "--cache-dir", (dir / "cache").string(), "--out", out, "--quiet"},
+                              log);
+  ASSERT_GT(pid, 0);
+  const int status = signal_and_wait(pid, std::chrono::milliseconds(3000), {SIGINT});
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130) << read_text(log);
+  EXPECT_EQ(read_image(dir / "cmp" / "reference.exr").width(), 32);
+  expect_mentions(read_text(log), {"interrupted during the run of 'power'", out});
 }

@@ -4,10 +4,12 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "rll/accel/accel.h"
@@ -52,10 +54,12 @@ std::string shell_quote(const std::string& s) {
 }
 }  // namespace
 
-CommandResult run_rll(const std::vector<std::string>& args) {
+CommandResult run_rll(const std::vector<std::string>& args, int timeout_seconds, double* wall) {
   std::string cmd = shell_quote(RLL_BINARY);
+  if (timeout_seconds > 0) cmd = "timeout -s KILL " + std::to_string(timeout_seconds) + " " + cmd;
   for (const auto& a : args) cmd += " " + shell_quote(a);
   cmd += " 2>&1";
+  const auto t0 = std::chrono::steady_clock::now();
   CommandResult r;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (!pipe) return r;
@@ -64,7 +68,15 @@ CommandResult run_rll(const std::vector<std::string>& args) {
   while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
   int status = ::pclose(pipe);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  if (wall) *wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
+}
+
+std::string read_text(const std::filesystem::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
 }
 
 Scene small_builtin_scene(const std::string& name, int width, int height) {

@@ -53,8 +53,13 @@ struct CommandResult {
   int exit_code = -1;
   std::string output;  // stdout and stderr together
 };
-// Runs the rll program with the given arguments (shell-quoted here).
-CommandResult run_rll(const std::vector<std::string>& args);
+// Runs the rll program with the given arguments (shell-quoted here). With `timeout_seconds` > 0
+// it is killed after that long (exit code 137), so that a command that would run forever fails
+// a test instead of hanging it; `wall` receives the wall time.
+CommandResult run_rll(const std::vector<std::string>& args, int timeout_seconds = 0,
+                      double* wall = nullptr);
+// The whole content of a file (empty if it cannot be read).
+std::string read_text(const std::filesystem::path& p);
 // Runs rll and checks a clean failure: an exit code in [1, 127] (128 + signal is a crash) and
 // every one of `mentions` in the output.
 void expect_clean_failure(const std::vector<std::string>& args,

@@ -94,14 +94,16 @@ TEST(CompareSummary, TableShowsMedianRangeRatioAndEfficiency) {
   const auto cells = table_cells(s);
   ASSERT_EQ(cells.size(), 3u);
   EXPECT_EQ(cells[2][0], "b");
-  EXPECT_EQ(cells[0][4], "trimmed relMSE");
-  EXPECT_EQ(cells[2][6], "5");
+  EXPECT_EQ(cells[0][5], "trimmed relMSE");
+  EXPECT_EQ(cells[0][9], "efficiency");
+  EXPECT_EQ(cells[2][9], "5");
+  EXPECT_EQ(cells[2][10], "5");  // no setup time
 }
 
 TEST(CompareSummary, CheckpointsAreSpacedLogarithmicallyAndEndAtTheFinalImage) {
   Image ref(2, 2, Rgb(1.0f));
   Film film(2, 2);
-  ConvergenceRecorder rec(ref, 2);  // two per decade: at least x3.16 apart
+  ConvergenceRecorder rec(ref, nullptr, 2);  // two per decade: at least x3.16 apart
   RenderProgress p;
   for (int pass = 1; pass <= 200; ++pass) {
     for (int y = 0; y < 2; ++y)

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "rll/core/error.h"
+#include "rll/core/rng.h"
 #include "rll/eval/metrics.h"
 
 using namespace rll;
@@ -110,3 +111,72 @@ TEST(Metrics, TrimmedRelMseDropsTheWorstTenthOfAPercent) {
   EXPECT_NEAR(rll::trimmed_relmse(img, ref), kept, 1e-6);
 }
 }  // namespace
+
+TEST(Metrics, MrseByHand) {
+  // Pixel 0: (0 + 1 + 4) / 1.01^2; pixel 1: .01/.11^2 + 0/.01^2 + .04/.21^2.
+  const double expected = (5.0 / (1.01 * 1.01) + 0.01 / (0.11 * 0.11) + 0.04 / (0.21 * 0.21)) / 6.0;
+  EXPECT_NEAR(mrse(kImage, kReference), expected, 1e-5);
+  const ErrorMetrics m = error_metrics(kImage, kReference);
+  EXPECT_NEAR(m.mrse, expected, 1e-5);
+  EXPECT_NEAR(m.relmse, relmse(kImage, kReference), 1e-12);
+  EXPECT_NEAR(m.mse, 5.05 / 6.0, 1e-7);
+  EXPECT_EQ(metric_by_name(m, "mrse"), m.mrse);
+  EXPECT_THROW(metric_by_name(m, "psnr"), Error);
+}
+
+TEST(Metrics, SubtractedVarianceComesOffEverySquaredDifference) {
+  // Variance 0.5 in every channel of pixel 0 and 0 in pixel 1: MSE drops by 0.5 * 3 / 6.
+  Image var(2, 1, Rgb(0));
+  var[0] = Rgb(0.5f);
+  const ErrorMetrics m = error_metrics(kImage, kReference, &var);
+  EXPECT_NEAR(m.mse, (5.05 - 1.5) / 6.0, 1e-7);
+  EXPECT_NEAR(m.relmse, ((5.0 - 1.5) / 1.01 + 1.3) / 6.0, 1e-6);
+  EXPECT_NEAR(m.mrse, mrse(kImage, kReference) - 1.5 / (1.01 * 1.01) / 6.0, 1e-5);
+}
+
+TEST(Metrics, HalvesVarianceIsQuarterOfTheSquaredDifference) {
+  const Image a = two_pixels({1, 2, 3}, {0, 0, 0});
+  const Image b = two_pixels({1, 0, 3}, {0, 0, 4});
+  const Image v = variance_of_mean_of_halves(a, b);
+  EXPECT_EQ(v[0].y, 1.0f);
+  EXPECT_EQ(v[1].z, 4.0f);
+  EXPECT_EQ(v[0].x, 0.0f);
+}
+
+// A known image, a reference that is the known image plus noise (the mean of two noisy halves),
+// and a render with its own, known error: the noise-corrected errors recover the render's error
+// against the noise-free image, where the uncorrected ones are inflated by the reference's noise.
+// (The relative metrics divide by the noisy reference: a bias of order (sigma_ref / ref)^2 that
+// the correction leaves, 0.5% here, as in a reference with a few hundred samples per pixel.)
+TEST(Metrics, NoiseCorrectionRecoversTheErrorAgainstTheTrueImage) {
+  const int w = 256, h = 256;
+  Image truth(w, h), render(w, h), half_a(w, h), half_b(w, h);
+  Pcg32 rng(7);
+  auto gauss = [&] {  // Box-Muller
+    const double u1 = std::max(1e-12, rng.next_double()), u2 = rng.next_double();
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+  };
+  const double sigma_render = 0.05, sigma_half = 0.05;
+  for (size_t i = 0; i < truth.pixel_count(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double t = 0.5 + rng.next_double();
+      truth[i][c] = float(t);
+      render[i][c] = float(t + sigma_render * gauss());
+      half_a[i][c] = float(t + sigma_half * gauss());
+      half_b[i][c] = float(t + sigma_half * gauss());
+    }
+  Image reference(w, h);
+  for (size_t i = 0; i < reference.pixel_count(); ++i)
+    reference[i] = (half_a[i] + half_b[i]) * 0.5f;
+  const Image var = variance_of_mean_of_halves(half_a, half_b);
+  const ErrorMetrics exact = error_metrics(render, truth);
+  const ErrorMetrics raw = error_metrics(render, reference);
+  const ErrorMetrics corrected = error_metrics(render, reference, &var);
+  // The reference's variance (0.05^2 / 2) is half the render's (0.05^2): raw is ~1.5x too high.
+  for (const char* name : kMetricNames) {
+    const double e = metric_by_name(exact, name), r = metric_by_name(raw, name),
+                 c = metric_by_name(corrected, name);
+    EXPECT_GT(r / e, 1.4) << name;
+    EXPECT_NEAR(c / e, 1.0, 0.04) << name;
+  }
+}

@@ -11,22 +11,31 @@
 
 namespace rll {
 
-ConvergenceRecorder::ConvergenceRecorder(const Image& reference, int per_decade)
-    : m_reference(reference), m_step(std::pow(10.0, 1.0 / std::max(1, per_decade))) {}
+double checkpoint_metric(const Checkpoint& c, const std::string& name) {
+  return metric_by_name({c.mse, c.relmse, c.trimmed_relmse, c.mrse}, name);
+}
+
+ConvergenceRecorder::ConvergenceRecorder(const Image& reference, const Image* reference_variance,
+                                         int per_decade)
+    : m_reference(reference),
+      m_variance(reference_variance),
+      m_step(std::pow(10.0, 1.0 / std::max(1, per_decade))) {}
+
+Checkpoint ConvergenceRecorder::measure(const RenderProgress& p, const Image& image) const {
+  const ErrorMetrics m = error_metrics(image, m_reference, m_variance);
+  return {p.seconds, p.spp_done, m.relmse, m.mse, m.trimmed_relmse, m.mrse};
+}
 
 void ConvergenceRecorder::after_pass(const RenderProgress& p, const Film& film) {
   if (p.seconds < m_next || p.spp_done < 1) return;
-  const Image image = film.resolve();
-  m_checkpoints.push_back(
-      {p.seconds, p.spp_done, relmse(image, m_reference), mse(image, m_reference)});
+  m_checkpoints.push_back(measure(p, film.resolve()));
   m_last_pass = p.passes;
   m_next = p.seconds * m_step;
 }
 
 void ConvergenceRecorder::finish(const RenderProgress& p, const Image& image) {
   if (m_last_pass == p.passes && !m_checkpoints.empty()) m_checkpoints.pop_back();
-  m_checkpoints.push_back(
-      {p.seconds, p.spp_done, relmse(image, m_reference), mse(image, m_reference)});
+  m_checkpoints.push_back(measure(p, image));
   m_last_pass = p.passes;
 }
 
@@ -67,7 +76,8 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
       fail("sampler '{}' was not run for the same repeats as '{}'", name, samplers[0]);
     SamplerSummary s;
     s.name = name;
-    std::vector<double> spp, seconds, setup, rel, trimmed, mse_v, eff, ratio;
+    std::vector<double> spp, seconds, setup, rel, trimmed, mrse_v, mse_v, eff, eff_setup, ratio,
+        trimmed_ratio;
     for (const auto& [repeat, run] : mine) {
       s.runs.push_back(run);
       spp.push_back(run->spp);
@@ -75,10 +85,14 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
       setup.push_back(run->setup_seconds);
       rel.push_back(run->relmse);
       trimmed.push_back(run->trimmed_relmse);
+      mrse_v.push_back(run->mrse);
       mse_v.push_back(run->mse);
       if (auto e = efficiency(run->relmse, run->seconds)) eff.push_back(*e);
-      const double base = first.at(repeat)->relmse;
-      if (base > 0) ratio.push_back(run->relmse / base);
+      if (auto e = efficiency(run->relmse, run->seconds + run->setup_seconds))
+        eff_setup.push_back(*e);
+      const RunResult& base = *first.at(repeat);
+      if (base.relmse > 0) ratio.push_back(run->relmse / base.relmse);
+      if (base.trimmed_relmse > 0) trimmed_ratio.push_back(run->trimmed_relmse / base.trimmed_relmse);
       if (run->sampler_bytes)
         s.sampler_bytes = std::max(s.sampler_bytes.value_or(0.0), *run->sampler_bytes);
       s.peak_rss_bytes = std::max(s.peak_rss_bytes, run->peak_rss_bytes);
@@ -89,9 +103,12 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
     s.setup_seconds = spread_of(setup);
     s.relmse = spread_of(rel);
     s.trimmed_relmse = spread_of(trimmed);
+    s.mrse = spread_of(mrse_v);
     s.mse = spread_of(mse_v);
     s.efficiency = spread_of(eff);
+    s.efficiency_with_setup = spread_of(eff_setup);
     s.relmse_ratio = spread_of(ratio);
+    s.trimmed_ratio = spread_of(trimmed_ratio);
     out.push_back(std::move(s));
   }
   return out;
@@ -125,16 +142,19 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
   j["setup_seconds"] = spread_json(s.setup_seconds);
   j["relmse"] = spread_json(s.relmse);
   j["trimmed_relmse"] = spread_json(s.trimmed_relmse);
+  j["mrse"] = spread_json(s.mrse);
   j["mse"] = spread_json(s.mse);
   j["efficiency"] = spread_json(s.efficiency);
+  j["efficiency_with_setup"] = spread_json(s.efficiency_with_setup);
   j["relmse_ratio"] = spread_json(s.relmse_ratio);
+  j["trimmed_ratio"] = spread_json(s.trimmed_ratio);
   j["memory"] = {{"sampler_bytes",
                   s.sampler_bytes ? nlohmann::json(*s.sampler_bytes) : nlohmann::json(nullptr)},
                  {"peak_rss_bytes", s.peak_rss_bytes}};
   nlohmann::json runs = nlohmann::json::array();
   for (const RunResult* r : s.runs) {
     nlohmann::json cps = nlohmann::json::array();
-    for (const auto& c : r->checkpoints) cps.push_back({c.seconds, c.spp, c.relmse, c.mse});
+    for (const auto& c : r->checkpoints) cps.push_back({c.seconds, c.spp, c.relmse, c.trimmed_relmse, c.mrse, c.mse});
     runs.push_back({{"repeat", r->repeat},
                     {"seed", r->seed},
                     {"spp", r->spp},
@@ -142,24 +162,29 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
                     {"setup_seconds", r->setup_seconds},
                     {"relmse", r->relmse},
                     {"trimmed_relmse", r->trimmed_relmse},
+                    {"mrse", r->mrse},
                     {"mse", r->mse},
                     {"checkpoints", std::move(cps)}});
   }
   j["runs"] = std::move(runs);
-  j["checkpoint_fields"] = {"seconds", "spp", "relmse", "mse"};
+  j["checkpoint_fields"] = {"seconds", "spp", "relmse", "trimmed_relmse", "mrse", "mse"};
   return j;
 }
 
 std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSummary>& summaries) {
   std::vector<std::vector<std::string>> rows;
-  rows.push_back(
-      {"sampler", "spp", "seconds", "relMSE median [min, max]", "trimmed relMSE", "ratio", "efficiency"});
+  rows.push_back({"sampler", "spp", "seconds", "setup s", "relMSE median [min, max]",
+                  "trimmed relMSE", "MRSE", "ratio", "trimmed ratio", "efficiency",
+                  "eff. with setup"});
+  auto median = [](const Spread& s, const char* format) {
+    return s.values.empty() ? std::string("-") : fmt::format(fmt::runtime(format), s.median);
+  };
   for (const auto& s : summaries) {
-    rows.push_back(
-        {s.name, fmt::format("{:g}", s.spp.median), fmt::format("{:.2f}", s.seconds.median),
-         with_range(s.relmse, sci), s.trimmed_relmse.values.empty() ? "-" : sci(s.trimmed_relmse.median),
-         s.relmse_ratio.values.empty() ? "-" : fmt::format("{:.3f}", s.relmse_ratio.median),
-         s.efficiency.values.empty() ? "-" : fmt::format("{:.4g}", s.efficiency.median)});
+    rows.push_back({s.name, median(s.spp, "{:g}"), median(s.seconds, "{:.2f}"),
+                    median(s.setup_seconds, "{:.2f}"), with_range(s.relmse, sci),
+                    median(s.trimmed_relmse, "{:.3e}"), median(s.mrse, "{:.3e}"),
+                    median(s.relmse_ratio, "{:.3f}"), median(s.trimmed_ratio, "{:.3f}"),
+                    median(s.efficiency, "{:.4g}"), median(s.efficiency_with_setup, "{:.4g}")});
   }
   return rows;
 }

@@ -17,14 +17,18 @@ namespace rll {
 struct Checkpoint {
   double seconds = 0;  // render time so far, metric time excluded
   int spp = 0;
-  double relmse = 0, mse = 0;
+  double relmse = 0, mse = 0, trimmed_relmse = 0, mrse = 0;
 };
+// The checkpoint's metric by its name in kMetricNames (metrics.h).
+double checkpoint_metric(const Checkpoint& c, const std::string& name);
 
 // Takes checkpoints of the error of a film against a reference at render times spaced
-// logarithmically (a fixed number per decade), for the convergence curve.
+// logarithmically (a fixed number per decade), for the convergence curve. With
+// `reference_variance`, the reference's noise is subtracted (error_metrics in metrics.h).
 class ConvergenceRecorder {
  public:
-  ConvergenceRecorder(const Image& reference, int per_decade = 6);
+  ConvergenceRecorder(const Image& reference, const Image* reference_variance = nullptr,
+                      int per_decade = 6);
   // To be called after every pass (render()'s after_pass): takes a checkpoint when due.
   void after_pass(const RenderProgress& progress, const Film& film);
   // The final state, always recorded (replaces a checkpoint taken at the same pass).
@@ -32,7 +36,9 @@ class ConvergenceRecorder {
   const std::vector<Checkpoint>& checkpoints() const { return m_checkpoints; }
 
  private:
+  Checkpoint measure(const RenderProgress& p, const Image& image) const;
   const Image& m_reference;
+  const Image* m_variance;
   double m_step;  // ratio between successive checkpoint times
   double m_next = 0;
   int m_last_pass = -1;
@@ -47,8 +53,8 @@ struct RunResult {
   int spp = 0;
   double seconds = 0;        // rendering, learning included
   double setup_seconds = 0;  // making the sampler (e.g. an oracle's estimates), not in `seconds`
-  double relmse = 0, mse = 0;
-  double trimmed_relmse = 0;  // of the final image
+  // Errors of the final image (metrics.h), the reference's noise subtracted when it is known.
+  double relmse = 0, mse = 0, trimmed_relmse = 0, mrse = 0;
   std::optional<double> sampler_bytes;  // the sampler's describe()["bytes"], when it reports one
   size_t peak_rss_bytes = 0;            // of the whole process, after this run
   nlohmann::json describe;              // the sampler's describe()
@@ -68,10 +74,13 @@ Spread spread_of(std::vector<double> values);
 
 struct SamplerSummary {
   std::string name;
-  Spread spp, seconds, setup_seconds, relmse, trimmed_relmse, mse, efficiency;
-  // Per repeat, relMSE over the first sampler's relMSE in the same repeat: ratios taken within
-  // one repeat cancel machine noise that hits all samplers of that repeat alike.
-  Spread relmse_ratio;
+  Spread spp, seconds, setup_seconds, relmse, trimmed_relmse, mrse, mse;
+  // 1 / (relMSE x seconds), over the render's seconds alone and over render and setup together
+  // (an oracle's precomputation can take far longer than its render).
+  Spread efficiency, efficiency_with_setup;
+  // Per repeat, relMSE (trimmed relMSE) over the first sampler's in the same repeat: ratios taken
+  // within one repeat cancel machine noise that hits all samplers of that repeat alike.
+  Spread relmse_ratio, trimmed_ratio;
   std::optional<double> sampler_bytes;  // largest over repeats
   size_t peak_rss_bytes = 0;            // largest over repeats
   nlohmann::json describe;
@@ -86,8 +95,9 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
 // The per-sampler part of summary.json.
 nlohmann::json sampler_summary_json(const SamplerSummary& s);
 
-// The table printed at the end of a compare: sampler, spp, seconds, relMSE median [min-max],
-// trimmed relMSE, ratio to the first sampler, efficiency.
+// The table printed at the end of a compare: sampler, spp, seconds, setup seconds, relMSE median
+// [min-max], trimmed relMSE, MRSE, both ratios to the first sampler, efficiency without and
+// with setup time.
 std::string format_table(const std::vector<SamplerSummary>& summaries);
 // The same table as rows of cells (header first), for the HTML report.
 std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSummary>& summaries);

@@ -25,23 +25,82 @@ double relative_squared_error(float x, float ref) {
 
 }  // namespace
 
-double mse(const Image& image, const Image& reference) {
+ErrorMetrics error_metrics(const Image& image, const Image& reference,
+                           const Image* reference_variance) {
   check_sizes(image, reference);
-  double sum = 0;
-  for (size_t i = 0; i < image.pixel_count(); ++i)
+  if (reference_variance) check_sizes(*reference_variance, reference);
+  const size_t n = image.pixel_count();
+  // Per pixel: its uncorrected relative error (for ranking) and its corrected relMSE term.
+  std::vector<std::pair<double, double>> rel(n);
+  double sum_mse = 0, sum_rel = 0, sum_mrse = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double raw = 0, corrected = 0;
     for (int c = 0; c < 3; ++c) {
-      const double d = double(image[i][c]) - reference[i][c];
-      sum += d * d;
+      const double ref = reference[i][c];
+      const double d = double(image[i][c]) - ref;
+      const double sq = d * d - (reference_variance ? double((*reference_variance)[i][c]) : 0.0);
+      const double rel_denominator = ref * ref + kRelMseEpsilon;
+      raw += d * d / rel_denominator;
+      corrected += sq / rel_denominator;
+      sum_mse += sq;
+      sum_mrse += sq / ((ref + kMrseEpsilon) * (ref + kMrseEpsilon));
     }
-  return sum / (3.0 * double(image.pixel_count()));
+    // NaN pixels count as the worst, so they are dropped first.
+    rel[i] = {std::isnan(raw) ? std::numeric_limits<double>::infinity() : raw, corrected};
+    sum_rel += corrected;
+  }
+  ErrorMetrics m;
+  const double values = 3.0 * double(n);
+  m.mse = sum_mse / values;
+  m.relmse = sum_rel / values;
+  m.mrse = sum_mrse / values;
+  const size_t keep = n - size_t(std::floor(double(n) * kTrimmedFraction));
+  std::nth_element(rel.begin(), rel.begin() + ptrdiff_t(keep - 1), rel.end(),
+                   [](const auto& x, const auto& y) { return x.first < y.first; });
+  double kept = 0;
+  for (size_t i = 0; i < keep; ++i) kept += rel[i].second;
+  m.trimmed_relmse = kept / (3.0 * double(keep));
+  return m;
 }
 
+double metric_by_name(const ErrorMetrics& m, const std::string& name) {
+  if (name == "relmse") return m.relmse;
+  if (name == "trimmed_relmse") return m.trimmed_relmse;
+  if (name == "mrse") return m.mrse;
+  if (name == "mse") return m.mse;
+  fail("unknown metric '{}' (valid: relmse, trimmed_relmse, mrse, mse)", name);
+}
+
+std::string metric_label(const std::string& name) {
+  if (name == "relmse") return "relMSE";
+  if (name == "trimmed_relmse") return "trimmed relMSE";
+  if (name == "mrse") return "MRSE";
+  if (name == "mse") return "MSE";
+  fail("unknown metric '{}' (valid: relmse, trimmed_relmse, mrse, mse)", name);
+}
+
+double mse(const Image& image, const Image& reference) {
+  return error_metrics(image, reference).mse;
+}
 double relmse(const Image& image, const Image& reference) {
-  check_sizes(image, reference);
-  double sum = 0;
-  for (size_t i = 0; i < image.pixel_count(); ++i)
-    for (int c = 0; c < 3; ++c) sum += relative_squared_error(image[i][c], reference[i][c]);
-  return sum / (3.0 * double(image.pixel_count()));
+  return error_metrics(image, reference).relmse;
+}
+double trimmed_relmse(const Image& image, const Image& reference) {
+  return error_metrics(image, reference).trimmed_relmse;
+}
+double mrse(const Image& image, const Image& reference) {
+  return error_metrics(image, reference).mrse;
+}
+
+Image variance_of_mean_of_halves(const Image& a, const Image& b) {
+  check_sizes(a, b);
+  Image v(a.width(), a.height());
+  for (size_t i = 0; i < a.pixel_count(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double d = double(a[i][c]) - b[i][c];
+      v[i][c] = float(d * d / 4);
+    }
+  return v;
 }
 
 std::vector<float> relative_error_map(const Image& image, const Image& reference) {
@@ -97,20 +156,6 @@ std::vector<uint8_t> false_colour(const std::vector<float>& values, float lo, fl
     rgb[3 * i + 2] = c.b;
   }
   return rgb;
-}
-
-double trimmed_relmse(const Image& image, const Image& reference) {
-  std::vector<float> map = relative_error_map(image, reference);
-  const size_t drop = size_t(std::floor(double(map.size()) * kTrimmedFraction));
-  const size_t keep = map.size() - drop;
-  if (keep == 0) return 0;
-  // NaN pixels count as the worst, so they are dropped first.
-  for (auto& v : map)
-    if (std::isnan(v)) v = std::numeric_limits<float>::infinity();
-  std::nth_element(map.begin(), map.begin() + ptrdiff_t(keep - 1), map.end());
-  double sum = 0;
-  for (size_t i = 0; i < keep; ++i) sum += map[i];
-  return sum / double(keep);
 }
 
 double quantile(std::vector<float> values, double q) {

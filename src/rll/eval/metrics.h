@@ -1,8 +1,10 @@
-// Image error metrics against a reference (MSE, relMSE), per-pixel error maps and their
+// Image error metrics against a reference (MSE, relMSE, trimmed relMSE, MRSE), with the
+// reference's own noise subtracted when its variance is known, per-pixel error maps and their
 // false-colour rendering for reports.
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "rll/core/image.h"
@@ -13,15 +15,45 @@ namespace rll {
 // the reference from dominating the mean.
 inline constexpr double kRelMseEpsilon = 0.01;
 
-// Mean over pixels and channels of (x - ref)^2. Throws rll::Error when the sizes differ.
-double mse(const Image& image, const Image& reference);
-// Mean over pixels and channels of (x - ref)^2 / (ref^2 + kRelMseEpsilon).
-double relmse(const Image& image, const Image& reference);
+// The constant of MRSE as pbrt-v4 defines it: (x - ref)^2 / (ref + eps)^2.
+inline constexpr double kMrseEpsilon = 0.01;
 // The share of pixels trimmed relMSE leaves out: the worst 0.1% by their own relative error.
 inline constexpr double kTrimmedFraction = 0.001;
-// relMSE with the worst kTrimmedFraction of pixels (by their own relative error, the
-// relative_error_map) left out, so that a few fireflies cannot decide a comparison alone.
+
+// The four errors of an image against a reference, each a mean over pixels and channels:
+//   mse            (x - ref)^2
+//   relmse         (x - ref)^2 / (ref^2 + kRelMseEpsilon)
+//   trimmed_relmse relMSE with the worst kTrimmedFraction of pixels (ranked by their own
+//                  relative error, the relative_error_map) left out, so that a few fireflies
+//                  cannot decide a comparison alone
+//   mrse           (x - ref)^2 / (ref + kMrseEpsilon)^2
+// With `reference_variance` (per pixel and channel, the variance of the reference's value),
+// every squared difference has it subtracted: for an image independent of the reference,
+// E[(x - ref)^2] = E[(x - truth)^2] + Var(ref), so the result estimates the error against the
+// noise-free image without bias. It can then come out negative when the image is as close to
+// the truth as the reference's noise lets one tell. Pixels are still ranked for trimming by their
+// uncorrected error. Throws rll::Error when the sizes differ.
+struct ErrorMetrics {
+  double mse = 0, relmse = 0, trimmed_relmse = 0, mrse = 0;
+};
+ErrorMetrics error_metrics(const Image& image, const Image& reference,
+                           const Image* reference_variance = nullptr);
+// Names of the metrics as they appear in summary.json, --plot-metric and tables.
+inline constexpr const char* kMetricNames[] = {"relmse", "trimmed_relmse", "mrse", "mse"};
+// The metric of that name; throws rll::Error listing the names for an unknown one.
+double metric_by_name(const ErrorMetrics& m, const std::string& name);
+// How the metric of that name is written for readers ("relMSE", "trimmed relMSE", ...).
+std::string metric_label(const std::string& name);
+
+// Single metrics, without noise subtraction (see error_metrics).
+double mse(const Image& image, const Image& reference);
+double relmse(const Image& image, const Image& reference);
 double trimmed_relmse(const Image& image, const Image& reference);
+double mrse(const Image& image, const Image& reference);
+
+// The variance of the mean of two independent, equally sampled renders a and b, per pixel and
+// channel: (a - b)^2 / 4 is an unbiased estimate of Var((a + b) / 2).
+Image variance_of_mean_of_halves(const Image& a, const Image& b);
 // Per pixel, the mean over channels of (x - ref)^2 / (ref^2 + kRelMseEpsilon): its mean over
 // pixels is relmse(image, reference).
 std::vector<float> relative_error_map(const Image& image, const Image& reference);

@@ -1,8 +1,10 @@
 #include "rll/eval/reference.h"
 
 #include <fmt/format.h>
+#include <signal.h>
 
 #include <bit>
+#include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -10,6 +12,7 @@
 
 #include "rll/core/error.h"
 #include "rll/core/rng.h"
+#include "rll/eval/metrics.h"
 #include "rll/render/session.h"
 
 namespace rll {
@@ -79,6 +82,10 @@ std::optional<ReferenceInfo> info_from_json(const nlohmann::json& j, const fs::p
     info.spp = j.at("spp").get<int>();
     info.seed = j.at("seed").get<uint64_t>();
     info.seconds = j.at("seconds").get<double>();
+    if (j.value("halves", false)) {
+      info.half = exr;
+      info.half.replace_extension(".half.exr");
+    }
     return info;
   } catch (const nlohmann::json::exception&) {
     return std::nullopt;
@@ -194,8 +201,37 @@ std::optional<ReferenceInfo> ReferenceCache::find(
   return best;
 }
 
+void ReferenceCache::remove(const ReferenceInfo& info) const {
+  std::error_code ec;
+  fs::path json = info.image;
+  json.replace_extension(".json");
+  fs::remove(json, ec);  // first: without it the entry is never found again
+  fs::remove(info.image, ec);
+  if (!info.half.empty()) fs::remove(info.half, ec);
+}
+
+int ReferenceCache::remove_stale_temporaries() const {
+  std::error_code ec;
+  if (!fs::is_directory(m_dir, ec)) return 0;
+  int removed = 0;
+  for (const auto& entry : fs::directory_iterator(m_dir, ec)) {
+    // write_file_atomic's temporaries: NAME.tmp-PID-COUNTER.
+    const std::string name = entry.path().filename().string();
+    const size_t at = name.rfind(".tmp-");
+    if (at == std::string::npos) continue;
+    const size_t dash = name.find('-', at + 5);
+    if (dash == std::string::npos) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(name.c_str() + at + 5, &end, 10);
+    if (end != name.c_str() + dash || pid <= 0) continue;
+    if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge
+    if (fs::remove(entry.path(), ec)) ++removed;
+  }
+  return removed;
+}
+
 ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image,
-                                    ReferenceInfo info) const {
+                                    ReferenceInfo info, const Image* first_half) const {
   std::error_code ec;
   fs::create_directories(m_dir, ec);
   if (!fs::is_directory(m_dir))
@@ -218,11 +254,16 @@ ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image,
       continue;
     fs::path exr = p;
     exr.replace_extension(".exr");
-    fs::remove(exr, ec);
-    fs::remove(p, ec);
+    old->image = exr;
+    remove(*old);
   }
 
   write_image(info.image, image);
+  info.half.clear();
+  if (first_half) {
+    info.half = m_dir / (stem + ".half.exr");
+    write_image(info.half, *first_half);
+  }
   nlohmann::json j;
   j["key"] = key.hex();
   j["scene_hash"] = fmt::format("{:016x}", key.scene);
@@ -233,47 +274,105 @@ ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image,
   j["spp"] = info.spp;
   j["seed"] = info.seed;
   j["seconds"] = info.seconds;
+  j["halves"] = first_half != nullptr;
   j["cache_version"] = kReferenceCacheVersion;
   // The metadata goes last: an entry without it is never found, so a crash mid-store is harmless.
   write_file_atomic(m_dir / (stem + ".json"), j.dump(2) + "\n");
   return info;
 }
 
+namespace {
+
+// A cached image as it must be: readable, of the scene's size, finite everywhere.
+std::optional<Image> read_cached(const fs::path& path, int width, int height, std::string& why) {
+  try {
+    Image image = read_image(path);
+    if (image.width() != width || image.height() != height) {
+      why = fmt::format("{} is {}x{}, not {}x{}", path.string(), image.width(), image.height(),
+                        width, height);
+      return std::nullopt;
+    }
+    for (size_t i = 0; i < image.pixel_count(); ++i)
+      if (!is_finite(image[i])) {
+        why = fmt::format("{} has non-finite pixels", path.string());
+        return std::nullopt;
+      }
+    return image;
+  } catch (const Error& e) {
+    why = e.what();
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
 ObtainedReference obtain_reference(const RenderSession& session, const ReferenceCache& cache,
                                    const ReferenceRequest& request, bool show_progress,
                                    const std::atomic<bool>* cancel) {
   if (request.spp < 1) fail("the reference needs at least 1 spp (got {})", request.spp);
   const ReferenceKey key = reference_key(session.scene(), session.integrator());
+  const int width = session.scene().width, height = session.scene().height;
   ObtainedReference out;
-  if (!request.force) {
-    if (auto hit = cache.find(key, request.spp, request.seed_allowed)) {
-      out.image = read_image(hit->image);
-      if (out.image.width() == session.scene().width &&
-          out.image.height() == session.scene().height) {
-        out.info = *hit;
-        out.from_cache = true;
-        return out;
-      }
+  cache.remove_stale_temporaries();
+  while (!request.force) {
+    auto hit = cache.find(key, request.spp, request.seed_allowed);
+    if (!hit) break;
+    std::string why;
+    std::optional<Image> image = read_cached(hit->image, width, height, why);
+    std::optional<Image> half;
+    if (image && !hit->half.empty() && !(half = read_cached(hit->half, width, height, why)))
+      image.reset();
+    if (!image) {
+      fmt::print(stderr, "rll: warning: the cached reference {} is damaged ({}); deleted\n",
+                 hit->image.string(), why);
+      cache.remove(*hit);
+      continue;  // another entry, or a new render
     }
+    out.image = std::move(*image);
+    if (half) {
+      // The second half is 2 x mean - first half.
+      Image second(width, height);
+      for (size_t i = 0; i < second.pixel_count(); ++i) second[i] = out.image[i] * 2.0f - (*half)[i];
+      out.variance = variance_of_mean_of_halves(*half, second);
+    }
+    out.info = *hit;
+    out.from_cache = true;
+    return out;
   }
-  auto sampler = session.make_sampler(request.sampler);
-  Film film(session.scene().width, session.scene().height);
-  RenderSettings rs;
-  rs.spp = request.spp;
-  rs.seed = request.seed;
-  rs.pass_spp = request.pass_spp;
-  rs.max_pass_spp = request.max_pass_spp;
-  const RenderProgress p = session.render(*sampler, film, rs, "reference", show_progress, cancel);
-  out.image = film.resolve();
+  const int half_spp = (request.spp + 1) / 2;
+  Image halves[2];
+  out.complete = true;
+  out.info.seconds = 0;
+  out.info.spp = 0;
+  for (int h = 0; h < 2 && out.complete; ++h) {
+    auto sampler = session.make_sampler(request.sampler);  // each half learns from scratch
+    Film film(width, height);
+    RenderSettings rs;
+    rs.spp = half_spp;
+    rs.seed = request.seed + uint64_t(h);
+    rs.pass_spp = request.pass_spp;
+    rs.max_pass_spp = request.max_pass_spp;
+    const RenderProgress p = session.render(*sampler, film, rs, fmt::format("reference {}/2", h + 1),
+                                            show_progress, cancel);
+    halves[h] = film.resolve();
+    out.info.spp += p.spp_done;
+    out.info.seconds += p.seconds;
+    out.complete = !p.cancelled && p.spp_done >= half_spp;
+  }
   out.info.scene = canonical_scene_spec(session.settings().scene);
   out.info.sampler = request.sampler;
-  out.info.spp = p.spp_done;
   out.info.seed = request.seed;
-  out.info.seconds = p.seconds;
-  out.info.width = out.image.width();
-  out.info.height = out.image.height();
-  out.complete = !p.cancelled && p.spp_done >= request.spp;
-  if (out.complete) out.info = cache.store(key, out.image, out.info);
+  out.info.width = width;
+  out.info.height = height;
+  if (!out.complete) {
+    out.image = std::move(halves[0]);
+    return out;
+  }
+  out.image = Image(width, height);
+  for (size_t i = 0; i < out.image.pixel_count(); ++i)
+    out.image[i] = (halves[0][i] + halves[1][i]) * 0.5f;
+  out.variance = variance_of_mean_of_halves(halves[0], halves[1]);
+  out.info = cache.store(key, out.image, out.info, &halves[0]);
   return out;
 }
 

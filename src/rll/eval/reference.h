@@ -38,9 +38,13 @@ ReferenceKey reference_key(const Scene& scene, const IntegratorSettings& setting
 // $RLL_CACHE_DIR when set and not empty, otherwise out/cache.
 std::filesystem::path default_cache_dir();
 
-// One cached reference: the image and what it was rendered with.
+// One cached reference: the image and what it was rendered with. A reference is rendered as two
+// independent halves of equal spp (seeds `seed` and `seed + 1`), so that its own per-pixel noise
+// can be estimated and subtracted from the errors measured against it (metrics.h); the cache
+// keeps their mean and the first half.
 struct ReferenceInfo {
-  std::filesystem::path image;  // the .exr in the cache
+  std::filesystem::path image;  // the .exr in the cache (the mean of the halves)
+  std::filesystem::path half;   // the first half's .exr; empty for an entry made without halves
   std::string scene;            // the scene spec it was loaded from (absolute path for files)
   int width = 0, height = 0;
   std::string sampler;
@@ -60,10 +64,16 @@ class ReferenceCache {
   // are ignored.
   std::optional<ReferenceInfo> find(const ReferenceKey& key, int min_spp,
                                     const std::function<bool(uint64_t)>& seed_allowed = {}) const;
-  // Stores `image` under `key` (creating the folder) and returns the stored entry. Entries of the
-  // same scene spec, resolution and settings whose scene content differs are deleted: the scene
-  // changed since they were rendered.
-  ReferenceInfo store(const ReferenceKey& key, const Image& image, ReferenceInfo info) const;
+  // Stores `image` (and the first half, when given) under `key`, creating the folder, and returns
+  // the stored entry. Entries of the same scene spec, resolution and settings whose scene content
+  // differs are deleted: the scene changed since they were rendered.
+  ReferenceInfo store(const ReferenceKey& key, const Image& image, ReferenceInfo info,
+                      const Image* first_half = nullptr) const;
+  // Deletes an entry's files (a damaged one).
+  void remove(const ReferenceInfo& info) const;
+  // Deletes temporaries (`*.tmp-PID-N`) left by writes that were killed: those of processes that
+  // no longer run. Returns how many were deleted.
+  int remove_stale_temporaries() const;
 
  private:
   std::filesystem::path m_dir;
@@ -83,7 +93,7 @@ struct ReferenceRequest {
   // on occluded scenes (whose lamps power sampling gives pmfs near 1e-7).
   std::string sampler = "tree";
   int spp = 1024;  // at least this many samples per pixel
-  uint64_t seed = kDefaultReferenceSeed;
+  uint64_t seed = kDefaultReferenceSeed;  // of the first half; the second half uses seed + 1
   int pass_spp = 1, max_pass_spp = 8;  // as in RenderSettings
   bool force = false;                  // render and store even when the cache holds one
   // When given, cached references with a seed it rejects are not used.
@@ -92,13 +102,18 @@ struct ReferenceRequest {
 
 struct ObtainedReference {
   Image image;
+  // Per pixel and channel, the variance of `image` estimated from its two halves; empty (0x0)
+  // when the cached entry was made without halves.
+  Image variance;
   ReferenceInfo info;
   bool from_cache = false;
   bool complete = true;  // false: the render was cancelled; it was not stored
 };
 
 // The cached reference for the session's scene and integrator with at least request.spp, or a
-// new one rendered (progress bar labelled "reference") and stored in the cache.
+// new one rendered as two halves of ceil(spp / 2) samples (progress bars labelled "reference
+// 1/2" and "2/2") and stored in the cache. A cache entry that cannot be read back (truncated,
+// wrong size, non-finite pixels) is reported, deleted and rendered again.
 ObtainedReference obtain_reference(const RenderSession& session, const ReferenceCache& cache,
                                    const ReferenceRequest& request, bool show_progress,
                                    const std::atomic<bool>* cancel = nullptr);

@@ -39,6 +39,31 @@ std::pair<float, float> error_range(const Report& r) {
   return {float(hi * 1e-4), float(hi)};
 }
 
+// A number in few characters: "4.6e-6", "0.046", "12".
+std::string short_number(double v) {
+  std::string t = fmt::format("{:.2g}", v);
+  const size_t e = t.find('e');
+  if (e == std::string::npos) return t;
+  std::string mantissa = t.substr(0, e), exponent = t.substr(e + 1);
+  const bool negative = exponent[0] == '-';
+  exponent = exponent.substr(1);
+  exponent.erase(0, std::min(exponent.find_first_not_of('0'), exponent.size() - 1));
+  return mantissa + "e" + (negative ? "-" : "") + exponent;
+}
+
+// "1040", "42", "3.5", "0.12": whole numbers from 10 up, where more digits mislead.
+std::string ratio_text(double r) {
+  return r >= 10 ? fmt::format("{:.0f}", r) : fmt::format("{:.2g}", r);
+}
+
+std::string seconds_text(double s) {
+  if (s < 1e-3) return fmt::format("{:.3g} µs", s * 1e6);
+  if (s < 1) return fmt::format("{:.3g} ms", s * 1e3);
+  return fmt::format("{:.3g} s", s);
+}
+
+// The bar spans the figure's width with its end labels under its ends, on one line each: beside
+// the bar they would need room the column does not have (they wrapped, or ran into the next map).
 std::string colour_bar(float lo, float hi) {
   const int n = 256;
   std::vector<uint8_t> px(size_t(n) * 3);
@@ -49,9 +74,10 @@ std::string colour_bar(float lo, float hi) {
     px[3 * i + 2] = c.b;
   }
   return fmt::format(
-      "<div class=\"bar\"><span>{:.2g}</span><img alt=\"colour scale\" "
-      "src=\"{}\"><span>{:.2g}</span></div>",
-      lo, png_uri(png_bytes(px, n, 1, 3)), hi);
+      "<div class=\"bar\"><img alt=\"colour scale\" src=\"{}\"><div class=\"bar-labels\"><span "
+      "id=\"scale-min\">{}</span><span class=\"bar-note\">log scale</span><span "
+      "id=\"scale-max\">{}</span></div></div>",
+      png_uri(png_bytes(px, n, 1, 3)), short_number(lo), short_number(hi));
 }
 
 // Zoom/pan state shared by every view, the exposure slider and the RGBE decoder.
@@ -134,7 +160,7 @@ constexpr const char* kScript = R"JS(
     clampView();
     zoomValue.textContent = view.zoom.toFixed(view.zoom < 10 ? 2 : 1) + 'x';
     canvases.forEach(function (c) {
-      var src = sources[c.dataset.source];
+      var src = sources[c.dataset.flipped === '1' ? 'reference' : c.dataset.source];
       var g = c.getContext('2d');
       g.setTransform(1, 0, 0, 1, 0, 0);
       g.fillStyle = '#000';
@@ -182,6 +208,43 @@ constexpr const char* kScript = R"JS(
   });
   exposure.addEventListener('input', tonemap);
 
+  // Flip: a view shows the reference in place of its own image, with the same zoom, pan and
+  // exposure, so that differences show as the picture changing under the eye.
+  var flippable = canvases.filter(function (c) { return c.dataset.source !== 'reference'; });
+  var flipAll = document.getElementById('flip-all');
+  function setFlipped(c, on) {
+    c.dataset.flipped = on ? '1' : '0';
+    var fig = c.closest('figure');
+    fig.classList.toggle('flipped', on);
+    var b = fig.querySelector('button.flip');
+    if (b) b.setAttribute('aria-pressed', on ? 'true' : 'false');
+  }
+  function allFlipped() {
+    return flippable.length > 0 && flippable.every(function (c) { return c.dataset.flipped === '1'; });
+  }
+  function toggleAll() {
+    var on = !allFlipped();
+    flippable.forEach(function (c) { setFlipped(c, on); });
+    flipAll.setAttribute('aria-pressed', on ? 'true' : 'false');
+    draw();
+  }
+  Array.prototype.forEach.call(document.querySelectorAll('button.flip'), function (b) {
+    b.addEventListener('click', function () {
+      var c = b.closest('figure').querySelector('canvas.view');
+      setFlipped(c, c.dataset.flipped !== '1');
+      flipAll.setAttribute('aria-pressed', allFlipped() ? 'true' : 'false');
+      draw();
+    });
+  });
+  flipAll.addEventListener('click', toggleAll);
+  document.addEventListener('keydown', function (ev) {
+    if ((ev.key !== 'f' && ev.key !== 'F') || ev.ctrlKey || ev.metaKey || ev.altKey || ev.repeat) return;
+    var t = ev.target;
+    if (t && (t.tagName === 'TEXTAREA' || (t.tagName === 'INPUT' && t.type !== 'range'))) return;
+    ev.preventDefault();
+    toggleAll();
+  });
+
   var parts = {};
   Array.prototype.forEach.call(document.querySelectorAll('img[data-hdr]'), function (img) {
     (parts[img.dataset.hdr] = parts[img.dataset.hdr] || {})[img.dataset.part] = img;
@@ -212,17 +275,38 @@ h1 { font-size: 1.4em; } h2 { font-size: 1.15em; margin-top: 1.6em; }
 dl.facts { display: grid; grid-template-columns: max-content auto; gap: 0.2em 1em; }
 dl.facts dt { font-weight: 600; } dl.facts dd { margin: 0; }
 .warning { color: #a33; }
-table { border-collapse: collapse; font-variant-numeric: tabular-nums; }
+/* Wide tables scroll inside their box, the header row and the sampler column staying in view. */
+.table-wrap { overflow: auto; max-width: 100%; max-height: 80vh; width: fit-content;
+  border: 1px solid #ddd; background: #fff; }
+table { border-collapse: separate; border-spacing: 0; font-variant-numeric: tabular-nums; }
 th, td { padding: 0.3em 0.8em; border-bottom: 1px solid #ddd; text-align: right; }
-th:first-child, td:first-child { text-align: left; }
+td { white-space: nowrap; }
+th { vertical-align: bottom; background: #f0f0f0; position: sticky; top: 0; z-index: 1; }
+th:first-child, td:first-child { text-align: left; position: sticky; left: 0; }
+td:first-child { background: #fff; }
+th:first-child { z-index: 2; }
+table.samplers td { text-align: left; vertical-align: top; white-space: normal; }
+table.samplers td.setup { text-align: right; white-space: nowrap; }
+table.samplers pre { margin: 0; font-size: 0.85em; white-space: pre-wrap; }
+.costly { color: #a33; font-weight: 600; }
+.note { color: #666; font-size: 0.85em; }
 .swatch { display: inline-block; width: 0.8em; height: 0.8em; margin-right: 0.4em; border-radius: 2px; }
 .controls { display: flex; gap: 1.5em; align-items: center; flex-wrap: wrap; margin: 1em 0; }
-.grid { display: flex; flex-wrap: wrap; gap: 12px; }
+.grid { display: flex; flex-wrap: wrap; gap: 12px; align-items: flex-start; }
 figure { margin: 0; }
 figcaption { font-size: 0.85em; margin-top: 0.3em; }
+figcaption .repeat { color: #555; }
+figcaption button.flip { float: right; font-size: 0.9em; padding: 0 0.4em; }
+button[aria-pressed="true"] { background: #ffe2a8; }
+.flip-note { display: none; color: #b35c00; font-weight: 600; }
+figure.flipped .flip-note { display: inline; }
+figure.flipped canvas.view { outline: 3px solid #e69f00; }
 canvas.view { display: block; image-rendering: pixelated; cursor: grab; background: #000; touch-action: none; }
-.bar { display: flex; align-items: center; gap: 0.5em; font-size: 0.85em; margin-top: 0.6em; }
-.bar img { width: 256px; height: 14px; image-rendering: pixelated; }
+.bar { font-size: 0.85em; margin-top: 0.6em; }
+.bar img { display: block; width: 100%; height: 14px; image-rendering: pixelated; }
+.bar-labels { display: flex; justify-content: space-between; gap: 0.5em; white-space: nowrap; margin-top: 0.2em; }
+.bar-note { color: #666; }
+.legend p { margin: 0; font-size: 0.9em; }
 .hidden { display: none; }
 )CSS";
 
@@ -254,6 +338,10 @@ void encode_rgbe(const Image& image, std::vector<uint8_t>& mantissas,
 }
 
 std::string report_html(const Report& r) {
+  auto swatch = [](const ReportEntry& e) {
+    return fmt::format("<span class=\"swatch\" style=\"background:{}\"></span>",
+                       css_colour(e.colour));
+  };
   if (!r.reference) fail("a report needs a reference image");
   const int w = r.reference->width(), h = r.reference->height();
   for (const auto& e : r.entries)
@@ -275,21 +363,49 @@ std::string report_html(const Report& r) {
   for (const auto& warning : r.warnings)
     s += "<p class=\"warning\">" + escape_markup(warning) + "</p>\n";
 
-  s += "<h2>Summary</h2>\n<table id=\"summary\">\n";
+  s += "<h2>Summary</h2>\n<div class=\"table-wrap\">\n<table id=\"summary\">\n";
   for (size_t row = 0; row < r.table.size(); ++row) {
     s += row == 0 ? "<thead><tr>" : (row == 1 ? "<tbody><tr>" : "<tr>");
     for (size_t c = 0; c < r.table[row].size(); ++c) {
       std::string cell = escape_markup(r.table[row][c]);
-      if (row > 0 && c == 0 && row - 1 < r.entries.size())
-        cell = fmt::format("<span class=\"swatch\" style=\"background:{}\"></span>",
-                           css_colour(r.entries[row - 1].colour)) +
-               cell;
+      if (row > 0 && c == 0 && row - 1 < r.entries.size()) cell = swatch(r.entries[row - 1]) + cell;
       s += (row == 0 ? "<th>" : "<td>") + cell + (row == 0 ? "</th>" : "</td>");
     }
     s += row == 0 ? "</tr></thead>\n" : "</tr>\n";
   }
   if (r.table.size() > 1) s += "</tbody>\n";
-  s += "</table>\n";
+  s += "</table>\n</div>\n";
+
+  if (!r.samplers.empty()) {
+    s += "<h2>Samplers</h2>\n<div class=\"table-wrap\">\n<table id=\"samplers\" "
+         "class=\"samplers\">\n<thead><tr><th>sampler</th><th>setup</th><th>parameters</th></tr>"
+         "</thead>\n<tbody>\n";
+    for (const ReportSampler& rs : r.samplers) {
+      std::string name = escape_markup(rs.name);
+      for (const auto& e : r.entries)
+        if (e.name == rs.name) {
+          name = swatch(e) + name;
+          break;
+        }
+      std::string setup = "&ndash;";
+      if (rs.setup_seconds >= 0) {
+        setup = escape_markup(seconds_text(rs.setup_seconds));
+        if (rs.render_seconds > 0) {
+          // A setup that costs more than the render it serves changes which sampler is cheaper;
+          // it is set in red so that a reader of the table cannot miss it.
+          const double ratio = rs.setup_seconds / rs.render_seconds;
+          if (ratio >= 1) setup = "<span class=\"costly\">" + setup + "</span>";
+          setup += "<br><span class=\"note\">" +
+                   escape_markup(ratio >= 0.01 ? ratio_text(ratio) + "x the render time"
+                                               : "under 1% of the render time") +
+                   "</span>";
+        }
+      }
+      s += "<tr><td>" + name + "</td><td class=\"setup\">" + setup + "</td><td><pre>" +
+           escape_markup(rs.params.empty() ? "(none)" : rs.params) + "</pre></td></tr>\n";
+    }
+    s += "</tbody>\n</table>\n</div>\n";
+  }
 
   s += "<h2>Images</h2>\n<div class=\"controls\">\n";
   s += fmt::format(
@@ -298,23 +414,38 @@ std::string report_html(const Report& r) {
       r.exposure);
   s += "<span>Zoom <span id=\"zoom-value\">1x</span> (wheel to zoom, drag to pan, double-click to "
        "reset)</span>\n";
-  s += "<button id=\"reset-view\" type=\"button\">Reset view</button>\n<span "
-       "id=\"status\"></span>\n</div>\n";
+  s += "<button id=\"reset-view\" type=\"button\">Reset view</button>\n";
+  s += "<button id=\"flip-all\" type=\"button\" aria-pressed=\"false\" title=\"Show the reference "
+       "in every view, same zoom and exposure; again to flip back\">Flip all with the reference "
+       "(F)</button>\n<span id=\"status\"></span>\n</div>\n";
 
+  // One view: its canvas, and under it the name, which repeat it shows, a button that flips it
+  // with the reference (all but the reference's own view) and the caption.
   auto figure = [&](const std::string& source, const std::string& title,
-                    const std::string& caption) {
-    return fmt::format(
-        "<figure><canvas class=\"view\" data-source=\"{}\" width=\"{}\" height=\"{}\" "
-        "style=\"width:{}px;height:{}px\"></canvas><figcaption><b>{}</b> "
-        "{}</figcaption></figure>\n",
-        source, w, h, display_w, display_h, escape_markup(title), escape_markup(caption));
+                    const std::string& repeat_label, const std::string& caption) {
+    const bool flippable = source != "reference";
+    std::string f = fmt::format(
+        "<figure style=\"width:{}px\"><canvas class=\"view\" data-source=\"{}\" "
+        "data-flipped=\"0\" width=\"{}\" height=\"{}\" style=\"width:{}px;height:{}px\"></canvas>"
+        "<figcaption>",
+        display_w, source, w, h, display_w, display_h);
+    if (flippable)
+      f += "<button class=\"flip\" type=\"button\" aria-pressed=\"false\" title=\"Show the "
+           "reference here (F flips all)\">&#8644; reference</button>";
+    f += "<b>" + escape_markup(title) + "</b>";
+    if (!repeat_label.empty())
+      f += " <span class=\"repeat\">(" + escape_markup(repeat_label) + ")</span>";
+    if (flippable) f += " <span class=\"flip-note\">showing the reference</span>";
+    if (!caption.empty()) f += "<br>" + escape_markup(caption);
+    return f + "</figcaption></figure>\n";
   };
   std::string data = hdr_images("reference", *r.reference);
-  s += "<div class=\"grid\">\n" + figure("reference", "reference", r.reference_caption);
+  s += "<div class=\"grid\">\n" + figure("reference", "reference", "", r.reference_caption);
   for (size_t i = 0; i < r.entries.size(); ++i) {
+    const ReportEntry& e = r.entries[i];
     const std::string id = fmt::format("image-{}", i);
-    s += figure(id, r.entries[i].name, r.entries[i].caption);
-    data += hdr_images(id, *r.entries[i].image);
+    s += figure(id, e.name, e.repeat_label, e.caption);
+    data += hdr_images(id, *e.image);
   }
   s += "</div>\n";
 
@@ -322,17 +453,18 @@ std::string report_html(const Report& r) {
   const auto [lo, hi] = error_range(r);
   bool any_error = false;
   std::string maps = fmt::format(
-      "<div class=\"grid\">\n<figure style=\"width:{}px\"><p>Per pixel (x - ref)&sup2; / "
-      "(ref&sup2; + 0.01), averaged over channels, on a logarithmic colour scale shared by all "
-      "maps:</p>{}</figure>\n",
+      "<div class=\"grid\">\n<figure class=\"legend\" style=\"width:{}px\"><p>Per pixel (x - "
+      "ref)&sup2; / (ref&sup2; + 0.01), averaged over channels, on a logarithmic colour scale "
+      "shared by all maps:</p>{}</figure>\n",
       display_w, colour_bar(lo, hi));
   for (size_t i = 0; i < r.entries.size(); ++i) {
-    if (!r.entries[i].error) continue;
+    const ReportEntry& e = r.entries[i];
+    if (!e.error) continue;
     any_error = true;
     const std::string id = fmt::format("error-{}", i);
-    maps += figure(id, r.entries[i].name, "");
+    maps += figure(id, e.name, e.repeat_label, "");
     data += fmt::format("<img alt=\"\" data-map=\"{}\" src=\"{}\">\n", id,
-                        png_uri(png_bytes(false_colour(*r.entries[i].error, lo, hi), w, h, 3)));
+                        png_uri(png_bytes(false_colour(*e.error, lo, hi), w, h, 3)));
   }
   if (any_error) {
     s += "<h2>Relative error</h2>\n" + maps + "</div>\n";

@@ -1,6 +1,7 @@
 // The HTML report of a comparison: one self-contained file (images embedded as data URIs, inline
 // CSS, JS and SVG) with the images side by side under an exposure slider, synchronized zoom and
-// pan, false-colour relative-error maps, the table and the convergence plot.
+// pan, a flip of any view with the reference, false-colour relative-error maps, the table, the
+// samplers' parameters and setup times, and the convergence plot.
 //
 // Exposure: each image is embedded losslessly as RGBE (Ward's shared-exponent format) split into
 // two PNGs, one RGB with the mantissas and one grey with the exponents, which the page decodes
@@ -23,6 +24,16 @@ struct ReportEntry {
   uint32_t colour = 0;  // 0xRRGGBB, as in the plot
   const Image* image = nullptr;
   const std::vector<float>* error = nullptr;  // relative_error_map of the image, or null
+  std::string repeat_label;  // which repeat the image is, e.g. "repeat 1 of 3, seed 1"; or empty
+};
+
+// One sampler's setup, for the report's samplers section.
+struct ReportSampler {
+  std::string name;
+  // Its parameters as text shown preformatted: pretty JSON, or one "key = value" a line.
+  std::string params;
+  double setup_seconds = -1;   // median precomputation (building trees, caches); < 0: unknown
+  double render_seconds = -1;  // median render time, to set the setup against; < 0: unknown
 };
 
 struct Report {
@@ -32,7 +43,8 @@ struct Report {
   const Image* reference = nullptr;
   std::string reference_caption;
   std::vector<ReportEntry> entries;
-  std::vector<std::vector<std::string>> table;  // header row first
+  std::vector<std::vector<std::string>> table;  // header row first; one row per entry, in order
+  std::vector<ReportSampler> samplers;          // matched to entries by name for the colour
   std::string plot_svg;                         // an <svg> element, or empty
   float exposure = 0;                           // initial exposure, stops
 };

@@ -49,27 +49,41 @@ float CellKeyer::cell_size(float footprint) const {
   return std::max(2 * r, m_extent * 0x1p-24f);
 }
 
-CellCoord CellKeyer::locate(const Vec3& p, const Vec3& n, float footprint, float u) const {
+int CellKeyer::level_of(float footprint, float u) const {
   // Level of detail: the cell edge is a power of two times the scene diameter, rounded up or
   // down at random in proportion to the fractional level, so that cell size follows the
   // footprint on average.
   float lf = std::log2(cell_size(footprint)) - m_log2_extent;
   float lo = std::floor(lf);
-  return locate_at_level(p, n, int(lo) + (u < lf - lo ? 1 : 0));
+  return int(lo) + (u < lf - lo ? 1 : 0);
+}
+
+CellCoord CellKeyer::locate(const Vec3& p, const Vec3& n, float footprint, float u) const {
+  return locate_with(p, n, level_of(footprint, u), m_jitter_disk, m_jitter_normal);
 }
 
 CellCoord CellKeyer::locate_at_level(const Vec3& p, const Vec3& n, int level) const {
+  return locate_with(p, n, level, m_jitter_disk, m_jitter_normal);
+}
+
+CellCoord CellKeyer::locate_jittered(const Vec3& p, const Vec3& n, float footprint, float u,
+                                     Vec2 disk, Vec2 normal) const {
+  return locate_with(p, n, level_of(footprint, u), disk, normal);
+}
+
+CellCoord CellKeyer::locate_with(const Vec3& p, const Vec3& n, int level, Vec2 disk,
+                                 Vec2 normal) const {
   CellCoord c;
   c.level = level;
   const int bins = m_s.normal_bins;
   Vec2 o = octahedral_encode(n);
-  c.nu = clamp(int(std::floor(o.x * bins + m_jitter_normal.x)), 0, bins - 1);
-  c.nv = clamp(int(std::floor(o.y * bins + m_jitter_normal.y)), 0, bins - 1);
+  c.nu = clamp(int(std::floor(o.x * bins + normal.x)), 0, bins - 1);
+  c.nv = clamp(int(std::floor(o.y * bins + normal.y)), 0, bins - 1);
   // The position jitter lies in the tangent plane of the bin's central normal, so that every
   // point of a cell shares it.
   float size = std::ldexp(m_extent, c.level);
-  Frame f(octahedral_decode({(c.nu + 0.5f - m_jitter_normal.x) / bins, (c.nv + 0.5f - m_jitter_normal.y) / bins}));
-  Vec3 q = p - m_origin + (f.s * m_jitter_disk.x + f.t * m_jitter_disk.y) * size;
+  Frame f(octahedral_decode({(c.nu + 0.5f - normal.x) / bins, (c.nv + 0.5f - normal.y) / bins}));
+  Vec3 q = p - m_origin + (f.s * disk.x + f.t * disk.y) * size;
   c.x = int64_t(std::floor(q.x / size));
   c.y = int64_t(std::floor(q.y / size));
   c.z = int64_t(std::floor(q.z / size));

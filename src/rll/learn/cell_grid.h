@@ -48,6 +48,10 @@ class CellKeyer {
   CellCoord locate(const Vec3& p, const Vec3& n, float footprint, float u) const;
   // The cell of p, n at a given level of detail.
   CellCoord locate_at_level(const Vec3& p, const Vec3& n, int level) const;
+  // As locate, with a jitter of this sample's own instead of the pass's (Fermat's per-sample
+  // jitter): `disk` in the tangent plane in cell edges, `normal` in normal bins.
+  CellCoord locate_jittered(const Vec3& p, const Vec3& n, float footprint, float u, Vec2 disk,
+                            Vec2 normal) const;
   uint64_t key(const CellCoord& c) const;
   uint64_t key(const Vec3& p, const Vec3& n, float footprint, float u) const { return key(locate(p, n, footprint, u)); }
   // The cell's centre under this pass's jitter (a function of the coordinates alone).
@@ -56,6 +60,8 @@ class CellKeyer {
   float cell_size(float footprint) const;
 
  private:
+  int level_of(float footprint, float u) const;
+  CellCoord locate_with(const Vec3& p, const Vec3& n, int level, Vec2 disk, Vec2 normal) const;
   CellGridSettings m_s;
   Vec3 m_origin;
   float m_extent;       // scene diameter

@@ -125,12 +125,17 @@ size_t CutStore::bytes() const {
 
 float CutStore::weight_of(uint32_t cell, uint32_t node) const {
   if (m_s.prior == ClusterWeight::Power) return m_tree.node(node).bounds.power;
+  if (m_s.prior == ClusterWeight::Uniform) return 1.0f;
   return m_tree.importance(node, m_anchor[cell].p, m_anchor[cell].n);
 }
 
 double CutStore::power_floor() const { return m_s.prior == ClusterWeight::Power ? 1.0 - kUniformShare : kPowerShare; }
 
 void CutStore::prior(const Cut& cut, std::vector<double>& out) const {
+  if (m_s.prior == ClusterWeight::Uniform) {  // Fermat's: no floor, every cluster alike
+    out.assign(cut.nodes.size(), 1.0 / double(cut.nodes.size()));
+    return;
+  }
   mix_prior(
       cut.nodes.size(), power_floor(), [&](size_t k) { return double(m_tree.node(cut.nodes[k]).bounds.power); },
       [&](size_t k) { return double(cut.weight[k]); }, out);
@@ -152,7 +157,7 @@ void CutStore::values(const Cut& cut, const std::vector<double>& pri, std::vecto
   }
   const double total = v_sum / std::max(p_sum, 0.25);
   for (size_t k = 0; k < K; ++k)
-    if (cut.q[k] < 0) out[k] = float(total * pri[k]);
+    if (cut.q[k] < 0) out[k] = m_s.q_init >= 0 ? m_s.q_init : float(total * pri[k]);
 }
 
 std::vector<double> CutStore::learnt_shares(uint32_t cell) const {
@@ -320,6 +325,7 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
     SplitCollapse sc(m_tree, m_m, m_s.threshold);
     auto prior_weight = [&](uint32_t node) { return weight_of(cell, node); };
     auto share = [&](uint32_t node) {
+      if (m_s.split == ClusterWeight::Uniform) return 1.0f;  // half and half
       return m_s.split == ClusterWeight::Power ? m_tree.node(node).bounds.power
                                                : m_tree.importance(node, m_anchor[cell].p, m_anchor[cell].n);
     };

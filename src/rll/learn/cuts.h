@@ -28,9 +28,10 @@ enum class LearningRule { Shrinkage, Exponential };
 enum class LearnTarget { Moment, Mean };
 
 // How a cluster's prior weight and a split's share of Q are estimated: from the light tree's
-// importance of the node at the cell's anchor (spatial, visibility-blind), or from the node's
-// power alone (the paper).
-enum class ClusterWeight { Importance, Power };
+// importance of the node at the cell's anchor (spatial, visibility-blind), from the node's
+// power alone, or equal for every cluster (Fermat's RLL: a uniform defensive term over the
+// clusters, Q split half and half).
+enum class ClusterWeight { Importance, Power, Uniform };
 
 struct CutSettings {
   int cut_size = 128;      // M, the most clusters of a cell
@@ -51,6 +52,9 @@ struct CutSettings {
   // e + (1 - e) * trust / (trust + rewards seen).
   float trust = 256;
   ClusterWeight split = ClusterWeight::Importance;
+  // The value of a cluster never visited: < 0, the visited clusters' estimate of the cell's total
+  // shared by prior; >= 0, this constant (Fermat's RLL starts every Q at 0.01).
+  float q_init = -1;
 };
 
 // A cut being edited (split-collapse), outside the flat store.

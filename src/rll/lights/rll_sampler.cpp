@@ -1,61 +1,99 @@
 #include "rll/lights/rll_sampler.h"
 
 #include <algorithm>
+#include <bit>
+#include <cmath>
 
 #include "rll/core/error.h"
+#include "rll/core/hash.h"
 #include "rll/core/parallel.h"
 #include "rll/core/params.h"
+#include "rll/core/sampling.h"
 #include "rll/lights/tree_sampler.h"
 #include "rll/scene/scene.h"
 
 namespace rll {
 
-RllSettings rll_settings_from(const Params& p) {
-  RllSettings s;
-  s.cut.cut_size = int(p.get_int("rll.cut_size", s.cut.cut_size));
-  s.cut.initial_size = int(p.get_int("rll.initial_cut", s.cut.cut_size));
-  s.cut.target = p.get_choice("rll.target", "moment", {"moment", "mean"}) == "moment" ? LearnTarget::Moment : LearnTarget::Mean;
-  s.cut.alpha = p.get_float("rll.alpha", s.cut.alpha);
-  s.cut.threshold = p.get_float("rll.T", s.cut.threshold);
-  s.cut.splits = int(p.get_int("rll.splits", s.cut.splits));
-  s.cut.epsilon = p.get_float("rll.epsilon", s.cut.epsilon);
-  auto weight = [&](const char* key) {
-    return p.get_choice(key, "importance", {"importance", "power"}) == "power" ? ClusterWeight::Power
-                                                                              : ClusterWeight::Importance;
+RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSettings s) {
+  auto key = [&](const char* k) { return prefix + "." + k; };
+  auto bad = [&](const char* k, const char* what) { fail("--set {}: {}", key(k), what); };
+  // The initial cut follows the cut size unless the base starts smaller.
+  const bool initial_is_whole = s.cut.initial_size == s.cut.cut_size;
+  s.cut.cut_size = int(p.get_int(key("cut_size"), s.cut.cut_size));
+  s.cut.initial_size = int(p.get_int(key("initial_cut"), initial_is_whole ? s.cut.cut_size : s.cut.initial_size));
+  auto choice = [&](const char* k, int current, std::vector<std::string> names) {
+    return int(std::find(names.begin(), names.end(), p.get_choice(key(k), names[size_t(current)], names)) -
+               names.begin());
   };
-  s.cut.prior = weight("rll.prior");
-  s.cut.split = weight("rll.split_by");
-  std::string within = p.get_choice("rll.within", "tree", {"uniform", "power", "tree", "hybrid"});
-  s.within = within == "uniform" ? WithinCluster::Uniform
-             : within == "power" ? WithinCluster::Power
-             : within == "tree"  ? WithinCluster::Tree
-                                 : WithinCluster::Hybrid;
-  long descend = p.get_int("rll.descend_above", s.descend_above);
-  if (descend < 1 || descend > (1l << 30)) fail("--set rll.descend_above={}: must be in [1, 2^30]", descend);
+  s.cut.target = LearnTarget(choice("target", int(s.cut.target), {"moment", "mean"}));
+  s.cut.alpha = p.get_float(key("alpha"), s.cut.alpha);
+  s.cut.threshold = p.get_float(key("T"), s.cut.threshold);
+  s.cut.splits = int(p.get_int(key("splits"), s.cut.splits));
+  s.cut.epsilon = p.get_float(key("epsilon"), s.cut.epsilon);
+  s.cut.prior = ClusterWeight(choice("prior", int(s.cut.prior), {"importance", "power", "uniform"}));
+  s.cut.split = ClusterWeight(choice("split_by", int(s.cut.split), {"importance", "power", "uniform"}));
+  s.cut.q_init = p.get_float(key("q_init"), s.cut.q_init);
+  s.within = WithinCluster(choice("within", int(s.within), {"uniform", "power", "tree", "hybrid"}));
+  long descend = p.get_int(key("descend_above"), s.descend_above);
+  if (descend < 1 || descend > (1l << 30)) bad("descend_above", "must be in [1, 2^30]");
   s.descend_above = uint32_t(descend);
-  std::string defensive = p.get_choice("rll.defensive", "cell", {"tree", "cell"});
-  s.defensive = defensive == "tree" ? Defensive::Tree : Defensive::Cell;
+  s.defensive = Defensive(choice("defensive", int(s.defensive), {"cell", "tree"}));
   s.cut.prior_in_cdf = s.defensive == Defensive::Cell;
-  std::string reward = p.get_choice("rll.reward", "cluster", {"cluster", "fullpdf"});
-  s.reward = reward == "cluster" ? RewardKind::Cluster : RewardKind::FullPdf;
-  long capacity = p.get_int("rll.capacity", s.capacity);
-  if (capacity < 1 || capacity > (1l << 24)) fail("--set rll.capacity={}: must be in [1, 16777216]", capacity);
+  s.reward = RewardKind(choice("reward", int(s.reward), {"cluster", "fullpdf", "fermat"}));
+  long capacity = p.get_int(key("capacity"), s.capacity);
+  if (capacity < 1 || capacity > (1l << 24)) bad("capacity", "must be in [1, 16777216]");
   s.capacity = uint32_t(capacity);
-  s.grid.footprint_scale = p.get_float("rll.footprint_scale", s.grid.footprint_scale);
-  s.grid.max_cell = p.get_float("rll.max_cell", s.grid.max_cell);
-  s.grid.normal_bins = int(p.get_int("rll.normal_bins", s.grid.normal_bins));
-  s.grid.jitter = p.get_float("rll.jitter", s.grid.jitter);
-  s.cut.rule = p.get_choice("rll.learning", "shrinkage", {"shrinkage", "exponential"}) == "shrinkage"
-                   ? LearningRule::Shrinkage
-                   : LearningRule::Exponential;
-  s.cut.prior_samples = p.get_float("rll.prior_samples", s.cut.prior_samples);
-  s.cut.trust = p.get_float("rll.trust", s.cut.trust);
-  if (!(s.cut.trust >= 0)) fail("--set rll.trust must not be negative");
-  if (!(s.cut.prior_samples > 0)) fail("--set rll.prior_samples must be positive");
-  if (!(s.grid.footprint_scale > 0)) fail("--set rll.footprint_scale must be positive");
-  if (!(s.grid.max_cell > 0 && s.grid.max_cell <= 1)) fail("--set rll.max_cell must be in (0, 1]");
-  if (s.grid.normal_bins < 1 || s.grid.normal_bins > 64) fail("--set rll.normal_bins must be in [1, 64]");
-  if (!(s.grid.jitter >= 0 && s.grid.jitter <= 1)) fail("--set rll.jitter must be in [0, 1]");
+  s.grid.footprint_scale = p.get_float(key("footprint_scale"), s.grid.footprint_scale);
+  s.grid.max_cell = p.get_float(key("max_cell"), s.grid.max_cell);
+  s.grid.normal_bins = int(p.get_int(key("normal_bins"), s.grid.normal_bins));
+  s.grid.jitter = p.get_float(key("jitter"), s.grid.jitter);
+  s.cut.rule = LearningRule(choice("learning", int(s.cut.rule), {"shrinkage", "exponential"}));
+  s.cut.prior_samples = p.get_float(key("prior_samples"), s.cut.prior_samples);
+  s.cut.trust = p.get_float(key("trust"), s.cut.trust);
+  s.cold_uniform = choice("cold", s.cold_uniform ? 1 : 0, {"tree", "uniform"}) == 1;
+  s.sample_jitter = p.get_float(key("sample_jitter"), s.sample_jitter);
+  long reset = p.get_int(key("reset_every"), s.reset_every);
+  if (reset < 0 || reset > (1l << 30)) bad("reset_every", "must be in [0, 2^30]");
+  s.reset_every = uint32_t(reset);
+  long vl = p.get_int(key("virtual_lights"), long(s.virtual_lights));
+  if (vl < 0 || vl > (1l << 26)) bad("virtual_lights", "must be in [0, 2^26]");
+  s.virtual_lights = uint64_t(vl);
+  if (!(s.cut.trust >= 0)) bad("trust", "must not be negative");
+  if (!(s.cut.prior_samples > 0)) bad("prior_samples", "must be positive");
+  if (!(s.grid.footprint_scale > 0)) bad("footprint_scale", "must be positive");
+  if (!(s.grid.max_cell > 0 && s.grid.max_cell <= 1)) bad("max_cell", "must be in (0, 1]");
+  if (s.grid.normal_bins < 1 || s.grid.normal_bins > 64) bad("normal_bins", "must be in [1, 64]");
+  if (!(s.grid.jitter >= 0 && s.grid.jitter <= 1)) bad("jitter", "must be in [0, 1]");
+  if (!(s.sample_jitter >= 0 && s.sample_jitter <= 4)) bad("sample_jitter", "must be in [0, 4]");
+  if (!((s.cut.q_init >= 0 && std::isfinite(s.cut.q_init)) || s.cut.q_init == -1))
+    bad("q_init", "must be >= 0 (or -1: the visited clusters' estimate)");
+  if (s.cold_uniform && s.defensive == Defensive::Tree) bad("cold", "uniform needs defensive=cell");
+  return s;
+}
+
+RllSettings fermat_settings(uint64_t pixels) {
+  RllSettings s;
+  s.name = "fermat";
+  s.cut.cut_size = s.cut.initial_size = 256;  // initial_cut() splits the node with most lights
+  s.cut.target = LearnTarget::Mean;
+  s.cut.rule = LearningRule::Exponential;
+  s.cut.alpha = 0.05f;
+  s.cut.threshold = 1;
+  s.cut.splits = 1;
+  s.cut.epsilon = 0.75f;  // P(s) = 0.75 / K + 0.25 Q(s) / sum Q from the first reward on
+  s.cut.trust = 0;
+  s.cut.prior = ClusterWeight::Uniform;
+  s.cut.split = ClusterWeight::Uniform;
+  s.cut.q_init = 0.01f;
+  s.within = WithinCluster::Uniform;
+  s.reward = RewardKind::Fermat;
+  s.defensive = Defensive::Cell;
+  s.cold_uniform = true;
+  s.grid.footprint_scale = 32;  // cell radius min(32 R, 0.05 scene size)
+  s.grid.max_cell = 0.05f;
+  s.sample_jitter = 1.5f;
+  s.reset_every = 32;
+  s.virtual_lights = pixels;
   return s;
 }
 
@@ -104,7 +142,19 @@ size_t RllLightSampler::bytes() const {
 void RllLightSampler::prepare(LightContext& ctx, float u) const {
   ctx.cell = kNoCell;
   if (length_sq(ctx.n) == 0) return;
-  CellCoord coord = m_keyer.locate(ctx.p, ctx.n, ctx.footprint, u);
+  CellCoord coord;
+  if (m_s.sample_jitter > 0) {
+    // This sample's own jitter, from hashes of u (the level's rounding uses u itself): a disk of
+    // sample_jitter cell radii (half edges) and a quarter normal bin.
+    const uint64_t h = mix64(uint64_t(std::bit_cast<uint32_t>(u)) ^ 0x6a09e667f3bcc909ull);
+    auto unit = [&](int i) { return float((h >> (16 * i)) & 0xffff) * 0x1p-16f; };
+    const Vec2 disk = sample_uniform_disk_concentric({unit(0), unit(1)});
+    const Vec2 d{disk.x * 0.5f * m_s.sample_jitter, disk.y * 0.5f * m_s.sample_jitter};
+    const Vec2 nj{(unit(2) - 0.5f) * 0.5f, (unit(3) - 0.5f) * 0.5f};
+    coord = m_keyer.locate_jittered(ctx.p, ctx.n, ctx.footprint, u, d, nj);
+  } else {
+    coord = m_keyer.locate(ctx.p, ctx.n, ctx.footprint, u);
+  }
   bool created = false;
   uint32_t cell = m_table->find_or_insert(m_keyer.key(coord), &created);
   if (cell == CellTable::kNone) return;  // table full: no cell until eviction makes room
@@ -194,6 +244,18 @@ float RllLightSampler::cdf_width(const View& v, uint32_t k) const {
 SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
   View v = view(ctx.cell);
   DescentPath path;
+  if (!has_cut(ctx.cell) && m_s.cold_uniform) {
+    // Every cluster of the initial cut alike (Fermat: every Q starts equal).
+    const uint32_t K = v.size;
+    const uint32_t k = std::min(K - 1, uint32_t(u * K));
+    const double u_within = std::clamp(u * K - k, 0.0, 0x1.fffffffffffffp-1);
+    SampledLight w = sample_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], u_within);
+    if (!(w.pmf > 0)) return {};
+    w.cluster = k;
+    w.cluster_pmf = 1.0f / float(K);
+    w.pmf = w.pmf / float(K);
+    return w;
+  }
   if (!has_cut(ctx.cell)) {
     // A point without a learnt cut (a cell new in this pass, or none: table full) samples
     // like the light tree. Its reward still goes to its cluster of the initial cut: given the
@@ -252,10 +314,13 @@ uint32_t RllLightSampler::cluster_of(const View& v, uint32_t light) const {
 }
 
 float RllLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
-  if (!has_cut(ctx.cell)) return tree_descend_pmf(m_tree, LightTree::kRoot, light, ctx.p, ctx.n);
   View v = view(ctx.cell);
   uint32_t k = cluster_of(v, light);
   if (k >= v.size) return 0;
+  if (!has_cut(ctx.cell)) {
+    if (!m_s.cold_uniform) return tree_descend_pmf(m_tree, LightTree::kRoot, light, ctx.p, ctx.n);
+    return pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], light) / float(v.size);
+  }
   float within = pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], light);
   float cluster_pmf;
   return mixture_pmf(ctx, v, k, light, within, nullptr, &cluster_pmf);
@@ -268,7 +333,16 @@ void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, con
   const float within = s.pmf / s.cluster_pmf;
   // DESIGN 2: the cluster reward estimates the cluster's total contribution I(s):
   // r = estimate / P(l|s). The original code divided by the full pdf (fixed point P ~ sqrt(I)).
-  float reward = m_s.reward == RewardKind::Cluster ? estimate / within : estimate / s.pmf;
+  float reward = 0;
+  switch (m_s.reward) {
+    case RewardKind::Cluster: reward = estimate / within; break;
+    case RewardKind::FullPdf: reward = estimate / s.pmf; break;
+    case RewardKind::Fermat:
+      if (!(r.unoccluded > 0)) return;  // the light cannot reach here at all: no reward
+      reward = r.max_rgb / s.pmf;
+      break;
+  }
+  if (!(reward >= 0) || !std::isfinite(reward)) return;
   m_cuts->record(ctx.cell, s.cluster, reward);
 }
 
@@ -332,6 +406,15 @@ void RllLightSampler::end_pass() {
   m_table->remove_and_rebuild(evict);
   ++m_pass;
   m_keyer.set_pass(m_pass, 0);
+  if (m_s.reset_every > 0 && m_pass % m_s.reset_every == 0) {
+    // Fermat's periodic reset: every cell starts over.
+    std::vector<uint32_t> all;
+    for (uint32_t c = 0; c < cap; ++c)
+      if (m_table->in_use(c)) all.push_back(c);
+    for (uint32_t c : all) m_cuts->clear(c);
+    m_table->remove_and_rebuild(all);
+    ++m_resets;
+  }
 }
 
 void RllLightSampler::lights_changed(const Scene& scene) {
@@ -350,6 +433,8 @@ nlohmann::json RllLightSampler::describe() const {
       ++active;
     }
   const char* within[] = {"uniform", "power", "tree", "hybrid"};
+  const char* weight_names[] = {"importance", "power", "uniform"};
+  const char* reward_names[] = {"cluster", "fullpdf", "fermat"};
   nlohmann::json j = {
       {"name", name()},
       {"parameters",
@@ -358,10 +443,10 @@ nlohmann::json RllLightSampler::describe() const {
         {"T", m_s.cut.threshold},
         {"splits", m_s.cut.splits},
         {"epsilon", m_s.cut.epsilon},
-        {"prior", m_s.cut.prior == ClusterWeight::Power ? "power" : "importance"},
-        {"split_by", m_s.cut.split == ClusterWeight::Power ? "power" : "importance"},
+        {"prior", weight_names[int(m_s.cut.prior)]},
+        {"split_by", weight_names[int(m_s.cut.split)]},
         {"within", within[int(m_s.within)]},
-        {"reward", m_s.reward == RewardKind::Cluster ? "cluster" : "fullpdf"},
+        {"reward", reward_names[int(m_s.reward)]},
         {"defensive", m_s.defensive == Defensive::Tree ? "tree" : "cell"},
         {"capacity", m_s.capacity},
         {"footprint_scale", m_s.grid.footprint_scale},
@@ -373,7 +458,13 @@ nlohmann::json RllLightSampler::describe() const {
         {"descend_above", m_s.descend_above},
         {"learning", m_s.cut.rule == LearningRule::Shrinkage ? "shrinkage" : "exponential"},
         {"prior_samples", m_s.cut.prior_samples},
-        {"trust", m_s.cut.trust}}},
+        {"trust", m_s.cut.trust},
+        {"q_init", m_s.cut.q_init},
+        {"cold", m_s.cold_uniform ? "uniform" : "tree"},
+        {"sample_jitter", m_s.sample_jitter},
+        {"reset_every", m_s.reset_every},
+        {"virtual_lights", m_s.virtual_lights}}},
+      {"resets", m_resets},
       {"passes", m_pass},
       {"cells_used", m_table->used()},
       {"cells_capacity", m_s.capacity},

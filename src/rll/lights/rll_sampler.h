@@ -21,13 +21,19 @@ namespace rll {
 // descent of the light tree below the cluster, or by power in small clusters and by descent in
 // clusters of more than `descend_above` lights (Hybrid).
 enum class WithinCluster { Uniform, Power, Tree, Hybrid };
-enum class RewardKind { Cluster, FullPdf };
+// A cluster's reward per next-event sample: its estimate of the cluster's contribution
+// (estimate / P(l | cluster), DESIGN 2), the estimate over the full pdf (the paper's fixed point,
+// P ~ sqrt(I)), or Fermat's: the largest RGB channel of the full MIS-weighted contribution
+// (path throughput included) over the full pdf, and no reward at all where the light could not
+// contribute even unoccluded.
+enum class RewardKind { Cluster, FullPdf, Fermat };
 // The defensive term of the cluster distribution: a per-cell prior folded into the cell's baked
 // table (constant cost), or the light tree's probability of the cluster at the shading point
 // itself (a walk from the root per sample and per pmf).
 enum class Defensive { Cell, Tree };
 
 struct RllSettings {
+  std::string name = "rll";  // the sampler's name: rll, or fermat (the paper's settings)
   CutSettings cut;
   CellGridSettings grid;
   uint32_t capacity = 32768;  // cells
@@ -35,15 +41,36 @@ struct RllSettings {
   uint32_t descend_above = 16;  // Hybrid: clusters of more lights than this are descended
   RewardKind reward = RewardKind::Cluster;
   Defensive defensive = Defensive::Cell;
+  // A cell without a cut yet (its first pass) samples the initial cut's clusters uniformly
+  // (Fermat's cells start with every Q equal) instead of by the light tree.
+  bool cold_uniform = false;
+  // Per-sample jitter of the cell lookup (Fermat's, after Binder et al.): the point moves inside
+  // a disk of this radius, in cell radii, in the tangent plane, and the normal by up to a
+  // quarter bin. 0: off (rll.jitter is the per-pass jitter).
+  float sample_jitter = 0;
+  // Every this many passes, all cells are forgotten (Fermat resets its table every 32 frames);
+  // 0: never.
+  uint32_t reset_every = 0;
+  // Fermat's equal-energy virtual lights: emissive triangles split until the scene has about
+  // this many (0: the scene's own). The render session applies it to its scene.
+  uint64_t virtual_lights = 0;
 };
 
-// Reads rll.* parameters (see docs/rll.md for each).
-RllSettings rll_settings_from(const Params& params);
+// Reads <prefix>.* parameters over `base` (see docs/rll.md for each): rll.* over rll's
+// defaults, fermat.* over fermat_settings().
+RllSettings rll_settings_from(const Params& params, const std::string& prefix = "rll",
+                              RllSettings base = {});
+// Fermat's RLL as published (PEERS.md): 256-cluster initial cut by light count, 75% uniform +
+// 25% learnt clusters with every Q starting at 0.01, exponential learning at 0.05, the
+// max-RGB full-pdf reward, one split-collapse per pass with T = 1 and Q split half and half,
+// uniform choice inside a cluster, per-sample jitter, a table reset every 32 passes, and
+// equal-energy virtual lights about one per pixel (`pixels`).
+RllSettings fermat_settings(uint64_t pixels);
 
 class RllLightSampler final : public LightSampler {
  public:
   RllLightSampler(const Scene& scene, const RllSettings& settings);
-  std::string name() const override { return "rll"; }
+  std::string name() const override { return m_s.name; }
   void prepare(LightContext& ctx, float u) const override;
   bool prepares() const override { return true; }
   SampledLight sample(const LightContext& ctx, double u) const override;
@@ -101,6 +128,7 @@ class RllLightSampler final : public LightSampler {
   float m_extent = 1;
   std::vector<double> m_power_prefix;                    // per light, tree order
   uint64_t m_pass = 0;
+  uint64_t m_resets = 0;
   bool m_frozen = false;
   // Statistics.
   uint64_t m_evictions = 0, m_failed_inserts = 0;

@@ -1,6 +1,7 @@
 #include "rll/render/session.h"
 
-#include <cstdio>
+#include <algorithm>
+#include <charconv>
 
 #include "rll/core/error.h"
 #include "rll/render/progress.h"
@@ -10,13 +11,26 @@ namespace rll {
 LoadOptions parse_resolution(const std::string& res) {
   LoadOptions lo;
   if (res.empty()) return lo;
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(res.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X'))
-    fail("--res '{}': expected WIDTHxHEIGHT, e.g. 640x480", res);
-  if (w <= 0 || h <= 0) fail("--res '{}': width and height must be positive", res);
-  lo.width = w;
-  lo.height = h;
+  // Each side is parsed whole, digits only: sscanf's %d would wrap 4294967328 to 32.
+  auto side = [&](size_t begin, size_t end) -> long long {
+    unsigned long long n = 0;
+    const char* last = res.data() + end;
+    auto [ptr, ec] = std::from_chars(res.data() + begin, last, n);
+    if (begin >= end || ptr != last) return -1;
+    return ec == std::errc::result_out_of_range || n > kMaxFilmSide ? kMaxFilmSide + 1ll
+                                                                    : (long long)n;
+  };
+  const size_t x = res.find_first_of("xX");
+  const long long w = x == std::string::npos ? -1 : side(0, x);
+  const long long h = x == std::string::npos ? -1 : side(x + 1, res.size());
+  if (w < 0 || h < 0) fail("--res '{}': expected WIDTHxHEIGHT, e.g. 640x480", res);
+  if (w == 0 || h == 0) fail("--res '{}': width and height must be positive", res);
+  if (w > kMaxFilmSide || h > kMaxFilmSide)
+    fail("--res '{}': width and height must be at most {}", res, kMaxFilmSide);
+  if (w * h > kMaxFilmPixels)
+    fail("--res '{}': {} pixels is more than the limit of {}", res, w * h, kMaxFilmPixels);
+  lo.width = int(w);
+  lo.height = int(h);
   return lo;
 }
 
@@ -72,6 +86,30 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
                                    bar.update(pr);
                                    if (after_pass) after_pass(pr, f);
                                  });
+  if (p.spp_done == 0 && !p.cancelled) {
+    // The budget ran out before a whole pass: finish one sample per pixel without a time limit,
+    // reporting the two parts as one render.
+    const RenderProgress first = p;
+    auto combined = [first](RenderProgress q) {
+      q.passes += first.passes;
+      q.seconds += first.seconds;
+      q.samples += first.samples;
+      q.nonfinite += first.nonfinite;
+      q.rays += first.rays;
+      q.spp_target = first.spp_target;
+      q.time_limit = first.time_limit;
+      q.out_of_time = true;
+      return q;
+    };
+    rs.spp = 1;
+    rs.time_limit = 0;
+    p = combined(rll::render(m_scene, integrator, sampler, film, rs, cancel,
+                             [&](const RenderProgress& pr, const Film& f) {
+                               const RenderProgress q = combined(pr);
+                               bar.update(q);
+                               if (after_pass) after_pass(q, f);
+                             }));
+  }
   bar.finish();
   return p;
 }

@@ -27,7 +27,12 @@ struct SessionSettings {
   std::string points = "sobol";  // --points: sobol or independent
 };
 
-// Parses --res WIDTHxHEIGHT (empty: keep the scene's); throws rll::Error naming the flag.
+// Film size limits of --res: a larger film would exhaust the memory of most machines.
+inline constexpr int kMaxFilmSide = 65536;
+inline constexpr long long kMaxFilmPixels = 1ll << 28;
+
+// Parses --res WIDTHxHEIGHT (empty: keep the scene's), each side a whole number within the
+// limits above (no wrap-around); throws rll::Error naming the flag.
 LoadOptions parse_resolution(const std::string& resolution);
 
 class RenderSession {
@@ -57,7 +62,9 @@ class RenderSession {
   using AfterPass = std::function<void(const RenderProgress&, const Film&)>;
   // Renders the current frame into `film` with `sampler` (with the session's --points, whatever
   // settings.points says), showing a progress bar labelled
-  // `label` on a terminal when `show_progress`; `after_pass` as in render().
+  // `label` on a terminal when `show_progress`; `after_pass` as in render(). Unless cancelled,
+  // at least one sample per pixel is taken, however short the time budget: a render never
+  // ends as a black image of 0 spp.
   RenderProgress render(LightSampler& sampler, Film& film, const RenderSettings& settings,
                         const std::string& label, bool show_progress,
                         const std::atomic<bool>* cancel = nullptr,
