@@ -26,7 +26,7 @@ parts=${BENCH_PARTS:-"equal-time equal-spp ablation seed-to-seed rays samplers"}
 want() { [[ " $parts " == *" $1 "* ]]; }
 ref_direct=${BENCH_REF_DIRECT:-$ref_direct}; ref_path=${BENCH_REF_PATH:-$ref_path}
 res=${BENCH_RES:-$res}; seconds=${BENCH_SECONDS:-$seconds}; ref_sampler=${BENCH_REF_SAMPLER:-rll}
-samplers=power,tree,rll,oracle
+samplers=power,tree,fermat,ltc,rll,oracle
 V1_COMMIT=a3cbdd4
 v1="build-v1/rll"
 if [ "${BENCH_V1:-1}" = 1 ] && [ ! -x "$v1" ]; then
@@ -67,18 +67,15 @@ for scene in cornell-boxes-room arch-interior many-lights-open cornell-boxes-dyn
   run "$scene-direct-spp" builtin:$scene --integrator direct --samplers oracle,rll,tree,power --spp $spp_direct --frames $f --reference-spp $ref_direct
   run "$scene-path-spp" builtin:$scene --integrator path --samplers oracle,rll,tree,power --spp $spp_path --frames $f --reference-spp $ref_path
 done
-# Ablation: each row adds one of rll's corrections to paper-like settings (the published RLL
-# itself, run as published, is issue 12's `fermat`); the last rows are v1's defensive term from
-# the tree at the point, and the defaults.
-a0=rll:within=uniform:reward=fullpdf:prior=power:split_by=power:defensive=cell:learning=exponential:jitter=1:target=mean:splits=4
-a1=${a0/reward=fullpdf/reward=cluster}
-a2=${a1/within=uniform/within=tree}
-a3=${a2/prior=power:split_by=power/prior=importance:split_by=importance}
-a4=${a3/learning=exponential/learning=shrinkage}
-a5=${a4/jitter=1/jitter=0}
-a6=${a5/splits=4/splits=0}
-a7=rll:defensive=tree
-ablation="tree,$a0,$a1,$a2,$a3,$a4,$a5,$a6,$a7,rll"
+# Ablation: from the published RLL (`fermat`, docs/fermat.md) to rll's defaults, each row
+# adding one of rll's changes to the row above; the last row differs from rll's defaults only
+# in fermat's remaining settings (cut size, splits, jitter, reset, cell size, cold cells).
+a1=fermat:reward=cluster
+a2=$a1:target=moment
+a3=$a2:learning=shrinkage:alpha=0.02
+a4=$a3:prior=importance:split_by=importance:epsilon=0.1:trust=256:q_init=-1
+a5=$a4:within=tree
+ablation="tree,fermat,$a1,$a2,$a3,$a4,$a5,rll"
 want ablation && for scene in cornell-boxes-room arch-interior; do
   run "ablation-$scene" builtin:$scene --integrator direct --samplers "$ablation" --time $seconds --reference-spp $ref_direct
 done

@@ -32,6 +32,48 @@ void expect_samplers_agree(const Scene& scene, IntegratorType type, int spp, con
   }
 }
 
+// Per-pixel difference estimates over nx x ny image regions, so that a bias confined to one part
+// of the image (one box of a room, where a learnt cut went wrong) cannot hide in the mean.
+std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx, int ny) {
+  std::vector<Estimate> out;
+  for (int ry = 0; ry < ny; ++ry)
+    for (int rx = 0; rx < nx; ++rx) {
+      const int x0 = rx * a.width() / nx, x1 = (rx + 1) * a.width() / nx;
+      const int y0 = ry * a.height() / ny, y1 = (ry + 1) * a.height() / ny;
+      Image ra(x1 - x0, y1 - y0), rb(x1 - x0, y1 - y0);
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+          ra.at(x - x0, y - y0) = a.at(x, y);
+          rb.at(x - x0, y - y0) = b.at(x, y);
+        }
+      out.push_back(difference_estimate(ra, rb));
+    }
+  return out;
+}
+
+// `sampler` renders the image `tree` renders: over the whole image and in each of 4 x 4 regions
+// (z = 4.5 each: 17 bounds falsely fail with probability about 1e-4 together).
+void expect_matches_tree_by_region(const Scene& scene, IntegratorType type, int spp, const std::string& sampler) {
+  RenderRequest r;
+  r.integrator.type = type;
+  r.integrator.max_depth = 3;
+  r.spp = spp;
+  r.sampler = "tree";
+  r.seed = 11;
+  Image reference = render_scene(scene, r);
+  r.sampler = sampler;
+  r.seed = 12;
+  Image img = render_scene(scene, r);
+  Estimate d = difference_estimate(img, reference);
+  EXPECT_LE(std::abs(d.mean), 4.5 * d.stderr_ + 1e-6)
+      << sampler << " vs tree: mean difference " << d.mean << " +- " << d.stderr_ << " (means " << image_mean(img)
+      << " vs " << image_mean(reference) << ")";
+  const auto regions = region_differences(img, reference, 4, 4);
+  for (size_t i = 0; i < regions.size(); ++i)
+    EXPECT_LE(std::abs(regions[i].mean), 4.5 * regions[i].stderr_ + 1e-6)
+        << sampler << " vs tree, region " << i << ": difference " << regions[i].mean << " +- " << regions[i].stderr_;
+}
+
 TEST(SamplerAgreement, CornellBoxDirect) {
   expect_samplers_agree(small_scene("cornell-box", 32, 32), IntegratorType::Direct, 64, {"power", "uniform", "tree", "rll"});
 }
@@ -49,4 +91,31 @@ TEST(SamplerAgreement, ManyLightsOpenPath) {
   expect_samplers_agree(small_scene("many-lights-open", 24, 18), IntegratorType::Path, 32, {"tree", "power", "rll"});
 }
 
+// Wang et al. 2021 (ltc) converges to the tree's image, region by region: on the occluded room
+// (where its learnt cuts move most probability) and on the open scene with many lights.
+TEST(SamplerAgreement, LtcMatchesTreeRoomDirect) {
+  expect_matches_tree_by_region(small_scene("cornell-boxes-room", 32, 24), IntegratorType::Direct, 128, "ltc");
+}
+
+TEST(SamplerAgreement, LtcMatchesTreeRoomPath) {
+  expect_matches_tree_by_region(small_scene("cornell-boxes-room", 24, 18), IntegratorType::Path, 64, "ltc");
+}
+
+TEST(SamplerAgreement, LtcMatchesTreeManyLightsDirect) {
+  expect_matches_tree_by_region(small_scene("many-lights-open", 32, 24), IntegratorType::Direct, 64, "ltc");
+}
+
+TEST(SamplerAgreement, LtcMatchesTreeManyLightsPath) {
+  expect_matches_tree_by_region(small_scene("many-lights-open", 24, 18), IntegratorType::Path, 32, "ltc");
+}
+
 }  // namespace
+
+// Fermat's RLL as published (the fermat preset) converges to the tree's image, region by region.
+TEST(SamplerAgreement, FermatMatchesTreeRoomDirect) {
+  expect_matches_tree_by_region(small_scene("cornell-boxes-room", 32, 24), IntegratorType::Direct, 128, "fermat");
+}
+
+TEST(SamplerAgreement, FermatMatchesTreeManyLightsPath) {
+  expect_matches_tree_by_region(small_scene("many-lights-open", 24, 18), IntegratorType::Path, 32, "fermat");
+}

@@ -39,9 +39,16 @@ const std::vector<SamplerCase>& sampler_cases() {
       {"rll_tree_defensive", "rll", {"rll.defensive=tree", "rll.within=power", "rll.initial_cut=32", "rll.splits=2"}},
       {"rll_full_table", "rll", {"rll.capacity=48"}},
       {"rll_uniform", "rll", {"rll.within=uniform"}},
+      // Fermat's RLL as published, and with uniform choice inside clusters (cold cells uniform).
+      {"fermat", "fermat", {}},
+      {"fermat_uniform", "fermat", {"fermat.within=uniform", "fermat.reset_every=8"}},
       {"rll_paper",
        "rll",
        {"rll.within=uniform", "rll.reward=fullpdf", "rll.prior=power", "rll.split_by=power"}},
+      // Wang et al. 2021 (ltc): defaults, and a small table with few clusters, small cuts and a
+      // large defensive weight (full table: tree fallback beside learnt entries).
+      {"ltc", "ltc", {}},
+      {"ltc_small", "ltc", {"ltc.clusters=64", "ltc.bins=2", "ltc.capacity=40", "ltc.initial_cut=2", "ltc.max_cut=6", "ltc.epsilon=0.5"}},
   };
   return cases;
 }
@@ -52,7 +59,7 @@ constexpr int kContexts = 200;
 constexpr int kChiContexts = 6;
 constexpr int kChiSamples = 20000;
 // Every chi-square test of this file, for the Sidak correction.
-const int kChiTests = int(kScenes.size()) * 16 * kChiContexts * 2;
+const int kChiTests = int(kScenes.size() * sampler_cases().size()) * kChiContexts * 2;
 using Param = std::tuple<size_t, std::string, PointSet>;
 
 struct Fixture {

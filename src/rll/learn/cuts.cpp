@@ -197,7 +197,9 @@ void CutStore::store(uint32_t cell, const Cut& cut) {
   double v_sum = 0;
   for (size_t k = 0; k < K; ++k) v_sum += val[k];
   m_learnt[cell] = v_sum > 0;
-  m_eps[cell] = v_sum > 0 ? m_s.epsilon + (1 - m_s.epsilon) * m_s.trust / (m_s.trust + m_seen[cell]) : 1.0f;
+  // (trust = 0: the configured weight from the start, also for a cell without rewards yet.)
+  const float distrust = m_s.trust > 0 ? m_s.trust / (m_s.trust + m_seen[cell]) : 0.0f;
+  m_eps[cell] = v_sum > 0 ? m_s.epsilon + (1 - m_s.epsilon) * distrust : 1.0f;
   const double eps = v_sum > 0 ? (m_s.prior_in_cdf ? m_eps[cell] : 0.0) : 1.0;
   double acc = 0;
   for (size_t k = 0; k < K; ++k) {

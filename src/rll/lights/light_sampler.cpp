@@ -2,6 +2,7 @@
 
 #include "rll/core/error.h"
 #include "rll/core/params.h"
+#include "rll/lights/ltc_sampler.h"
 #include "rll/lights/oracle_sampler.h"
 #include "rll/lights/rll_sampler.h"
 #include "rll/lights/simple_samplers.h"
@@ -10,7 +11,7 @@
 namespace rll {
 
 const std::vector<std::string>& light_sampler_names() {
-  static const std::vector<std::string> names = {"uniform", "power", "tree", "rll", "oracle"};
+  static const std::vector<std::string> names = {"uniform", "power", "tree", "fermat", "ltc", "rll", "oracle"};
   return names;
 }
 
@@ -20,6 +21,10 @@ std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const 
   if (name == "power") return std::make_unique<PowerLightSampler>(scene);
   if (name == "tree") return std::make_unique<TreeLightSampler>(scene);
   if (name == "rll") return std::make_unique<RllLightSampler>(scene, rll_settings_from(params));
+  if (name == "fermat")  // the paper's RLL as published: rll with Fermat's settings (fermat.*)
+    return std::make_unique<RllLightSampler>(
+        scene, rll_settings_from(params, "fermat", fermat_settings()));
+  if (name == "ltc") return std::make_unique<LtcLightSampler>(scene, ltc_settings_from(params));
   if (name == "oracle") {
     if (!accel) fail("the oracle sampler traces rays before rendering and needs the scene's ray tracer");
     // The oracle samples with RLL's settings (rll.*), so that only the learning differs.

@@ -55,9 +55,6 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   long reset = p.get_int(key("reset_every"), s.reset_every);
   if (reset < 0 || reset > (1l << 30)) bad("reset_every", "must be in [0, 2^30]");
   s.reset_every = uint32_t(reset);
-  long vl = p.get_int(key("virtual_lights"), long(s.virtual_lights));
-  if (vl < 0 || vl > (1l << 26)) bad("virtual_lights", "must be in [0, 2^26]");
-  s.virtual_lights = uint64_t(vl);
   if (!(s.cut.trust >= 0)) bad("trust", "must not be negative");
   if (!(s.cut.prior_samples > 0)) bad("prior_samples", "must be positive");
   if (!(s.grid.footprint_scale > 0)) bad("footprint_scale", "must be positive");
@@ -71,7 +68,7 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   return s;
 }
 
-RllSettings fermat_settings(uint64_t pixels) {
+RllSettings fermat_settings() {
   RllSettings s;
   s.name = "fermat";
   s.cut.cut_size = s.cut.initial_size = 256;  // initial_cut() splits the node with most lights
@@ -85,7 +82,7 @@ RllSettings fermat_settings(uint64_t pixels) {
   s.cut.prior = ClusterWeight::Uniform;
   s.cut.split = ClusterWeight::Uniform;
   s.cut.q_init = 0.01f;
-  s.within = WithinCluster::Uniform;
+  s.within = WithinCluster::Power;  // for uniform among equal-energy virtual lights
   s.reward = RewardKind::Fermat;
   s.defensive = Defensive::Cell;
   s.cold_uniform = true;
@@ -93,7 +90,6 @@ RllSettings fermat_settings(uint64_t pixels) {
   s.grid.max_cell = 0.05f;
   s.sample_jitter = 1.5f;
   s.reset_every = 32;
-  s.virtual_lights = pixels;
   return s;
 }
 
@@ -462,8 +458,7 @@ nlohmann::json RllLightSampler::describe() const {
         {"q_init", m_s.cut.q_init},
         {"cold", m_s.cold_uniform ? "uniform" : "tree"},
         {"sample_jitter", m_s.sample_jitter},
-        {"reset_every", m_s.reset_every},
-        {"virtual_lights", m_s.virtual_lights}}},
+        {"reset_every", m_s.reset_every}}},
       {"resets", m_resets},
       {"passes", m_pass},
       {"cells_used", m_table->used()},

@@ -51,9 +51,6 @@ struct RllSettings {
   // Every this many passes, all cells are forgotten (Fermat resets its table every 32 frames);
   // 0: never.
   uint32_t reset_every = 0;
-  // Fermat's equal-energy virtual lights: emissive triangles split until the scene has about
-  // this many (0: the scene's own). The render session applies it to its scene.
-  uint64_t virtual_lights = 0;
 };
 
 // Reads <prefix>.* parameters over `base` (see docs/rll.md for each): rll.* over rll's
@@ -63,9 +60,11 @@ RllSettings rll_settings_from(const Params& params, const std::string& prefix = 
 // Fermat's RLL as published (PEERS.md): 256-cluster initial cut by light count, 75% uniform +
 // 25% learnt clusters with every Q starting at 0.01, exponential learning at 0.05, the
 // max-RGB full-pdf reward, one split-collapse per pass with T = 1 and Q split half and half,
-// uniform choice inside a cluster, per-sample jitter, a table reset every 32 passes, and
-// equal-energy virtual lights about one per pixel (`pixels`).
-RllSettings fermat_settings(uint64_t pixels);
+// per-sample jitter and a table reset every 32 passes. One departure (docs/fermat.md): Fermat
+// splits emitters into equal-energy virtual lights and picks uniformly among them inside a
+// cluster; here the scene's own lights are picked by power inside a cluster, the distribution
+// that uniform choice among equal-energy pieces approximates.
+RllSettings fermat_settings();
 
 class RllLightSampler final : public LightSampler {
  public:
