@@ -3,13 +3,19 @@
 // sanitizer report) is a bug.
 #pragma once
 
+#include <string>
 #include <string_view>
 
 #include "rll/scene/load.h"
 
 namespace rll::fuzz {
 
-enum class Format { Ply, Gltf, Pbrt };
+enum class Format { Ply, Gltf, Pbrt, Json, Obj };
+
+// An OBJ input carries its MTL after this line: the part before it is the OBJ, the part after
+// it is served from memory as "fuzz.mtl" (the name the seeds' mtllib gives), so that one target
+// fuzzes both readers and how they meet.
+inline constexpr std::string_view kMtlSeparator = "\n#--- fuzz.mtl ---\n";
 
 // Parses `bytes` with file access turned off and the geometry capped, so that a small input
 // can neither read files nor allocate without bound.
@@ -28,6 +34,16 @@ inline void parse_untrusted(Format format, std::string_view bytes) {
     case Format::Pbrt:
       parse_pbrt(bytes, "fuzz.pbrt", "", scene, policy);
       break;
+    case Format::Json:
+      parse_json_scene(bytes, "fuzz.json", "", scene, policy);
+      break;
+    case Format::Obj: {
+      const size_t cut = bytes.find(kMtlSeparator);
+      if (cut != std::string_view::npos)
+        policy.memory_files["fuzz.mtl"] = std::string(bytes.substr(cut + kMtlSeparator.size()));
+      parse_obj(bytes.substr(0, cut), "fuzz.obj", "", scene, policy);
+      break;
+    }
   }
 }
 

@@ -1,6 +1,6 @@
 // Writes the fuzz targets' seed corpora: small valid files of each format, made by rll's own
-// writers (PLY, glTF) or written out here (pbrt, which must not refer to other files).
-// Usage: rll_fuzz_seeds DIR  (writes DIR/ply, DIR/gltf, DIR/pbrt)
+// writers (PLY, glTF, OBJ + MTL) or written out here (pbrt and JSON, which must not refer to
+// other files). Usage: rll_fuzz_seeds DIR  (writes DIR/ply, DIR/gltf, DIR/pbrt, DIR/json, DIR/obj)
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -11,6 +11,7 @@
 #include "rll/scene/builder.h"
 #include "rll/scene/save.h"
 #include "rll/scene/text_scan.h"
+#include "../fuzz/fuzz_input.h"
 
 namespace fs = std::filesystem;
 using namespace rll;
@@ -108,6 +109,77 @@ Option "bool disablepixeljitter" true
 )",
 };
 
+const char* kJsonSeeds[] = {
+    R"({
+  // every kind of field, and no reference to another file
+  "camera": {"position": [0.5, 0.5, 2.4], "target": [0.5, 0.5, 0], "up": [0, 1, 0], "fov": 38},
+  "film": {"width": 64, "height": 48},
+  "materials": {
+    "white": {"albedo": [0.73, 0.73, 0.73]},
+    "lamp": {"albedo": [0, 0, 0], "emission": [17, 12, 4], "two_sided": true},
+    "brass": {"type": "conductor", "eta": [0.44, 0.53, 1.09], "k": [3.7, 2.8, 1.9], "roughness": 0.2},
+    "red": {"type": "plastic", "albedo": [0.6, 0.1, 0.1], "roughness": 0.05, "ior": 1.5}
+  },
+  "shapes": [
+    {"type": "box", "min": [0, 0, 0], "max": [1, 1, 1], "inward": true, "skip": ["+z", "-x"], "material": "white"},
+    {"type": "quad", "origin": [0.4, 0.999, 0.4], "edge1": [0.2, 0, 0], "edge2": [0, 0, 0.2], "material": "lamp"},
+    {"type": "triangle", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "material": "brass",
+     "transform": {"scale": 0.1, "rotate": {"axis": [0, 1, 0], "angle": 30}, "translate": [0.5, 0, 0.5]}},
+    {"type": "sphere", "center": [0.3, 0.15, 0.7], "radius": 0.15, "subdivisions": 2,
+     "material": {"type": "plastic", "albedo": [0.6, 0.1, 0.1], "roughness": 0.05}},
+    {"type": "box", "min": [2, 0, 0], "max": [3, 1, 1], "material": "red",
+     "transform": {"matrix": [[1, 0, 0, 0], [0, 2, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}
+  ],
+  "lights": [
+    {"type": "directional", "direction": [-1, 0.9, -0.45], "irradiance": [9, 8, 6.5]},
+    {"type": "point", "position": [0.5, 0.8, 0.5], "intensity": [0.5, 0.5, 0.5]}
+  ],
+  "sky": {"type": "dome", "triangles": 512, "radiance": [0.75, 0.97, 1.5], "up": [0, 0, 1],
+          "radius_scale": 4, "full_sphere": true}
+})",
+    R"({"shapes": [{"type": "quad", "origin": [0, 0, 0], "edge1": [1, 0, 0], "edge2": [0, 1, 0],
+  "material": {"emission": [1, 1, 1]}}], /* a comment */ "film": {"width": 8, "height": 8}})",
+};
+
+// An OBJ and its MTL (after fuzz::kMtlSeparator): every statement rll reads, and the index forms
+// (v, v/vt, v//vn, v/vt/vn, negative).
+const char* kObjSeed = R"(# hand-written seed
+mtllib fuzz.mtl
+o thing
+g group1
+s 1
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0 1.0
+v 0.5 0.5 1 0.2 0.3 0.4
+vt 0 0
+vt 1 0
+vt 1 1 0
+vn 0 0 1
+vn 0 1 0
+usemtl white
+f 1 2 3
+f 1/1 3/3 4/2
+f 1//1 2//1 5//2
+f 2/2/1 3/3/1 5/1/2 4/1/1
+usemtl lamp
+f -5 -4 -3
+l 1 2
+p 3
+)";
+const char* kMtlSeed = R"(newmtl white
+Kd 0.7
+Ks 0.1 0.1 0.1
+Ns 20
+illum 2
+newmtl lamp
+Kd 0 0 0
+Ke 5 4 3
+d 1
+Ni 1.5
+)";
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -117,7 +189,7 @@ int main(int argc, char** argv) {
   }
   try {
     const fs::path dir = argv[1];
-    for (const char* f : {"ply", "gltf", "pbrt"}) fs::create_directories(dir / f);
+    for (const char* f : {"ply", "gltf", "pbrt", "json", "obj"}) fs::create_directories(dir / f);
     Scene s = small_scene();
     Mesh tri;
     tri.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
@@ -136,6 +208,21 @@ int main(int argc, char** argv) {
     write(dir / "gltf/scene.glb", glb_of(read_text_file(gltf)));
     for (size_t i = 0; i < std::size(kPbrtSeeds); ++i)
       write(dir / fmt::format("pbrt/seed{}.pbrt", i), kPbrtSeeds[i]);
+    for (size_t i = 0; i < std::size(kJsonSeeds); ++i)
+      write(dir / fmt::format("json/seed{}.json", i), kJsonSeeds[i]);
+    const std::string separator(fuzz::kMtlSeparator);
+    write(dir / "obj/hand.obj", kObjSeed + separator + kMtlSeed);
+    // rll's own writer: the JSON it writes names its OBJ, whose mtllib is renamed to the name
+    // the fuzz target serves the MTL by.
+    const fs::path saved = dir / "obj/saved-tmp";
+    fs::create_directories(saved);
+    save_json_scene(s, saved / "scene.json");
+    write(dir / "json/saved.json", read_text_file(saved / "scene.json"));
+    std::string obj = read_text_file(saved / "scene.obj");
+    if (size_t at = obj.find("mtllib scene.mtl"); at != std::string::npos)
+      obj.replace(at, 16, "mtllib fuzz.mtl");
+    write(dir / "obj/saved.obj", obj + separator + read_text_file(saved / "scene.mtl"));
+    fs::remove_all(saved);
   } catch (const Error& e) {
     std::fprintf(stderr, "rll_fuzz_seeds: %s\n", e.what());
     return 1;

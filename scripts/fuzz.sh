@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs each scene-parser fuzzer for a bounded time (make fuzz). Usage: fuzz.sh BUILD SECONDS
+# Runs each scene-parser fuzzer (PLY, glTF, pbrt, JSON, OBJ+MTL) for a bounded time (make fuzz). Usage: fuzz.sh BUILD SECONDS
 set -euo pipefail
 build=${1:-build-fuzz}
 seconds=${2:-60}
@@ -12,7 +12,7 @@ mkdir -p "$crashes"
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 status=0
-for format in ply gltf pbrt; do
+for format in ply gltf pbrt json obj; do
   fuzzer=$build/fuzz/rll_fuzz_$format
   regressions=$root/tests/fuzz/$format
   mkdir -p "$corpus/$format"

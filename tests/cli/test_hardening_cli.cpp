@@ -272,3 +272,43 @@ TEST(HardeningCli, ReferenceTakesExposureForAPng) {
   };
   EXPECT_GT(mean_of("2"), mean_of("0") * 1.2);
 }
+
+// Issue 13, item 3: a cell table the machine cannot hold is refused up front, naming the figure
+// and the memory; tested under a 2 GB address-space limit, never by exhausting the machine.
+TEST(HardeningCli, CellTableTooLargeForTheMachineIsRefused) {
+  TempDir dir;
+  const fs::path out = dir / "x.exr";
+  const std::string cmd = "ulimit -v 2000000; " + std::string(RLL_BINARY) +
+                          " render builtin:cornell-box --res 16x12 --spp 1 --sampler rll --set "
+                          "rll.capacity=1048576 -o " + out.string() + " --quiet 2>&1";
+  FILE* pipe = ::popen(("bash -c '" + cmd + "'").c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string output;
+  char buf[512];
+  while (size_t n = std::fread(buf, 1, sizeof buf, pipe)) output.append(buf, n);
+  const int status = ::pclose(pipe);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 1) << output;
+  expect_mentions(output, {"rll.capacity=1048576", "GiB", "lower rll.capacity"});
+  EXPECT_FALSE(fs::exists(out));
+  // The documented maximum on this machine, without a limit: refused as well (it needs >100 GiB).
+  CommandResult r = run_rll({"render", "builtin:cornell-box", "--res", "16x12", "--spp", "1", "--sampler",
+                             "rll", "--set", "rll.capacity=16777216", "-o", out.string(), "--quiet"}, 60);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  expect_mentions(r.output, {"needs", "GiB"});
+}
+
+// Item 8: a full cell table is said, once.
+TEST(HardeningCli, FullCellTableIsWarnedOnce) {
+  TempDir dir;
+  CommandResult r = run_rll({"render", "builtin:cornell-boxes-room", "--res", "32x24", "--spp", "8",
+                             "--sampler", "rll", "--set", "rll.capacity=16", "-o",
+                             (dir / "x.exr").string(), "--quiet"}, 120);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  expect_mentions(r.output, {"cell table is full", "rll.capacity=16"});
+  size_t count = 0;
+  for (size_t at = r.output.find("cell table is full"); at != std::string::npos;
+       at = r.output.find("cell table is full", at + 1))
+    ++count;
+  EXPECT_EQ(count, 1u) << r.output;
+}

@@ -60,6 +60,69 @@ Image from_8bit(unsigned char* data, int w, int h, bool srgb, const std::string&
   return img;
 }
 
+// A claim of an image's size, checked before anything is allocated for it.
+void check_claimed_size(int64_t w, int64_t h, const std::string& name) {
+  if (w <= 0 || h <= 0) fail("cannot read '{}': its header claims a size of {}x{}", name, w, h);
+  if (w > kMaxImageSide || h > kMaxImageSide || w * h > int64_t(kMaxImagePixels))
+    fail("cannot read '{}': its header claims {}x{} pixels; rll reads images of at most {} "
+         "pixels a side and {} in all",
+         name, w, h, kMaxImageSide, kMaxImagePixels);
+}
+
+// The fewest bytes a Radiance .hdr file of w x h pixels can take as stb_image reads it: each
+// scanline flat (4 bytes a pixel) or, for widths in [8, 32768), run-length coded (a 4-byte
+// header, then per channel at most 127 pixels per 2 bytes). stb_image reads a truncated file as
+// black rows rather than failing, so the claim is checked against the file instead.
+uint64_t min_hdr_bytes(int64_t w, int64_t h) {
+  uint64_t line = 4 * uint64_t(w);
+  if (w >= 8 && w < 32768) line = std::min(line, 4 + 4 * 2 * uint64_t((w + 126) / 127));
+  return line * uint64_t(h);
+}
+
+Image read_exr(const fs::path& path) {
+  const std::string name = path.string();
+  Imf::InputFile file(path.c_str());
+  const Imf::Header& header = file.header();
+  const Imath::Box2i dw = header.dataWindow();
+  const int64_t w = int64_t(dw.max.x) - dw.min.x + 1, h = int64_t(dw.max.y) - dw.min.y + 1;
+  check_claimed_size(w, h, name);
+  if (header.compression() == Imf::NO_COMPRESSION) {
+    uint64_t pixel_bytes = 0;
+    for (auto c = header.channels().begin(); c != header.channels().end(); ++c)
+      pixel_bytes += c.channel().type == Imf::HALF ? 2 : 4;
+    std::error_code ec;
+    const uintmax_t size = fs::file_size(path, ec);
+    if (!ec && pixel_bytes * uint64_t(w) * uint64_t(h) > size)
+      fail("cannot read '{}': its header claims {}x{} uncompressed pixels ({} bytes), but the "
+           "file has only {} bytes",
+           name, w, h, pixel_bytes * uint64_t(w) * uint64_t(h), size);
+  }
+  // A compressed file can claim any size in a few bytes. The pixels are read in bands of rows
+  // and memory is taken band by band as the file delivers them, so a false claim fails at its
+  // first missing chunk, having allocated little. 256 rows is a whole number of chunks for
+  // every compression (1, 16, 32 or 256 rows each).
+  constexpr int64_t kBand = 256;
+  Image img;
+  std::vector<Rgb>& px = img.pixels();
+  for (int64_t y0 = 0; y0 < h; y0 += kBand) {
+    const int64_t rows = std::min(kBand, h - y0);
+    const size_t need = size_t((y0 + rows) * w);
+    if (need > px.capacity()) px.reserve(std::min(size_t(w * h), std::max(need, 2 * px.capacity())));
+    px.resize(need);
+    // OpenEXR addresses pixel (x, y) at base + x * xs + y * ys in data-window coordinates.
+    const ptrdiff_t origin = ptrdiff_t(((dw.min.y + y0) * w + dw.min.x) * int64_t(sizeof(Rgb)));
+    char* base = reinterpret_cast<char*>(px.data() + y0 * w) - origin;
+    const size_t xs = sizeof(Rgb), ys = sizeof(Rgb) * size_t(w);
+    Imf::FrameBuffer fb;
+    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys, 1, 1, 0.0));
+    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys, 1, 1, 0.0));
+    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys, 1, 1, 0.0));
+    file.setFrameBuffer(fb);
+    file.readPixels(int(dw.min.y + y0), int(dw.min.y + y0 + rows - 1));
+  }
+  return Image(int(w), int(h), std::move(px));
+}
+
 }  // namespace
 
 uint8_t to_srgb8(float v, float scale) {
@@ -133,28 +196,33 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
 }
 
 Image read_image(const fs::path& path, bool srgb) {
-  if (!fs::exists(path)) fail("image '{}' not found", path.string());
+  std::error_code ec;
+  const auto status = fs::status(path, ec);
+  if (fs::is_directory(status)) fail("cannot read '{}': it is a folder, not an image", path.string());
+  if (!fs::exists(status)) fail("image '{}' not found", path.string());
+  if (!fs::is_regular_file(status))
+    fail("cannot read '{}': it is not a regular file (a device or a pipe?)", path.string());
   std::string ext = lower_ext(path);
   if (ext == ".exr") {
     try {
-      Imf::InputFile file(path.c_str());
-      Imath::Box2i dw = file.header().dataWindow();
-      int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
-      Image img(w, h);
-      Imf::FrameBuffer fb;
-      char* base = (char*)img.pixels().data() - (size_t(dw.min.x) + size_t(dw.min.y) * w) * sizeof(Rgb);
-      size_t xs = sizeof(Rgb), ys = sizeof(Rgb) * w;
-      fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys, 1, 1, 0.0));
-      fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys, 1, 1, 0.0));
-      fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys, 1, 1, 0.0));
-      file.setFrameBuffer(fb);
-      file.readPixels(dw.min.y, dw.max.y);
-      return img;
+      return read_exr(path);
+    } catch (const Error&) {
+      throw;
     } catch (const std::exception& e) {
       fail("cannot read '{}': {}", path.string(), e.what());
     }
   }
   int w = 0, h = 0, n = 0;
+  if (!stbi_info(path.c_str(), &w, &h, &n))
+    fail("cannot read '{}': {}", path.string(), stbi_failure_reason());
+  check_claimed_size(w, h, path.string());
+  if (stbi_is_hdr(path.c_str())) {
+    const uintmax_t size = fs::file_size(path, ec);
+    if (!ec && min_hdr_bytes(w, h) > size)
+      fail("cannot read '{}': its header claims {}x{} pixels, which take at least {} bytes, but "
+           "the file has only {}",
+           path.string(), w, h, min_hdr_bytes(w, h), size);
+  }
   if (ext == ".hdr") {
     float* data = stbi_loadf(path.c_str(), &w, &h, &n, 3);
     if (!data) fail("cannot read '{}': {}", path.string(), stbi_failure_reason());
@@ -170,7 +238,14 @@ Image read_image(const fs::path& path, bool srgb) {
 Image decode_image(const unsigned char* bytes, size_t size, bool srgb, const std::string& name) {
   if (size > size_t(INT32_MAX)) fail("cannot read '{}': the image is too large", name);
   int w = 0, h = 0, n = 0;
+  if (!stbi_info_from_memory(bytes, int(size), &w, &h, &n))
+    fail("cannot read '{}': {}", name, stbi_failure_reason());
+  check_claimed_size(w, h, name);
   if (stbi_is_hdr_from_memory(bytes, int(size))) {
+    if (min_hdr_bytes(w, h) > size)
+      fail("cannot read '{}': its header claims {}x{} pixels, which take at least {} bytes, but "
+           "it has only {}",
+           name, w, h, min_hdr_bytes(w, h), size);
     float* data = stbi_loadf_from_memory(bytes, int(size), &w, &h, &n, 3);
     if (!data) fail("cannot read '{}': {}", name, stbi_failure_reason());
     Image img(w, h);

@@ -1,6 +1,7 @@
 // HDR RGB images and their files: OpenEXR (linear) and PNG (tone-mapped sRGB), written atomically.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -9,10 +10,17 @@
 
 namespace rll {
 
+// The largest image rll reads: a header claiming more is refused before anything is allocated.
+// 2^28 pixels (16384 x 16384, 3 GiB as floats), at most 65536 a side.
+constexpr int64_t kMaxImageSide = int64_t(1) << 16;
+constexpr size_t kMaxImagePixels = size_t(1) << 28;
+
 class Image {
  public:
   Image() = default;
   Image(int width, int height, Rgb fill = Rgb(0)) : m_w(width), m_h(height), m_px(size_t(width) * height, fill) {}
+  // Takes `pixels` (width * height of them, row by row).
+  Image(int width, int height, std::vector<Rgb> pixels) : m_w(width), m_h(height), m_px(std::move(pixels)) {}
   int width() const { return m_w; }
   int height() const { return m_h; }
   size_t pixel_count() const { return m_px.size(); }

@@ -1,5 +1,9 @@
 #include "rll/core/sysinfo.h"
 
+#include <algorithm>
+
+#include <sys/resource.h>
+
 #include <fmt/format.h>
 #include <sched.h>
 #include <unistd.h>
@@ -16,6 +20,18 @@
 #endif
 
 namespace rll {
+
+size_t usable_memory_bytes() {
+  size_t usable = 0;
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  if (pages > 0 && page > 0) usable = size_t(pages) * size_t(page);
+  for (int resource : {RLIMIT_AS, RLIMIT_DATA}) {
+    struct rlimit lim;
+    if (::getrlimit(resource, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY)
+      usable = usable ? std::min(usable, size_t(lim.rlim_cur)) : size_t(lim.rlim_cur);
+  }
+  return usable;
+}
 
 size_t peak_rss_bytes() {
   std::ifstream f("/proc/self/status");

@@ -9,6 +9,9 @@ namespace rll {
 
 // Peak resident set size of this process in bytes (0 where unknown).
 size_t peak_rss_bytes();
+// The memory this process can expect to allocate: the machine's physical memory, or less where
+// a resource limit (RLIMIT_AS, RLIMIT_DATA) says so. 0 where unknown.
+size_t usable_memory_bytes();
 // Starts a new peak at the current resident size (Linux /proc/self/clear_refs), so that
 // peak_rss_bytes() afterwards measures one phase of the program; false where unsupported.
 bool reset_peak_rss();

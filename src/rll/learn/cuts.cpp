@@ -117,11 +117,13 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   for (size_t i = 0; i < n; ++i) m_count[i].store(0, std::memory_order_relaxed);
 }
 
-size_t CutStore::bytes() const {
-  const size_t per_cell = size_t(m_m) * (2 * sizeof(uint32_t) + 5 * sizeof(float) + 2 * sizeof(ExactSum) + sizeof(uint32_t)) +
+size_t CutStore::bytes_for(uint32_t cells, int cut_size) {
+  const size_t per_cell = size_t(cut_size) * (2 * sizeof(uint32_t) + 5 * sizeof(float) + 2 * sizeof(ExactSum) + sizeof(uint32_t)) +
                           sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t) + sizeof(double) + sizeof(CellAnchor);
-  return m_size.size() * per_cell;
+  return size_t(cells) * per_cell;
 }
+
+size_t CutStore::bytes() const { return bytes_for(uint32_t(m_size.size()), m_m); }
 
 float CutStore::weight_of(uint32_t cell, uint32_t node) const {
   if (m_s.prior == ClusterWeight::Power) return m_tree.node(node).bounds.power;

@@ -190,6 +190,8 @@ struct ExactSum {
 class CutStore {
  public:
   CutStore(const LightTree& tree, uint32_t cells, const CutSettings& settings, double reward_scale);
+  // The memory a store of `cells` cells of cuts of `cut_size` clusters takes (bytes()).
+  static size_t bytes_for(uint32_t cells, int cut_size);
 
   const CutSettings& settings() const { return m_s; }
   int max_size() const { return m_m; }

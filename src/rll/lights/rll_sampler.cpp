@@ -1,5 +1,7 @@
 #include "rll/lights/rll_sampler.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -9,6 +11,7 @@
 #include "rll/core/parallel.h"
 #include "rll/core/params.h"
 #include "rll/core/sampling.h"
+#include "rll/core/sysinfo.h"
 #include "rll/lights/tree_sampler.h"
 #include "rll/scene/scene.h"
 
@@ -108,10 +111,23 @@ double reward_scale(const Scene& scene) {
   }
   return s > 0 ? s : 1.0;
 }
+
+void check_memory(const RllSettings& s) {
+  // The cell table, the cuts and the point sums, allocated up front: refuse a configuration the
+  // machine cannot hold rather than grow towards the out-of-memory killer.
+  const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size)) +
+                        double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t));
+  const size_t usable = usable_memory_bytes();
+  if (usable > 0 && needed > 0.8 * double(usable))
+    fail("{0}.capacity={1} with {0}.cut_size={2} needs {3:.1f} GiB for its cells, more than 80% of "
+         "the {4:.1f} GiB this process may use; lower {0}.capacity or {0}.cut_size",
+         s.name, s.capacity, s.cut.cut_size, needed / double(1ull << 30), double(usable) / double(1ull << 30));
+}
 }  // namespace
 
 RllLightSampler::RllLightSampler(const Scene& scene, const RllSettings& s)
     : m_tree(*scene.light_tree), m_s(s), m_keyer(s.grid, scene.bounds) {
+  check_memory(s);
   m_table = std::make_unique<CellTable>(s.capacity);
   m_cuts = std::make_unique<CutStore>(m_tree, s.capacity, s.cut, reward_scale(scene));
   m_last_used = std::make_unique<std::atomic<uint32_t>[]>(s.capacity);
@@ -381,6 +397,14 @@ void RllLightSampler::end_pass() {
   // used cells until it is 70% full. Ties go to the lower cell id.
   uint64_t failed = m_table->failed_inserts();
   m_failed_inserts += failed;
+  if (failed > 0 && !m_warned_full) {
+    // Said once: points without a cell sample like the tree and teach nothing.
+    fmt::print(stderr,
+               "rll: warning: {0}'s cell table is full ({0}.capacity={1}): {2} points this pass "
+               "found no cell and sampled without learning; raise {0}.capacity\n",
+               m_s.name, m_s.capacity, failed);
+    m_warned_full = true;
+  }
   std::vector<uint32_t> evict;
   if (failed > 0 || m_table->used() > cap * 9ull / 10) {
     std::vector<uint32_t> used;

@@ -128,6 +128,7 @@ class RllLightSampler final : public LightSampler {
   std::vector<double> m_power_prefix;                    // per light, tree order
   uint64_t m_pass = 0;
   uint64_t m_resets = 0;
+  bool m_warned_full = false;
   bool m_frozen = false;
   // Statistics.
   uint64_t m_evictions = 0, m_failed_inserts = 0;

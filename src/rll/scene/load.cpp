@@ -4,6 +4,7 @@
 
 #include "rll/core/error.h"
 #include "rll/scene/builtin.h"
+#include "rll/scene/text_scan.h"
 
 namespace rll {
 namespace fs = std::filesystem;
@@ -57,15 +58,22 @@ Scene read_scene(const std::string& spec) {
   if (!fs::exists(path)) fail("{}: file not found", spec);
   if (fs::is_directory(path)) fail("{}: is a folder, not a scene file", spec);
   std::string ext = lower_extension(path);
-  if (ext == ".json") load_json_scene(path, scene);
-  else if (ext == ".obj") load_obj(path, scene);
-  else if (ext == ".ply") load_ply(path, scene);
-  else if (ext == ".gltf" || ext == ".glb") load_gltf(path, scene);
-  else if (ext == ".pbrt") load_pbrt(path, scene);
-  else
-    fail("{}: unknown scene format '{}' (rll reads .json, .obj, .gltf, .glb, .ply, .pbrt and "
-         "builtin:NAME)",
-         spec, ext);
+  try {
+    if (ext == ".json") load_json_scene(path, scene);
+    else if (ext == ".obj") load_obj(path, scene);
+    else if (ext == ".ply") load_ply(path, scene);
+    else if (ext == ".gltf" || ext == ".glb") load_gltf(path, scene);
+    else if (ext == ".pbrt") load_pbrt(path, scene);
+    else
+      fail("{}: unknown scene format '{}' (rll reads .json, .obj, .gltf, .glb, .ply, .pbrt and "
+           "builtin:NAME)",
+           spec, printable(ext));
+  } catch (const Error& e) {
+    // The readers quote what they echo from a file with printable(); this catches what they
+    // pass on from the libraries (tinyobjloader, tinygltf, nlohmann::json) and file names.
+    throw Error(without_control_bytes(e.what()));
+  }
+  for (auto& w : scene.warnings) w = without_control_bytes(w);
   drop_unused_materials(scene);
   return scene;
 }
@@ -75,9 +83,14 @@ Scene load_scene(const std::string& spec, const LoadOptions& options) {
   if (options.width < 0 || options.height < 0) fail("resolution must be positive");
   if (options.width > 0) scene.width = options.width;
   if (options.height > 0) scene.height = options.height;
+  // The readers' warnings come before finalize() may fail, and finalize()'s own after it.
+  const size_t read_warnings = scene.warnings.size();
   if (options.print_warnings)
     for (const auto& w : scene.warnings) fmt::print(stderr, "rll: warning: {}\n", w);
   scene.finalize();
+  if (options.print_warnings)
+    for (size_t i = read_warnings; i < scene.warnings.size(); ++i)
+      fmt::print(stderr, "rll: warning: {}\n", scene.warnings[i]);
   return scene;
 }
 

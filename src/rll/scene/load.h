@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <string_view>
 
@@ -27,6 +28,9 @@ Scene read_scene(const std::string& spec);
 struct ReadPolicy {
   bool read_files = true;
   size_t max_triangles = size_t(1) << 31;
+  // Files served from memory by the name the scene gives them, before the disk is tried (the
+  // fuzz target for OBJ hands the reader its MTL this way). Only the OBJ reader looks here.
+  std::map<std::string, std::string> memory_files;
 };
 
 // Format readers. Each appends what it reads to `scene` (geometry, materials, textures,
@@ -49,6 +53,14 @@ Mesh parse_ply(std::string_view bytes, const std::string& name);
 void parse_gltf(std::string_view bytes, const std::string& name,
                 const std::filesystem::path& base_dir, Scene& scene,
                 const ReadPolicy& policy = {});
+// A JSON scene (docs/scene-format.md).
+void parse_json_scene(std::string_view text, const std::string& name,
+                      const std::filesystem::path& base_dir, Scene& scene,
+                      const ReadPolicy& policy = {});
+// A Wavefront OBJ file and the MTL files it names.
+void parse_obj(std::string_view text, const std::string& name,
+               const std::filesystem::path& base_dir, Scene& scene,
+               const ReadPolicy& policy = {});
 void parse_pbrt(std::string_view text, const std::string& name,
                 const std::filesystem::path& base_dir, Scene& scene,
                 const ReadPolicy& policy = {});

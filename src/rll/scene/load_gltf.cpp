@@ -6,6 +6,7 @@
 #include <tiny_gltf.h>
 
 #include <cstring>
+#include <nlohmann/json.hpp>
 #include <map>
 #include <set>
 
@@ -55,6 +56,70 @@ std::string one_line(std::string s) {
   for (auto& c : s)
     if (c == '\n') c = ';';
   return s;
+}
+
+// The JSON text of a .gltf, or of a .glb's first chunk ("" when there is none).
+std::string_view gltf_json_text(std::string_view bytes, bool binary) {
+  if (!binary) return bytes;
+  if (bytes.size() < 20) return {};
+  uint32_t length = 0;
+  std::memcpy(&length, bytes.data() + 12, 4);
+  return bytes.substr(20, length);
+}
+
+// tinygltf names a buffer whose data URI does not decode to its byteLength by the whole URI,
+// which can be megabytes of base64: each such line becomes the buffer's sizes and the URI's
+// beginning, escaped.
+std::string shorten_uri_errors(const std::string& err, std::string_view json_text) {
+  static constexpr std::string_view kHead = "Failed to decode 'uri' : ", kTail = " in Buffer";
+  nlohmann::json doc = nlohmann::json::parse(json_text, nullptr, false);
+  std::string out;
+  size_t pos = 0;
+  while (pos < err.size()) {
+    size_t end = err.find('\n', pos);
+    if (end == std::string::npos) end = err.size();
+    std::string_view line(err.data() + pos, end - pos);
+    pos = end + 1;
+    if (line.substr(0, kHead.size()) != kHead || line.size() < kHead.size() + kTail.size() ||
+        line.substr(line.size() - kTail.size()) != kTail) {
+      out.append(line);
+      out += '\n';
+      continue;
+    }
+    const std::string_view uri =
+        line.substr(kHead.size(), line.size() - kHead.size() - kTail.size());
+    // Base64 decodes to 3 bytes per 4 characters, less one per '=' of padding.
+    const size_t comma = uri.find(',');
+    std::string decoded = "cannot be decoded";
+    if (comma != std::string_view::npos &&
+        uri.substr(0, comma).find(";base64") != std::string_view::npos) {
+      std::string_view payload = uri.substr(comma + 1);
+      if (payload.size() % 4 == 0) {
+        size_t pad = 0;
+        while (pad < 2 && pad < payload.size() && payload[payload.size() - 1 - pad] == '=') ++pad;
+        decoded = fmt::format("decodes to {} bytes", payload.size() / 4 * 3 - pad);
+      } else {
+        decoded = fmt::format("is not base64 ({} characters, not a multiple of 4)",
+                              payload.size());
+      }
+    }
+    std::string buffer = "a buffer";
+    if (doc.is_object() && doc.contains("buffers") && doc["buffers"].is_array()) {
+      const auto& buffers = doc["buffers"];
+      for (size_t i = 0; i < buffers.size(); ++i)
+        if (buffers[i].is_object() && buffers[i].contains("uri") && buffers[i]["uri"].is_string() &&
+            buffers[i]["uri"].get_ref<const std::string&>() == uri) {
+          buffer = fmt::format("buffer {}", i);
+          if (buffers[i].contains("byteLength") && buffers[i]["byteLength"].is_number())
+            buffer += fmt::format(" (byteLength {})", buffers[i]["byteLength"].dump());
+          break;
+        }
+    }
+    out += fmt::format("{}: its data URI '{}' ({} characters) {}", buffer, printable(uri, 40),
+                       uri.size(), decoded);
+    out += '\n';
+  }
+  return out;
 }
 
 double number_or(const tinygltf::Value& obj, const char* key, double def) {
@@ -657,7 +722,15 @@ void parse_gltf(std::string_view bytes, const std::string& name, const fs::path&
     loader.SetFsCallbacks({no_file_exists, same_path, no_file_read, no_file_write, nullptr});
   tinygltf::Model model;
   std::string err, warn;
+  if (bytes.empty()) fail("{}: empty file", name);
   const bool binary = bytes.size() >= 4 && bytes.substr(0, 4) == "glTF";
+  std::string ext = fs::path(name).extension().string();
+  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".glb" || binary) {
+    if (bytes.size() < 12)
+      fail("{}: not a GLB: {} bytes are too short for its 12-byte header", name, bytes.size());
+    if (!binary) fail("{}: not a GLB: it does not begin with 'glTF'", name);
+  }
   bool ok = false;
   const std::string dir = base_dir.string();
   try {
@@ -673,7 +746,9 @@ void parse_gltf(std::string_view bytes, const std::string& name, const fs::path&
     fail("{}: {}", name, e.what());
   }
   if (!ok || !err.empty())
-    fail("{}: {}", name, err.empty() ? "cannot parse the file" : one_line(err));
+    fail("{}: {}", name,
+         err.empty() ? "cannot parse the file"
+                     : one_line(shorten_uri_errors(err, gltf_json_text(bytes, binary))));
   if (!warn.empty()) scene.warnings.push_back(fmt::format("{}: {}", name, one_line(warn)));
   GltfReader(model, name, scene, policy).read();
 }

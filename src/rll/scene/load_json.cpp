@@ -55,7 +55,7 @@ void check_object(const json& v, const std::string& ptr,
     if (std::find(known.begin(), known.end(), item.key()) != known.end()) continue;
     std::string list;
     for (auto k : known) list += (list.empty() ? "" : ", ") + std::string(k);
-    fail("unknown field \"{}\" in {} (known fields: {})", item.key(), where(ptr), list);
+    fail("unknown field \"{}\" in {} (known fields: {})", printable(item.key()), where(ptr), list);
   }
 }
 
@@ -183,7 +183,8 @@ Affine to_transform(const json& v, const std::string& ptr) {
 // Builds the scene from a parsed JSON document.
 class JsonSceneReader {
  public:
-  JsonSceneReader(const fs::path& path, Scene& scene) : m_path(path), m_scene(scene) {}
+  JsonSceneReader(const fs::path& base_dir, Scene& scene, const ReadPolicy& policy)
+      : m_base(base_dir), m_scene(scene), m_policy(policy) {}
 
   void read(const json& root) {
     check_object(root, "", {"camera", "film", "materials", "shapes", "lights", "sky"});
@@ -208,15 +209,18 @@ class JsonSceneReader {
 
  private:
   fs::path resolve(const std::string& name) const {
-    return (m_path.parent_path() / name).lexically_normal();
+    return (m_base / name).lexically_normal();
   }
 
   // A file named by the scene, which must exist.
   fs::path referenced_file(const json& v, const std::string& ptr) const {
     std::string name = to_string(v, ptr);
     if (name.empty()) fail("{} must not be empty", ptr);
+    if (!m_policy.read_files)
+      fail("{}: '{}': reading other files is turned off", ptr, printable(name));
     fs::path p = resolve(name);
-    if (!fs::is_regular_file(p)) fail("{}: '{}' not found ({})", ptr, name, p.string());
+    if (const std::string why = unreadable_reason(p); !why.empty())
+      fail("{}: '{}' {} ({})", ptr, printable(name), why, printable(p.string(), 256));
     return p;
   }
 
@@ -240,11 +244,11 @@ class JsonSceneReader {
                  "roughness", "ior",    "emission", "two_sided"};
     } else {
       fail("{}: unknown material type '{}' (rll knows diffuse, conductor, plastic)",
-           child(ptr, "type"), type);
+           child(ptr, "type"), printable(type));
     }
     for (const auto& item : v.items())
       if (std::find(applies.begin(), applies.end(), item.key()) == applies.end())
-        fail("{}: field \"{}\" does not apply to a {} material", ptr, item.key(), type);
+        fail("{}: field \"{}\" does not apply to a {} material", ptr, printable(item.key()), type);
     m.albedo = optional_field(v, ptr, "albedo", to_colour).value_or(m.albedo);
     m.specular = optional_field(v, ptr, "specular", to_colour).value_or(m.specular);
     m.eta = optional_field(v, ptr, "eta", to_colour).value_or(m.eta);
@@ -378,7 +382,7 @@ class JsonSceneReader {
             std::string f = to_string((*it)[i], child(sp, i));
             auto k = std::find(std::begin(kFaces), std::end(kFaces), f);
             if (k == std::end(kFaces))
-              fail("{}: unknown face '{}' (faces: -x +x -y +y -z +z)", child(sp, i), f);
+              fail("{}: unknown face '{}' (faces: -x +x -y +y -z +z)", child(sp, i), printable(f));
             skip |= 1u << (k - std::begin(kFaces));
           }
         }
@@ -394,13 +398,16 @@ class JsonSceneReader {
         int sub = optional_field(v, ptr, "subdivisions", to_int).value_or(3);
         if (sub < 0 || sub > 8)
           fail("{} must be in [0, 8] (got {})", child(ptr, "subdivisions"), sub);
+        // A sphere of 8 subdivisions is a million triangles from a few bytes of JSON.
+        if (m_scene.mesh.triangle_count() > m_policy.max_triangles)
+          fail("{}: the scene has more than {} triangles", ptr, m_policy.max_triangles);
         b.sphere(c, r, sub, shape_material(v, ptr),
                  optional_field(v, ptr, "inward", to_bool).value_or(false));
       } else {
         fail(
             "{}: unknown shape type '{}' (rll knows quad, triangle, box, sphere, or {{\"file\": "
             "...}})",
-            child(ptr, "type"), type);
+            child(ptr, "type"), printable(type));
       }
     }
     if (auto it = v.find("transform"); it != v.end())
@@ -459,7 +466,7 @@ class JsonSceneReader {
       m_scene.lights.push_back(make_point_light(required_field(v, ptr, "position", to_vec3),
                                                 required_field(v, ptr, "intensity", to_colour)));
     } else {
-      fail("{}: unknown light type '{}' (rll knows directional, point)", child(ptr, "type"), type);
+      fail("{}: unknown light type '{}' (rll knows directional, point)", child(ptr, "type"), printable(type));
     }
   }
 
@@ -469,7 +476,7 @@ class JsonSceneReader {
                   "mapping", "transform"});
     std::string type = required_field(v, ptr, "type", to_string);
     if (type != "dome")
-      fail("{}: unknown sky type '{}' (rll knows dome)", child(ptr, "type"), type);
+      fail("{}: unknown sky type '{}' (rll knows dome)", child(ptr, "type"), printable(type));
     SkyDome sky;
     sky.full_sphere = optional_field(v, ptr, "full_sphere", to_bool).value_or(false);
     sky.triangles = optional_field(v, ptr, "triangles", to_int).value_or(sky.triangles);
@@ -512,8 +519,9 @@ class JsonSceneReader {
     m_scene.sky = sky;
   }
 
-  fs::path m_path;
+  fs::path m_base;
   Scene& m_scene;
+  ReadPolicy m_policy;
   std::map<std::string, uint32_t> m_named;
   std::map<fs::path, int> m_textures;
   std::optional<uint32_t> m_default_material;
@@ -533,7 +541,7 @@ class DuplicateKeyCheck {
         Frame& f = m_stack.back();
         f.key = parsed.get<std::string>();
         if (!f.keys.insert(f.key).second)
-          fail("duplicate field \"{}\" in {}", f.key, where(pointer()));
+          fail("duplicate field \"{}\" in {}", printable(f.key), where(pointer()));
         break;
       }
       case json::parse_event_t::object_end:
@@ -572,7 +580,11 @@ class DuplicateKeyCheck {
 void load_json_scene(const fs::path& path, Scene& scene) {
   const std::string file = path.string();
   if (!fs::exists(path)) fail("{}: file not found", file);
-  const std::string text = read_text_file(path);
+  parse_json_scene(read_text_file(path), file, path.parent_path(), scene);
+}
+
+void parse_json_scene(std::string_view text, const std::string& file, const fs::path& base_dir,
+                      Scene& scene, const ReadPolicy& policy) {
   json root;
   try {
     root = json::parse(text, DuplicateKeyCheck(), true, /*ignore_comments=*/true);
@@ -598,7 +610,7 @@ void load_json_scene(const fs::path& path, Scene& scene) {
     fail("{}: {}", file, e.what());
   }
   try {
-    JsonSceneReader(path, scene).read(root);
+    JsonSceneReader(base_dir, scene, policy).read(root);
   } catch (const Error& e) {
     fail("{}: {}", file, e.what());
   }

@@ -51,9 +51,9 @@ int read_numbers(std::string_view rest, float* out, int max, const std::string& 
       case NumberStatus::Ok:
         break;
       case NumberStatus::NonFinite:
-        fail_line(file, line, fmt::format("{} '{}' is not a finite number", what, tok));
+        fail_line(file, line, fmt::format("{} '{}' is not a finite number", what, printable(tok)));
       case NumberStatus::Malformed:
-        fail_line(file, line, fmt::format("{} '{}' is not a number", what, tok));
+        fail_line(file, line, fmt::format("{} '{}' is not a number", what, printable(tok)));
     }
     if (n >= max)
       fail_line(file, line, fmt::format("too many values for {} (at most {})", what, max));
@@ -122,13 +122,24 @@ std::string normalize_mtl(std::string_view text, const std::string& file,
 }
 
 void load_mtl(const fs::path& mtl, const std::string& obj_file, size_t obj_line,
-              std::string_view name, MtlLibrary& lib) {
+              const std::string& name, MtlLibrary& lib, const ReadPolicy& policy) {
   if (std::find(lib.files.begin(), lib.files.end(), mtl) != lib.files.end()) return;
-  if (!fs::is_regular_file(mtl))
-    fail_line(obj_file, obj_line,
-              fmt::format("material library '{}' not found ({})", name, mtl.string()));
+  std::string bytes;
+  if (auto it = policy.memory_files.find(name); it != policy.memory_files.end()) {
+    bytes = it->second;
+  } else {
+    if (!policy.read_files)
+      fail_line(obj_file, obj_line,
+                fmt::format("material library '{}': reading other files is turned off",
+                            printable(name)));
+    if (const std::string why = unreadable_reason(mtl); !why.empty())
+      fail_line(obj_file, obj_line,
+                fmt::format("material library '{}' {} ({})", printable(name), why,
+                            printable(mtl.string(), 256)));
+    bytes = read_text_file(mtl);
+  }
   std::set<std::string> with_kd;
-  std::string text = normalize_mtl(read_text_file(mtl), mtl.string(), with_kd);
+  std::string text = normalize_mtl(bytes, mtl.string(), with_kd);
   std::istringstream in(text);
   std::string warn, err;
   const size_t first = lib.materials.size();
@@ -165,8 +176,8 @@ void check_index(long idx, size_t count, IndexUse& use, const std::string& file,
 
 // The validating scan: vertices, normals and uvs into `v`, face indices and material names
 // checked, the MTL files read into `lib`.
-void scan_obj(std::string_view text, const fs::path& path, ObjVertices& v, MtlLibrary& lib) {
-  const std::string file = path.string();
+void scan_obj(std::string_view text, const std::string& file, const fs::path& base_dir,
+              ObjVertices& v, MtlLibrary& lib, const ReadPolicy& policy) {
   IndexUse use_v, use_vt, use_vn;
   TextLines lines(text);
   std::string_view line;
@@ -198,7 +209,7 @@ void scan_obj(std::string_view text, const fs::path& path, ObjVertices& v, MtlLi
         int np = 0;
         for (size_t b = 0;; ++np) {
           size_t e = tok.find('/', b);
-          if (np == 3) fail_line(file, ln, fmt::format("malformed face vertex '{}'", tok));
+          if (np == 3) fail_line(file, ln, fmt::format("malformed face vertex '{}'", printable(tok)));
           parts[np] = tok.substr(b, e == std::string_view::npos ? std::string_view::npos : e - b);
           if (e == std::string_view::npos) {
             ++np;
@@ -208,16 +219,16 @@ void scan_obj(std::string_view text, const fs::path& path, ObjVertices& v, MtlLi
         }
         long idx;
         if (!parse_long(parts[0], idx))
-          fail_line(file, ln, fmt::format("malformed face vertex '{}'", tok));
+          fail_line(file, ln, fmt::format("malformed face vertex '{}'", printable(tok)));
         check_index(idx, v.positions.size(), use_v, file, ln, "vertex");
         if (np >= 2 && !parts[1].empty()) {
           if (!parse_long(parts[1], idx))
-            fail_line(file, ln, fmt::format("malformed face vertex '{}'", tok));
+            fail_line(file, ln, fmt::format("malformed face vertex '{}'", printable(tok)));
           check_index(idx, v.uvs.size(), use_vt, file, ln, "texture coordinate");
         }
         if (np == 3) {
           if (!parse_long(parts[2], idx))
-            fail_line(file, ln, fmt::format("malformed face vertex '{}'", tok));
+            fail_line(file, ln, fmt::format("malformed face vertex '{}'", printable(tok)));
           check_index(idx, v.normals.size(), use_vn, file, ln, "normal");
         }
       }
@@ -230,7 +241,7 @@ void scan_obj(std::string_view text, const fs::path& path, ObjVertices& v, MtlLi
       // them).
       std::string name;
       auto flush = [&] {
-        if (!name.empty()) load_mtl(path.parent_path() / name, file, ln, name, lib);
+        if (!name.empty()) load_mtl(base_dir / name, file, ln, name, lib, policy);
         name.clear();
       };
       std::string_view names = rest;
@@ -251,8 +262,8 @@ void scan_obj(std::string_view text, const fs::path& path, ObjVertices& v, MtlLi
         std::string libs;
         for (const auto& f : lib.files) libs += (libs.empty() ? "" : ", ") + f.filename().string();
         fail_line(file, ln,
-                  libs.empty() ? fmt::format("usemtl '{}' but no mtllib was read before it", name)
-                               : fmt::format("usemtl '{}': no such material in {}", name, libs));
+                  libs.empty() ? fmt::format("usemtl '{}' but no mtllib was read before it", printable(name))
+                               : fmt::format("usemtl '{}': no such material in {}", printable(name), libs));
       }
     }
   }
@@ -299,7 +310,8 @@ Rgb rgb(const tinyobj::real_t* c) {
 
 // The MTL -> Material mapping documented in docs/scene-format.md.
 Material convert_material(const tinyobj::material_t& t, bool has_kd, const fs::path& mtl,
-                          Scene& scene, std::map<fs::path, int>& textures) {
+                          Scene& scene, std::map<fs::path, int>& textures,
+                          const ReadPolicy& policy) {
   Material m;
   m.name = t.name;
   Rgb kd = has_kd ? rgb(t.diffuse) : Rgb(0), ks = rgb(t.specular);
@@ -314,9 +326,12 @@ Material convert_material(const tinyobj::material_t& t, bool has_kd, const fs::p
     tex = tex.lexically_normal();
     auto it = textures.find(tex);
     if (it == textures.end()) {
-      if (!fs::is_regular_file(tex))
-        fail("{}: material '{}': texture '{}' not found ({})", mtl.string(), t.name,
-             t.diffuse_texname, tex.string());
+      if (!policy.read_files)
+        fail("{}: material '{}': texture '{}': reading other files is turned off", mtl.string(),
+             printable(t.name), printable(t.diffuse_texname));
+      if (const std::string why = unreadable_reason(tex); !why.empty())
+        fail("{}: material '{}': texture '{}' {} ({})", mtl.string(), printable(t.name),
+             printable(t.diffuse_texname), why, printable(tex.string(), 256));
       try {
         scene.textures.push_back(read_image(tex));
       } catch (const Error& e) {
@@ -421,11 +436,15 @@ Mesh build_mesh(const ObjVertices& v, const std::vector<tinyobj::shape_t>& shape
 void load_obj(const fs::path& path, Scene& scene) {
   const std::string file = path.string();
   if (!fs::exists(path)) fail("{}: file not found", file);
-  const std::string text = read_text_file(path);
+  parse_obj(read_text_file(path), file, path.parent_path(), scene);
+}
 
+void parse_obj(std::string_view text_view, const std::string& file, const fs::path& base_dir,
+               Scene& scene, const ReadPolicy& policy) {
+  const std::string text(text_view);  // tinyobjloader reads it through a stream
   ObjVertices v;
   MtlLibrary lib;
-  scan_obj(text, path, v, lib);
+  scan_obj(text, file, base_dir, v, lib, policy);
 
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
@@ -449,12 +468,14 @@ void load_obj(const fs::path& path, Scene& scene) {
   Mesh mesh = build_mesh(v, shapes, default_material, uses_default);
   mesh.light.assign(mesh.triangles.size(), -1);
   if (mesh.triangles.empty()) fail("{}: the file has no faces", file);
+  if (mesh.triangles.size() > policy.max_triangles)
+    fail("{}: the file has more than {} triangles", file, policy.max_triangles);
 
   const uint32_t material_offset = uint32_t(scene.materials.size());
   std::map<fs::path, int> textures;
   for (size_t i = 0; i < lib.materials.size(); ++i)
     scene.materials.push_back(
-        convert_material(lib.materials[i], lib.has_kd[i], lib.source[i], scene, textures));
+        convert_material(lib.materials[i], lib.has_kd[i], lib.source[i], scene, textures, policy));
   if (uses_default) {
     Material m;
     m.name = "default";

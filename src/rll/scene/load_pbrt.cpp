@@ -195,8 +195,10 @@ struct Token {
 // '#' starts a comment to the end of the line.
 class Tokenizer {
  public:
-  Tokenizer(std::string_view text, uint32_t file, const std::string& name)
-      : m_text(text), m_file(file), m_name(name) {}
+  // `included_from` comes before the file in messages: "a.pbrt:3: Include: ".
+  Tokenizer(std::string_view text, uint32_t file, const std::string& name,
+            const std::string& included_from)
+      : m_text(text), m_file(file), m_name(name), m_included_from(included_from) {}
 
   bool next(Token& t) {
     const size_t n = m_text.size();
@@ -217,11 +219,13 @@ class Tokenizer {
       const size_t start = ++m_pos;
       while (m_pos < n && m_text[m_pos] != '"') {
         if (m_text[m_pos] == '\n')
-          fail("{}:{}: a string runs past the end of the line", m_name, t.line);
+          fail("{}{}:{}: a string runs past the end of the line", m_included_from, m_name,
+               t.line);
         if (m_text[m_pos] == '\\') ++m_pos;  // an escaped character, whatever it is
         ++m_pos;
       }
-      if (m_pos >= n) fail("{}:{}: a string is not closed", m_name, t.line);
+      if (m_pos >= n)
+        fail("{}{}:{}: a string is not closed", m_included_from, m_name, t.line);
       t.text = m_text.substr(start, m_pos - start);
       t.quoted = true;
       ++m_pos;
@@ -246,7 +250,7 @@ class Tokenizer {
   std::string_view m_text;
   size_t m_pos = 0, m_line = 1;
   uint32_t m_file;
-  std::string m_name;
+  std::string m_name, m_included_from;
 };
 
 std::string unescape(std::string_view s) {
@@ -375,7 +379,7 @@ class PbrtReader {
       fs::path canon = fs::weakly_canonical(name, ec);
       key = ec ? name : canon.string();
     }
-    push_file(text, name, key);
+    push_file(text, name, key, "");
     m_scene.width = 1280;  // pbrt's default film
     m_scene.height = 720;
     while (auto t = take()) directive(*t);
@@ -389,11 +393,14 @@ class PbrtReader {
  private:
   // --- token stream across included files ---
 
-  void push_file(std::string_view text, const std::string& name, const std::string& key) {
+  void push_file(std::string_view text, const std::string& name, const std::string& key,
+                 const std::string& included_from) {
     if (m_tokenizers.size() >= size_t(kMaxIncludeDepth))
       fail("{}: includes nested more than {} deep", name, kMaxIncludeDepth);
     m_names.push_back(name);
-    m_tokenizers.emplace_back(text, uint32_t(m_names.size() - 1), name);
+    m_included_from.push_back(included_from);
+    m_begun.push_back(false);
+    m_tokenizers.emplace_back(text, uint32_t(m_names.size() - 1), name, included_from);
     m_open.push_back(key);
   }
 
@@ -417,9 +424,9 @@ class PbrtReader {
     return m_peeked ? &*m_peeked : nullptr;
   }
 
-  std::string where(const Token& t) const { return fmt::format("{}:{}", m_names[t.file], t.line); }
+  std::string where(const Token& t) const { return where(t.file, t.line); }
   std::string where(size_t file, size_t line) const {
-    return fmt::format("{}:{}", m_names[file], line);
+    return fmt::format("{}{}:{}", m_included_from[file], m_names[file], line);
   }
 
   [[noreturn]] void syntax(const Token& t, const std::string& what) const {
@@ -442,17 +449,17 @@ class PbrtReader {
   }
 
   double number(const Token& t) const {
-    if (t.quoted) syntax(t, fmt::format("expected a number, got \"{}\"", t.text));
+    if (t.quoted) syntax(t, fmt::format("expected a number, got \"{}\"", printable(t.text)));
     float f = 0;
     switch (parse_float(t.text, f)) {
       case NumberStatus::Ok:
         return f;
       case NumberStatus::NonFinite:
-        syntax(t, fmt::format("'{}' is not a finite number", t.text));
+        syntax(t, fmt::format("'{}' is not a finite number", printable(t.text)));
       case NumberStatus::Malformed:
         break;
     }
-    syntax(t, fmt::format("expected a number, got '{}'", t.text));
+    syntax(t, fmt::format("expected a number, got '{}'", printable(t.text)));
   }
 
   Token expect_token(const Token& after, const char* what) {
@@ -465,7 +472,8 @@ class PbrtReader {
 
   std::string expect_string(const Token& after) {
     Token t = expect_token(after, "a quoted string");
-    if (!t.quoted) syntax(t, fmt::format("expected a quoted string, got '{}'", t.text));
+    if (!t.quoted)
+      syntax(t, fmt::format("expected a quoted string, got '{}'", printable(t.text)));
     return unescape(t.text);
   }
 
@@ -493,16 +501,17 @@ class PbrtReader {
       std::string_view rest = decl.text, type, name, extra;
       if (!next_token(rest, type) || !next_token(rest, name) || next_token(rest, extra))
         syntax(decl, fmt::format("expected a parameter declaration \"TYPE NAME\", got \"{}\"",
-                                 decl.text));
+                                 printable(decl.text)));
       Param par;
       par.type = std::string(type);
       par.name = std::string(name);
       par.line = decl.line;
       if (std::find(std::begin(kParamTypes), std::end(kParamTypes), par.type) ==
           std::end(kParamTypes))
-        syntax(decl, fmt::format("unknown parameter type '{}'", par.type));
+        syntax(decl, fmt::format("unknown parameter type '{}'", printable(par.type)));
       for (const auto& q : params)
-        if (q.name == par.name) syntax(decl, fmt::format("parameter '{}' given twice", par.name));
+        if (q.name == par.name)
+          syntax(decl, fmt::format("parameter '{}' given twice", printable(par.name)));
       Token v = expect_token(decl, "a parameter value");
       auto add_value = [&](const Token& t) {
         if (t.quoted) {
@@ -510,7 +519,8 @@ class PbrtReader {
         } else if (t.text == "true" || t.text == "false") {
           par.strings.push_back(std::string(t.text));
         } else if (is_directive(t) || t.text == "[" || t.text == "]") {
-          syntax(t, fmt::format("parameter '{}' has a bad value '{}'", par.name, t.text));
+          syntax(t, fmt::format("parameter '{}' has a bad value '{}'", printable(par.name),
+                                printable(t.text)));
         } else {
           par.numbers.push_back(number(t));
         }
@@ -701,10 +711,18 @@ class PbrtReader {
   // --- directives ---
 
   void directive(const Token& t) {
-    if (t.quoted) syntax(t, fmt::format("expected a directive, got \"{}\"", t.text));
-    if (!is_directive(t)) syntax(t, fmt::format("expected a directive, got '{}'", t.text));
     const std::string_view d = t.text;
-    if (!pbrt_directives().count(d)) syntax(t, fmt::format("unknown directive '{}'", d));
+    const bool known = !t.quoted && is_directive(t) && pbrt_directives().count(d);
+    // An included file that does not begin with a directive is not a pbrt file at all (say,
+    // Include "/etc/passwd"): its content stays out of the message.
+    if (!known && !m_begun[t.file] && !m_included_from[t.file].empty())
+      syntax(t, "this is not a pbrt file (it does not begin with a pbrt directive)");
+    m_begun[t.file] = true;
+    if (t.quoted)
+      syntax(t, fmt::format("expected a directive, got \"{}\"", printable(t.text)));
+    if (!is_directive(t))
+      syntax(t, fmt::format("expected a directive, got '{}'", printable(t.text)));
+    if (!known) syntax(t, fmt::format("unknown directive '{}'", printable(d)));
     GraphicsState& g = m_state;
     if (d == "Identity") {
       g.ctm = Mat4();
@@ -857,10 +875,11 @@ class PbrtReader {
   fs::path referenced_file(const Token& t, const std::string& what, const std::string& name) const {
     if (name.empty()) syntax(t, fmt::format("{}: empty file name", what));
     if (!m_policy.read_files)
-      syntax(t, fmt::format("{}: '{}': reading other files is turned off", what, name));
+      syntax(t, fmt::format("{}: '{}': reading other files is turned off", what, printable(name)));
     fs::path p = resolve(name);
-    if (!fs::is_regular_file(p))
-      syntax(t, fmt::format("{}: '{}' not found ({})", what, name, p.string()));
+    if (const std::string why = unreadable_reason(p); !why.empty())
+      syntax(t, fmt::format("{}: '{}' {} ({})", what, printable(name), why,
+                            printable(p.string(), 256)));
     return p;
   }
 
@@ -873,14 +892,14 @@ class PbrtReader {
     if (std::find(m_open.begin(), m_open.end(), key) != m_open.end())
       syntax(t, fmt::format("{} \"{}\" includes a file that is already being read (recursive "
                             "include)",
-                            t.text, name));
+                            t.text, printable(name)));
     if (m_tokenizers.size() >= size_t(kMaxIncludeDepth))
       syntax(t, fmt::format("includes nested more than {} deep", kMaxIncludeDepth));
     m_texts.push_back(read_text_file(p));
     // The peeked token (if any) belongs to the including file: tokens of the included file
     // must come first, so the peek is pushed back by re-reading after the include.
     if (m_peeked) syntax(t, "internal: token pending at an include");
-    push_file(m_texts.back(), p.string(), key);
+    push_file(m_texts.back(), p.string(), key, fmt::format("{}:{}: {}: ", m_names[t.file], t.line, t.text));
   }
 
   void camera(const Token& t) {
@@ -1574,6 +1593,8 @@ class PbrtReader {
   ReadPolicy m_policy;
   std::deque<std::string> m_texts;  // included files, alive while their tokens are
   std::vector<std::string> m_names;
+  std::vector<std::string> m_included_from;  // per file: "FILE:LINE: Include: ", or ""
+  std::vector<bool> m_begun;                  // per file: whether a directive was read
   std::vector<Tokenizer> m_tokenizers;
   std::vector<std::string> m_open;  // canonical paths of the files being read
   std::optional<Token> m_peeked;

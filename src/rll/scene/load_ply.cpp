@@ -150,9 +150,9 @@ class PlyReader {
         else if (enc == "binary_big_endian")
           m_encoding = Encoding::BinaryBig;
         else
-          fail_line(line_no, fmt::format("unknown format '{}'", enc));
+          fail_line(line_no, fmt::format("unknown format '{}'", printable(enc)));
         if (version != "1.0")
-          fail_line(line_no, fmt::format("unsupported PLY version '{}'", version));
+          fail_line(line_no, fmt::format("unsupported PLY version '{}'", printable(version)));
         have_format = true;
       } else if (kw == "element") {
         std::string_view name, count;
@@ -161,7 +161,7 @@ class PlyReader {
           fail_line(line_no, "expected 'element NAME COUNT'");
         if (!parse_long(count, n) || n < 0)
           fail_line(line_no,
-                    fmt::format("element count '{}' is not a non-negative integer", count));
+                    fmt::format("element count '{}' is not a non-negative integer", printable(count)));
         m_elements.push_back({std::string(name), size_t(n), {}, line_no});
         current = &m_elements.back();
       } else if (kw == "property") {
@@ -177,7 +177,8 @@ class PlyReader {
           p.count_type = parse_type(count_type, line_no);
           if (!is_integer(p.count_type))
             fail_line(line_no,
-                      fmt::format("a list count must have an integer type, not '{}'", count_type));
+                      fmt::format("a list count must have an integer type, not '{}'",
+                                  printable(count_type)));
         }
         p.type = parse_type(type, line_no);
         if (!next_token(rest, name) || next_token(rest, tok))
@@ -185,10 +186,10 @@ class PlyReader {
         p.name = std::string(name);
         for (const auto& q : current->properties)
           if (q.name == p.name)
-            fail_line(line_no, fmt::format("property '{}' declared twice", p.name));
+            fail_line(line_no, fmt::format("property '{}' declared twice", printable(p.name)));
         current->properties.push_back(p);
       } else {
-        fail_line(line_no, fmt::format("unknown header statement '{}'", kw));
+        fail_line(line_no, fmt::format("unknown header statement '{}'", printable(kw)));
       }
     }
     if (!have_format) fail("{}: the header has no 'format' line", m_name);
@@ -201,7 +202,7 @@ class PlyReader {
   PlyType parse_type(std::string_view s, size_t line) const {
     for (const auto& t : kTypes)
       if (s == t.name) return t.type;
-    fail_line(line, fmt::format("unknown property type '{}'", s));
+    fail_line(line, fmt::format("unknown property type '{}'", printable(s)));
   }
 
   void choose_layout() {
@@ -376,7 +377,7 @@ class PlyReader {
       long v = 0;
       if (!parse_long(tok, v))
         fail_line(line, fmt::format("'{}' of '{}' must be an integer (got '{}')", prop.name,
-                                    el.name, tok));
+                                    el.name, printable(tok)));
       if (!in_range(double(v), type))
         fail_line(line, fmt::format("'{}' value {} is out of range for its type", prop.name, v));
       return double(v);
@@ -393,7 +394,8 @@ class PlyReader {
         break;
     }
     fail_line(line,
-              fmt::format("'{}' of '{}' is not a number (got '{}')", prop.name, el.name, tok));
+              fmt::format("'{}' of '{}' is not a number (got '{}')", prop.name, el.name,
+                          printable(tok)));
   }
 
   static bool in_range(double v, PlyType t) {

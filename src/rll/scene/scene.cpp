@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <numeric>
 
 #include "rll/core/error.h"
@@ -282,8 +283,33 @@ void Scene::finalize() {
     lights.push_back(make_triangle_light(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2),
                                          m.emission, m.two_sided_emission, t));
   }
+  // Before the lights: a mesh scaled to nothing has lost its emitters too, and is the cause.
+  size_t surfaces = 0, visible = 0;
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (is_sky_triangle(t)) continue;
+    ++surfaces;
+    if (mesh.area(uint32_t(t)) > 0) ++visible;
+  }
+  if (surfaces > 0 && visible == 0)
+    fail("{}: all {} triangles have zero area (is the geometry scaled to nothing?)", source,
+         surfaces);
   if (lights.empty())
     fail("{}: the scene has no lights (no emissive material, light source or sky)", source);
+  // A light of zero intensity or irradiance renders as black as no light at all, and is refused
+  // the same way as a zero emission (which makes no light above). A scene whose every light is
+  // enclosed by geometry renders black too, but telling that needs the visibility this check
+  // cannot afford; it is not detected.
+  if (std::none_of(lights.begin(), lights.end(),
+                   [](const Light& l) { return max_component(l.radiance) > 0; }))
+    fail("{}: the scene has no lights: its {} light {} nothing (zero intensity or irradiance)",
+         source, lights.size(), lights.size() == 1 ? "source emits" : "sources emit");
+  // Without geometry or a sky, point and directional lights have nothing to light; a warning,
+  // as a scene made in code may hold lights alone on purpose.
+  if (surfaces == 0 && !sky) {
+    std::string w = fmt::format("{}: the scene has no geometry and no sky: it renders black", source);
+    if (std::find(warnings.begin(), warnings.end(), w) == warnings.end())  // finalized twice
+      warnings.push_back(std::move(w));
+  }
 
   if (!has_camera) {
     Vec3 c = bounds.center();

@@ -19,6 +19,46 @@ std::string read_text_file(const std::filesystem::path& path) {
   return std::move(s).str();
 }
 
+std::string printable(std::string_view bytes, size_t max_bytes) {
+  const std::string_view shown = bytes.substr(0, max_bytes);
+  std::string out;
+  out.reserve(shown.size() + 3);
+  for (char ch : shown) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '\\')
+      out += "\\\\";
+    else if (c >= 0x20 && c < 0x7f)
+      out += ch;
+    else
+      out += fmt::format("\\x{:02x}", c);
+  }
+  if (shown.size() < bytes.size()) out += "...";
+  return out;
+}
+
+std::string without_control_bytes(std::string_view message) {
+  std::string out;
+  out.reserve(message.size());
+  for (char ch : message) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c == 0x7f)
+      out += fmt::format("\\x{:02x}", c);
+    else
+      out += ch;
+  }
+  return out;
+}
+
+std::string unreadable_reason(const std::filesystem::path& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (std::filesystem::is_regular_file(status)) return "";
+  if (std::filesystem::is_directory(status)) return "is a folder, not a file";
+  // A device or a pipe could be read forever.
+  if (std::filesystem::exists(status)) return "is not a regular file";
+  return "not found";
+}
+
 bool TextLines::next(std::string_view& line) {
   if (m_pos >= m_text.size()) return false;
   // memchr for '\n' is fast; a '\r' (CRLF, or a lone CR ending a line) is then looked for

@@ -1,5 +1,5 @@
 // Line and number scanning for the text formats rll reads (OBJ, MTL): line numbers for error
-// messages and strict, correctly rounded number parsing.
+// messages, strict, correctly rounded number parsing, and file bytes made safe to print.
 #pragma once
 
 #include <filesystem>
@@ -10,6 +10,19 @@ namespace rll {
 
 // Reads a whole file; throws rll::Error naming it when it cannot be read.
 std::string read_text_file(const std::filesystem::path& path);
+
+// Bytes from a file as a message may show them: printable ASCII kept, every other byte
+// (control, escape, non-ASCII) written as \xNN and a backslash as \\, and at most `max_bytes`
+// of the input ("..." marks a cut), so that an error neither replays a file nor drives the
+// terminal.
+std::string printable(std::string_view bytes, size_t max_bytes = 48);
+// A whole message with only its control bytes (C0, DEL) written as \xNN: text that is already
+// quoted with printable() stays as it is, and so do UTF-8 file names.
+std::string without_control_bytes(std::string_view message);
+
+// Why a referenced file cannot be read, for "'NAME' " + this: "is a folder, not a file", "is not
+// a regular file" (a device or pipe), "not found", or "" when it is a regular file.
+std::string unreadable_reason(const std::filesystem::path& path);
 
 // The lines of a text as tinyobjloader splits them: "\n", "\r\n" and a lone "\r" end a line.
 class TextLines {
