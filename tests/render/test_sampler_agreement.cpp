@@ -32,25 +32,6 @@ void expect_samplers_agree(const Scene& scene, IntegratorType type, int spp, con
   }
 }
 
-// Per-pixel difference estimates over nx x ny image regions, so that a bias confined to one part
-// of the image (one box of a room, where a learnt cut went wrong) cannot hide in the mean.
-std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx, int ny) {
-  std::vector<Estimate> out;
-  for (int ry = 0; ry < ny; ++ry)
-    for (int rx = 0; rx < nx; ++rx) {
-      const int x0 = rx * a.width() / nx, x1 = (rx + 1) * a.width() / nx;
-      const int y0 = ry * a.height() / ny, y1 = (ry + 1) * a.height() / ny;
-      Image ra(x1 - x0, y1 - y0), rb(x1 - x0, y1 - y0);
-      for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x) {
-          ra.at(x - x0, y - y0) = a.at(x, y);
-          rb.at(x - x0, y - y0) = b.at(x, y);
-        }
-      out.push_back(difference_estimate(ra, rb));
-    }
-  return out;
-}
-
 // `sampler` renders the image `tree` renders: over the whole image and in each of 4 x 4 regions
 // (z = 4.5 each: 17 bounds falsely fail with probability about 1e-4 together).
 void expect_matches_tree_by_region(const Scene& scene, IntegratorType type, int spp, const std::string& sampler) {

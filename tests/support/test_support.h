@@ -96,5 +96,8 @@ bool agree(const Estimate& a, const Estimate& b, double z = 4.0, double abs_tol 
 // Per-pixel difference test between two independent renders of the same scene: the mean of
 // (a - b) over pixels, with its standard error, must be consistent with zero.
 Estimate difference_estimate(const Image& a, const Image& b);
+// difference_estimate over each of nx x ny image regions (row by row), so that a bias confined to
+// one part of the image (one box of a room, where a learnt cut went wrong) cannot hide in the mean.
+std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx, int ny);
 
 }  // namespace rll::test

@@ -6,18 +6,11 @@
 #include "rll/core/rng.h"
 #include "rll/learn/cuts.h"
 #include "rll/scene/builtin.h"
+#include "support/test_support.h"
 
 using namespace rll;
 
 namespace {
-
-Scene many_lights() {
-  Scene s = make_builtin_scene("many-lights-open");
-  s.width = 16;
-  s.height = 12;
-  s.finalize();
-  return s;
-}
 
 void expect_cell_invariants(const LightTree& tree, const CutStore& store, uint32_t cell, int max_size) {
   ASSERT_TRUE(store.active(cell));
@@ -38,7 +31,7 @@ void expect_cell_invariants(const LightTree& tree, const CutStore& store, uint32
 }  // namespace
 
 TEST(InitialCut, PartitionsAllLightsWithMNodes) {
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   const LightTree& tree = *s.light_tree;
   for (int m : {1, 2, 7, 64, 128, 1000}) {
     auto cut = initial_cut(tree, m);
@@ -48,7 +41,7 @@ TEST(InitialCut, PartitionsAllLightsWithMNodes) {
 }
 
 TEST(SplitCollapse, InvariantsAfterManyRandomPasses) {
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   const LightTree& tree = *s.light_tree;
   CutSettings cs;
   cs.cut_size = 24;  // small, so that collapses happen constantly
@@ -82,7 +75,7 @@ TEST(SplitCollapse, InvariantsAfterManyRandomPasses) {
 }
 
 TEST(SplitCollapse, SplitsTheLargestAndCollapsesTheSmallest) {
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   const LightTree& tree = *s.light_tree;
   Cut cut;
   cut.nodes = initial_cut(tree, 8);
@@ -127,7 +120,7 @@ TEST(SplitCollapse, SplitsTheLargestAndCollapsesTheSmallest) {
 // scale per step, so a cell lit only by lights 1e-8 as bright learnt nothing (every reward
 // rounded to zero), and a cluster's int64 sum wrapped after ~2000 saturated rewards in a pass.
 TEST(CutStore, DimRewardsAreLearntBesideAVeryBrightLight) {
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   const LightTree& tree = *s.light_tree;
   CutSettings cs;
   cs.splits = 0;
@@ -154,7 +147,7 @@ TEST(CutStore, DimRewardsAreLearntBesideAVeryBrightLight) {
 }
 
 TEST(CutStore, SaturatedRewardsNeverWrapAround) {
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   const LightTree& tree = *s.light_tree;
   CutSettings cs;
   cs.splits = 0;
@@ -213,7 +206,7 @@ std::vector<double> shares_after(LearnTarget target, const LightTree& tree, std:
 }  // namespace
 
 TEST(CutStore, HalfHiddenClusterGetsMoreUnderMomentAndHiddenFallsToTheFloor) {
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   const LightTree& tree = *s.light_tree;
   std::vector<float> cdf_moment, cdf_mean;
   std::vector<double> moment = shares_after(LearnTarget::Moment, tree, &cdf_moment);

@@ -12,18 +12,11 @@
 #include "rll/learn/cuts.h"
 #include "rll/lights/ltc_sampler.h"
 #include "rll/scene/builtin.h"
+#include "support/test_support.h"
 
 using namespace rll;
 
 namespace {
-
-Scene many_lights() {
-  Scene s = make_builtin_scene("many-lights-open");
-  s.width = 16;
-  s.height = 12;
-  s.finalize();
-  return s;
-}
 
 LtcSettings small_settings() {
   LtcSettings st;
@@ -96,7 +89,7 @@ TEST(LtcClusters, FewerWhenPointsCannotSplit) {
 }
 
 TEST(LtcCut, GlobalCutByPowerPartitionsLights) {
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   const LightTree& tree = *s.light_tree;
   for (int m : {1, 2, 8, 64}) {
     auto cut = power_cut(tree, m);
@@ -106,7 +99,7 @@ TEST(LtcCut, GlobalCutByPowerPartitionsLights) {
 }
 
 TEST(LtcSampler, DirectionBinsCoverTheSphere) {
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   LtcLightSampler ltc(s, small_settings());
   std::vector<int> hits(64, 0);
   Pcg32 rng(3);
@@ -121,7 +114,7 @@ TEST(LtcSampler, DirectionBinsCoverTheSphere) {
 }
 
 TEST(LtcSampler, LearningMovesProbabilityOntoTheLitLights) {
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   const LightTree& tree = *s.light_tree;
   ASSERT_GT(tree.light_count(), 64u);
   LtcLightSampler ltc(s, small_settings());
@@ -165,7 +158,7 @@ TEST(LtcSampler, LearningMovesProbabilityOntoTheLitLights) {
 TEST(LtcSampler, LearntStateIndependentOfRewardOrder) {
   // Two samplers get the same rewards, one in reverse order (as threads might deliver them):
   // every pmf afterwards is identical to the bit.
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   LtcLightSampler a(s, small_settings()), b(s, small_settings());
   LightContext ctx = floor_context(s), cb = ctx;
   a.prepare(ctx, 0.5f);
@@ -190,7 +183,7 @@ TEST(LtcSampler, LearntStateIndependentOfRewardOrder) {
 }
 
 TEST(LtcSampler, BadParametersAreErrors) {
-  Scene s = many_lights();
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
   for (const char* bad : {"ltc.epsilon=0", "ltc.initial_cut=70", "ltc.bins=0", "ltc.capacity=0", "ltc.clusters=0"}) {
     Params p = Params::parse({bad});
     EXPECT_THROW(ltc_settings_from(p), Error) << bad;

@@ -45,6 +45,12 @@ long Params::get_int(const std::string& key, long fallback) const {
   return out;
 }
 
+long Params::get_int_in(const std::string& key, long fallback, long lo, long hi) const {
+  const long v = get_int(key, fallback);
+  if (v < lo || v > hi) fail("--set {}={}: must be in [{}, {}]", key, v, lo, hi);
+  return v;
+}
+
 bool Params::get_bool(const std::string& key, bool fallback) const {
   const std::string* v = find(key);
   if (!v) return fallback;

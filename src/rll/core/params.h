@@ -21,6 +21,8 @@ class Params {
   double get_double(const std::string& key, double fallback) const;
   float get_float(const std::string& key, float fallback) const { return float(get_double(key, fallback)); }
   long get_int(const std::string& key, long fallback) const;
+  // get_int, and an error naming the key and the range outside [lo, hi].
+  long get_int_in(const std::string& key, long fallback, long lo, long hi) const;
   bool get_bool(const std::string& key, bool fallback) const;
   std::string get_string(const std::string& key, const std::string& fallback) const;
   // One of `choices`; an error listing them otherwise.

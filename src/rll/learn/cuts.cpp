@@ -5,6 +5,7 @@
 #include <queue>
 
 #include "rll/core/error.h"
+#include "rll/scene/scene.h"
 
 namespace rll {
 
@@ -42,16 +43,16 @@ void mix_prior(size_t K, double power_share, const Power& power, const Weight& w
 }
 }  // namespace
 
-std::vector<uint32_t> initial_cut(const LightTree& tree, int cut_size) {
-  // Max-heap by light count; ties by node id for determinism.
+std::vector<uint32_t> refine_cut(const LightTree& tree, int size, double (*priority)(const LightTree&, uint32_t)) {
+  // Max-heap by priority; ties by node id for determinism.
   auto cmp = [&](uint32_t a, uint32_t b) {
-    uint32_t ca = tree.node(a).light_count(), cb = tree.node(b).light_count();
-    return ca != cb ? ca < cb : a > b;
+    const double pa = priority(tree, a), pb = priority(tree, b);
+    return pa != pb ? pa < pb : a > b;
   };
   std::priority_queue<uint32_t, std::vector<uint32_t>, decltype(cmp)> heap(cmp);
   std::vector<uint32_t> done;
   heap.push(LightTree::kRoot);
-  while (!heap.empty() && int(heap.size() + done.size()) < cut_size) {
+  while (!heap.empty() && int(heap.size() + done.size()) < size) {
     uint32_t n = heap.top();
     heap.pop();
     if (tree.node(n).is_leaf()) {
@@ -61,12 +62,26 @@ std::vector<uint32_t> initial_cut(const LightTree& tree, int cut_size) {
     heap.push(tree.node(n).child);
     heap.push(tree.node(n).child + 1);
   }
-  while (!heap.empty()) {
-    done.push_back(heap.top());
-    heap.pop();
-  }
+  for (; !heap.empty(); heap.pop()) done.push_back(heap.top());
   std::sort(done.begin(), done.end(), [&](uint32_t a, uint32_t b) { return tree.node(a).begin < tree.node(b).begin; });
   return done;
+}
+
+std::vector<uint32_t> initial_cut(const LightTree& tree, int cut_size) {
+  return refine_cut(tree, cut_size, [](const LightTree& t, uint32_t n) { return double(t.node(n).light_count()); });
+}
+
+double reward_scale(const Scene& scene) {
+  double s = 0;
+  for (const auto& l : scene.lights) {
+    double lum = luminance(l.radiance);
+    switch (l.type) {
+      case LightType::Triangle: s = std::max(s, kPi * lum * (l.two_sided ? 2 : 1)); break;
+      case LightType::Point: s = std::max(s, 4 * kPi * lum / double(scene.radius * scene.radius)); break;
+      case LightType::Directional: s = std::max(s, kPi * lum); break;
+    }
+  }
+  return s > 0 ? s : 1.0;
 }
 
 bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes) {

@@ -66,9 +66,17 @@ struct Cut {
   std::vector<float> weight;    // prior weight of each cluster (importance or power)
 };
 
-// The shared initial cut: breadth-first refinement of the tree, always splitting the node with
-// the most lights, until `size` nodes (or every node is a leaf).
+// Refinement of the tree from the root, always splitting the node with the largest
+// `priority(node)` (ties: the lower node id), until `size` nodes or only leaves; sorted by light
+// range.
+std::vector<uint32_t> refine_cut(const LightTree& tree, int size, double (*priority)(const LightTree&, uint32_t));
+// The shared initial cut: refine_cut by light count.
 std::vector<uint32_t> initial_cut(const LightTree& tree, int size);
+
+struct Scene;
+// The unit of the learning samplers' exact reward sums: the brightest light's largest irradiance,
+// so that every scene gets the same relative range of ExactSum (2^-40 to 2^36 of it).
+double reward_scale(const Scene& scene);
 
 // True if the nodes partition [0, light_count) into contiguous ranges in order.
 bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes);

@@ -16,28 +16,15 @@ namespace rll {
 
 LtcSettings ltc_settings_from(const Params& p) {
   LtcSettings s;
-  long clusters = p.get_int("ltc.clusters", s.clusters);
-  if (clusters < 1 || clusters > (1l << 20)) fail("--set ltc.clusters={}: must be in [1, 1048576]", clusters);
-  s.clusters = uint32_t(clusters);
-  long bins = p.get_int("ltc.bins", s.bins);
-  if (bins < 1 || bins > 32) fail("--set ltc.bins={}: must be in [1, 32]", bins);
-  s.bins = uint32_t(bins);
-  long capacity = p.get_int("ltc.capacity", s.capacity);
-  if (capacity < 1 || capacity > (1l << 24)) fail("--set ltc.capacity={}: must be in [1, 16777216]", capacity);
-  s.capacity = uint32_t(capacity);
-  long max_cut = p.get_int("ltc.max_cut", s.max_cut);
-  if (max_cut < 1 || max_cut > 1024) fail("--set ltc.max_cut={}: must be in [1, 1024]", max_cut);
-  s.max_cut = int(max_cut);
-  long initial = p.get_int("ltc.initial_cut", s.initial_cut);
-  if (initial < 1 || initial > s.max_cut)
-    fail("--set ltc.initial_cut={}: must be in [1, ltc.max_cut = {}]", initial, s.max_cut);
-  s.initial_cut = int(initial);
+  s.clusters = uint32_t(p.get_int_in("ltc.clusters", s.clusters, 1, 1l << 20));
+  s.bins = uint32_t(p.get_int_in("ltc.bins", s.bins, 1, 32));
+  s.capacity = uint32_t(p.get_int_in("ltc.capacity", s.capacity, 1, 1l << 24));
+  s.max_cut = int(p.get_int_in("ltc.max_cut", s.max_cut, 1, 1024));
+  s.initial_cut = int(p.get_int_in("ltc.initial_cut", s.initial_cut, 1, s.max_cut));
   s.epsilon = p.get_float("ltc.epsilon", s.epsilon);
   if (!(s.epsilon > 0 && s.epsilon <= 1))
     fail("--set ltc.epsilon={}: must be in (0, 1] (it keeps every light that can contribute sampleable)", s.epsilon);
-  long no_change = p.get_int("ltc.no_change", s.no_change);
-  if (no_change < 1 || no_change > (1l << 30)) fail("--set ltc.no_change={}: must be in [1, 2^30]", no_change);
-  s.no_change = uint32_t(no_change);
+  s.no_change = uint32_t(p.get_int_in("ltc.no_change", s.no_change, 1, 1l << 30));
   return s;
 }
 
@@ -140,46 +127,12 @@ SpatialClusters SpatialClusters::build(std::vector<Vec3> pts, uint32_t count) {
 // --- The initial cut ----------------------------------------------------------------------------
 
 std::vector<uint32_t> power_cut(const LightTree& tree, int size) {
-  auto cmp = [&](uint32_t a, uint32_t b) {
-    float pa = tree.node(a).bounds.power, pb = tree.node(b).bounds.power;
-    return pa != pb ? pa < pb : a > b;
-  };
-  std::priority_queue<uint32_t, std::vector<uint32_t>, decltype(cmp)> heap(cmp);
-  std::vector<uint32_t> done;
-  heap.push(LightTree::kRoot);
-  while (!heap.empty() && int(heap.size() + done.size()) < size) {
-    uint32_t n = heap.top();
-    heap.pop();
-    if (tree.node(n).is_leaf()) {
-      done.push_back(n);
-      continue;
-    }
-    heap.push(tree.node(n).child);
-    heap.push(tree.node(n).child + 1);
-  }
-  for (; !heap.empty(); heap.pop()) done.push_back(heap.top());
-  std::sort(done.begin(), done.end(), [&](uint32_t a, uint32_t b) { return tree.node(a).begin < tree.node(b).begin; });
-  return done;
+  return refine_cut(tree, size, [](const LightTree& t, uint32_t n) { return double(t.node(n).bounds.power); });
 }
 
 // --- The sampler --------------------------------------------------------------------------------
 
 namespace {
-// The unit of a new entry's accumulators: the brightest light's largest irradiance (as rll's
-// cells use), so ExactSum's 2^-40..2^36 range covers the rewards of any scene.
-double reward_scale(const Scene& scene) {
-  double s = 0;
-  for (const auto& l : scene.lights) {
-    double lum = luminance(l.radiance);
-    switch (l.type) {
-      case LightType::Triangle: s = std::max(s, kPi * lum * (l.two_sided ? 2 : 1)); break;
-      case LightType::Point: s = std::max(s, 4 * kPi * lum / double(scene.radius * scene.radius)); break;
-      case LightType::Directional: s = std::max(s, kPi * lum); break;
-    }
-  }
-  return s > 0 ? s : 1.0;
-}
-
 constexpr double kMaxRootOfSquare = 0x1p18;  // r^2 saturates where ExactSum does
 
 // The learning rate of the t-th visit of an entry (t >= 1).

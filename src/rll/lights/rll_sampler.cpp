@@ -37,15 +37,11 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   s.cut.split = ClusterWeight(choice("split_by", int(s.cut.split), {"importance", "power", "uniform"}));
   s.cut.q_init = p.get_float(key("q_init"), s.cut.q_init);
   s.within = WithinCluster(choice("within", int(s.within), {"uniform", "power", "tree", "hybrid"}));
-  long descend = p.get_int(key("descend_above"), s.descend_above);
-  if (descend < 1 || descend > (1l << 30)) bad("descend_above", "must be in [1, 2^30]");
-  s.descend_above = uint32_t(descend);
+  s.descend_above = uint32_t(p.get_int_in(key("descend_above"), s.descend_above, 1, 1l << 30));
   s.defensive = Defensive(choice("defensive", int(s.defensive), {"cell", "tree"}));
   s.cut.prior_in_cdf = s.defensive == Defensive::Cell;
   s.reward = RewardKind(choice("reward", int(s.reward), {"cluster", "fullpdf", "fermat"}));
-  long capacity = p.get_int(key("capacity"), s.capacity);
-  if (capacity < 1 || capacity > (1l << 24)) bad("capacity", "must be in [1, 16777216]");
-  s.capacity = uint32_t(capacity);
+  s.capacity = uint32_t(p.get_int_in(key("capacity"), s.capacity, 1, 1l << 24));
   s.grid.footprint_scale = p.get_float(key("footprint_scale"), s.grid.footprint_scale);
   s.grid.max_cell = p.get_float(key("max_cell"), s.grid.max_cell);
   s.grid.normal_bins = int(p.get_int(key("normal_bins"), s.grid.normal_bins));
@@ -55,9 +51,7 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   s.cut.trust = p.get_float(key("trust"), s.cut.trust);
   s.cold_uniform = choice("cold", s.cold_uniform ? 1 : 0, {"tree", "uniform"}) == 1;
   s.sample_jitter = p.get_float(key("sample_jitter"), s.sample_jitter);
-  long reset = p.get_int(key("reset_every"), s.reset_every);
-  if (reset < 0 || reset > (1l << 30)) bad("reset_every", "must be in [0, 2^30]");
-  s.reset_every = uint32_t(reset);
+  s.reset_every = uint32_t(p.get_int_in(key("reset_every"), s.reset_every, 0, 1l << 30));
   if (!(s.cut.trust >= 0)) bad("trust", "must not be negative");
   if (!(s.cut.prior_samples > 0)) bad("prior_samples", "must be positive");
   if (!(s.grid.footprint_scale > 0)) bad("footprint_scale", "must be positive");
@@ -97,21 +91,6 @@ RllSettings fermat_settings() {
 }
 
 namespace {
-// Rewards are luminances of irradiance-like quantities; the unit of the exact accumulators is
-// the brightest light's largest irradiance, so that every scene gets the same relative range.
-double reward_scale(const Scene& scene) {
-  double s = 0;
-  for (const auto& l : scene.lights) {
-    double lum = luminance(l.radiance);
-    switch (l.type) {
-      case LightType::Triangle: s = std::max(s, kPi * lum * (l.two_sided ? 2 : 1)); break;
-      case LightType::Point: s = std::max(s, 4 * kPi * lum / double(scene.radius * scene.radius)); break;
-      case LightType::Directional: s = std::max(s, kPi * lum); break;
-    }
-  }
-  return s > 0 ? s : 1.0;
-}
-
 void check_memory(const RllSettings& s) {
   // The cell table, the cuts and the point sums, allocated up front: refuse a configuration the
   // machine cannot hold rather than grow towards the out-of-memory killer.
