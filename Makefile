@@ -12,7 +12,7 @@ all: build
 deps:
 	@scripts/install-deps.sh
 
-# What only the tests need (chromium, to load the HTML reports).
+# What only the tests need (chromium, to load the HTML reports; Slurm and munge, for the job-array test).
 test-deps:
 	@scripts/install-deps.sh --test
 

@@ -18,6 +18,11 @@ void add_samplers_command(CLI::App& app);
 void add_reference_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_convert_command(CLI::App& app);
+void add_merge_command(CLI::App& app);
+void add_error_command(CLI::App& app);
+
+// ASCII lower case (file extensions).
+std::string lower(std::string s);
 
 // SIGINT, SIGTERM and SIGHUP: before begin_work() nothing would be lost, so the program ends at
 // once; after it, renders stop at the next tile, the command writes what it has and exits with

@@ -17,12 +17,12 @@
 namespace rll::cli {
 namespace fs = std::filesystem;
 
-namespace {
-
 std::string lower(std::string s) {
   for (auto& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
   return s;
 }
+
+namespace {
 
 // The whole of `text` as a decimal integer; false on anything else, an overflow included.
 template <typename T>

@@ -105,6 +105,8 @@ int main(int argc, char** argv) {
   rll::cli::add_reference_command(app);
   rll::cli::add_compare_command(app);
   rll::cli::add_convert_command(app);
+  rll::cli::add_merge_command(app);
+  rll::cli::add_error_command(app);
   if (rll::cli::unknown_command(app, argc, argv)) return int(CLI::ExitCodes::ExtrasError);
   try {
     app.parse(argc, argv);

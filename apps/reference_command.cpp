@@ -23,6 +23,13 @@ struct ReferenceOptions {
   bool quiet = false;
 };
 
+// Beside an .exr output, its variance: ref.exr -> ref.variance.exr (none for .png).
+fs::path variance_path(const fs::path& output) {
+  if (lower(output.extension().string()) != ".exr") return {};
+  fs::path p = output;
+  return p.replace_extension(".variance.exr");
+}
+
 void run(const ReferenceOptions& o) {
   install_interrupt_handler();
   ThreadLimit limit(o.threads);
@@ -31,6 +38,8 @@ void run(const ReferenceOptions& o) {
   if (!o.output.empty()) {
     prepare_output(o.output, "-o", {".exr", ".png"});
     refuse_input(o.output, "-o", scene_inputs(o.session.scene));
+    if (const fs::path var = variance_path(o.output); !var.empty())
+      refuse_input(var, "-o", scene_inputs(o.session.scene));
   }
 
   RenderSession session(o.session);
@@ -54,6 +63,11 @@ void run(const ReferenceOptions& o) {
   if (!o.output.empty()) {
     write_image(o.output, ref.image, o.exposure);
     fmt::print(stderr, "wrote {}\n", o.output);
+    if (const fs::path var = variance_path(o.output); !var.empty() && ref.variance.pixel_count() > 0) {
+      write_image(var, ref.variance);
+      fmt::print(stderr, "wrote {} (its per-pixel variance: rll error --reference-variance)\n",
+                 var.string());
+    }
   }
 }
 
@@ -91,7 +105,8 @@ void add_reference_command(CLI::App& app) {
                   "Reference cache folder (default: $RLL_CACHE_DIR, else out/cache)");
   cmd->add_flag("--force", o->request.force, "Render even when the cache holds a reference");
   cmd->add_option("-o,--output", o->output,
-                  "Also write the reference here, .exr (linear) or .png (sRGB), any case");
+                  "Also write the reference here, .exr (linear) or .png (sRGB), any case; beside an "
+                  ".exr, NAME.variance.exr holds its per-pixel variance (from its two halves)");
   cmd->add_option("--exposure", o->exposure, "Exposure in stops for a .png -o")
       ->capture_default_str()
       ->check(number_in(-kMaxExposure, kMaxExposure));

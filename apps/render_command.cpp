@@ -11,8 +11,10 @@
 #include "rll/core/params.h"
 #include "rll/core/sysinfo.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/lights/sampler_state.h"
 #include "rll/render/progress.h"
 #include "rll/render/session.h"
+#include "rll/render/share.h"
 
 namespace rll::cli {
 namespace fs = std::filesystem;
@@ -33,7 +35,32 @@ struct RenderOptions {
   std::string stats;
   float exposure = 0;
   bool quiet = false;
+  std::string task;        // --task I/N, empty: the whole render
+  bool spp_given = false;  // --spp was on the command line
+  std::string state;       // --rll-state FILE
+  std::string state_mode = "update";
 };
+
+// What every share of one render has in common (ShareInfo::settings).
+nlohmann::json share_settings(const RenderOptions& o, const RenderSession& session, int frame) {
+  const Scene& scene = session.scene();
+  const IntegratorSettings& is = session.integrator();
+  std::vector<std::string> set = o.session.set;
+  std::sort(set.begin(), set.end());
+  return {{"scene_fingerprint", fmt::format("{:016x}", scene.fingerprint())},
+          {"resolution", fmt::format("{}x{}", scene.width, scene.height)},
+          {"integrator", integrator_name(is.type)},
+          {"max_depth", is.max_depth},
+          {"strategy", strategy_name(is.strategy)},
+          {"sampler", o.sampler},
+          {"set", set},
+          {"points", point_set_name(session.points())},
+          {"seed", std::to_string(o.seed)},
+          {"frame", frame},
+          {"pass_spp", o.pass_spp},
+          {"max_pass_spp", o.max_pass_spp},
+          {"rll_state", o.state.empty() ? "none" : o.state_mode}};
+}
 
 std::string default_output(const std::string& scene) {
   std::string stem =
@@ -55,25 +82,61 @@ void run(const RenderOptions& o) {
   // checked as they were parsed.
   parse_resolution(o.session.resolution);
   Params::parse(o.session.set);
+  const RenderTask task = o.task.empty() ? RenderTask{} : parse_task(o.task, "--task");
+  if (!o.task.empty()) {
+    if (!o.spp_given)
+      fail("--task {}: give the samples per pixel of each share with --spp (the shares of a render "
+           "must all hold the same number)",
+           o.task);
+    if (o.time > 0)
+      fail("--task {}: a share renders a fixed range of samples; --time cannot be used with it",
+           o.task);
+    if ((long long)o.spp * task.count > kMaxSpp)
+      fail("--task {} with --spp {}: the whole render would have more than {} spp", o.task, o.spp,
+           kMaxSpp);
+  }
   fs::path output =
       o.output.empty() ? fs::path(default_output(o.session.scene)) : fs::path(o.output);
+  if (!o.task.empty() && lower(output.extension().string()) != ".exr")
+    fail("--task {}: the output must be an .exr, which keeps what a merge needs (got -o {})", o.task,
+         output.string());
   prepare_output(output, "-o", {".exr", ".png"});
+  const bool load_state = !o.state.empty() && o.state_mode != "save";
+  const bool save_state = !o.state.empty() && o.state_mode != "load";
+  if (!o.state.empty()) {
+    std::error_code ec;
+    if (o.state_mode == "load" && !fs::exists(o.state, ec))
+      fail("--rll-state {}: not found (--rll-state-mode load reads a state and never writes one)",
+           o.state);
+    if (save_state) prepare_output(o.state, "--rll-state", {lower(fs::path(o.state).extension().string())});
+    if (fs::path(o.state) == output || (!o.stats.empty() && fs::path(o.state) == fs::path(o.stats)))
+      fail("--rll-state {}: the same file as another output", o.state);
+  }
   if (!o.stats.empty()) prepare_output(o.stats, "--stats", {".json"});
   const std::vector<fs::path> inputs = scene_inputs(o.session.scene);
   for (int f = 0; f < o.frames && !inputs.empty(); ++f)
     refuse_input(frame_path(output, f, o.frames), "-o", inputs);
   if (!o.stats.empty()) refuse_input(o.stats, "--stats", inputs);
+  if (!o.state.empty() && !inputs.empty()) refuse_input(o.state, "--rll-state", inputs);
 
   RenderSession session(o.session);
   Scene& scene = session.scene();
   const IntegratorSettings& is = session.integrator();
   auto sampler = session.make_sampler(o.sampler);
   session.check_params_used();
+  if (!o.state.empty()) check_sampler_has_state(*sampler, "--rll-state");
+  bool state_loaded = false;
+  if (load_state && fs::exists(o.state)) {
+    load_sampler_state(o.state, *sampler, scene);
+    state_loaded = true;
+    if (!o.quiet) fmt::print(stderr, "rll: {} starts from the state learnt in {}\n", sampler->name(), o.state);
+  }
 
   RenderSettings rs;
   rs.spp = o.spp;
   rs.time_limit = o.time;
   rs.seed = o.seed;
+  rs.first_sample = uint64_t(task.index) * uint64_t(o.spp);
   rs.pass_spp = o.pass_spp;
   rs.max_pass_spp = o.max_pass_spp;
   const int frames = o.frames;
@@ -88,7 +151,18 @@ void run(const RenderOptions& o) {
         frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
     RenderProgress p = session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag());
     fs::path out = frame_path(output, f, frames);
-    write_image(out, film.resolve(), o.exposure);
+    if (lower(out.extension().string()) == ".exr") {
+      ShareInfo share;
+      share.settings = share_settings(o, session, f);
+      share.tasks = task.count;
+      share.task_spp = o.task.empty() ? p.spp_done : o.spp;
+      share.held = {task.index};
+      share.scene = o.session.scene;
+      share.commit = build_commit();
+      write_exr(out, share_file(film, share));
+    } else {
+      write_image(out, film.resolve(), o.exposure);
+    }
     if (p.cancelled) fmt::print(stderr, "rll: interrupted after {} spp; ", p.spp_done);
     fmt::print(stderr, "wrote {} ({} spp, {})\n", out.string(), p.spp_done,
                format_duration(p.seconds));
@@ -102,6 +176,11 @@ void run(const RenderOptions& o) {
     total.spp_done = p.spp_done;
     total.cancelled = total.cancelled || p.cancelled;
     total.nonfinite += p.nonfinite;
+  }
+
+  if (save_state) {
+    save_sampler_state(o.state, *sampler, scene);
+    if (!o.quiet) fmt::print(stderr, "rll: saved {}'s learnt state to {}\n", sampler->name(), o.state);
   }
 
   if (!o.stats.empty()) {
@@ -126,6 +205,8 @@ void run(const RenderOptions& o) {
     j["triangles"] = scene.mesh.triangle_count();
     j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
     j["seed"] = o.seed;
+    j["task"] = {{"index", task.index}, {"count", task.count}, {"first_sample", rs.first_sample}};
+    j["rll_state"] = {{"file", o.state}, {"mode", o.state_mode}, {"loaded", state_loaded}};
     j["points"] = point_set_name(session.points());
     j["interrupted"] = total.cancelled;
     j["nonfinite_samples"] = total.nonfinite;
@@ -145,7 +226,8 @@ void add_render_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--spp", o->spp, "Samples per pixel (an upper limit when --time is given)")
       ->capture_default_str()
-      ->check(integer_in(1, kMaxSpp));
+      ->check(integer_in(1, kMaxSpp))
+      ->each([o](const std::string&) { o->spp_given = true; });
   cmd->add_option("--time", o->time,
                   "Time budget in seconds (positive; leave it out for no limit); stops at "
                   "whichever of --spp and --time comes first, but always after at least one "
@@ -179,6 +261,20 @@ void add_render_command(CLI::App& app) {
       ->capture_default_str()
       ->check(number_in(-kMaxExposure, kMaxExposure));
   cmd->add_flag("--quiet", o->quiet, "No progress bar");
+  cmd->add_option("--task", o->task,
+                  "Render share I of N (I counted from 0) of a render split by samples: sample "
+                  "indices [I*S, (I+1)*S) of each pixel, S the --spp of each share, to an .exr "
+                  "that `rll merge` combines with the other shares into the N*S-spp render "
+                  "(docs/cluster.md)");
+  cmd->add_option("--rll-state", o->state,
+                  "Learnt sampler state (rll, fermat): loaded at the start if the file exists, "
+                  "saved at the end (see --rll-state-mode); refused if it was learnt on another "
+                  "scene, resolution, sampler or parameters");
+  cmd->add_option("--rll-state-mode", o->state_mode,
+                  "update: load if it exists, save at the end; load: it must exist, never "
+                  "written (the shares of a farm); save: start cold, write at the end")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"update", "load", "save"}));
   cmd->callback([o] { run(*o); });
 }
 

@@ -139,7 +139,7 @@ TEST(Report, HtmlIsSelfContainedAndHasTheTable) {
   r.facts = {{"budget", "1 s"}};
   r.warnings = {"a warning"};
   r.reference = &ref;
-  r.entries = {{"power", "relMSE 1", 0x1f77b4, &a, &ea}, {"r<l>l", "relMSE 2", 0xd62728, &b, &eb}};
+  r.entries = {{"power", "relMSE 1", 0x1f77b4, &a, &ea, ""}, {"r<l>l", "relMSE 2", 0xd62728, &b, &eb, ""}};
   r.table = {{"sampler", "relMSE"}, {"power", "1"}, {"r<l>l", "2"}};
   r.plot_svg = "<svg id=\"plot\"></svg>";
   const std::string html = report_html(r);

@@ -18,33 +18,33 @@ Scene small_box() {
 
 TEST(ReferenceCache, SceneHashIsStableAndSeesEveryChange) {
   const Scene base = small_box();
-  const uint64_t h = scene_content_hash(base);
-  EXPECT_EQ(scene_content_hash(small_box()), h);
+  const uint64_t h = base.fingerprint();
+  EXPECT_EQ(small_box().fingerprint(), h);
 
   Scene moved = small_box();
   moved.mesh.positions[0].x += 1e-3f;
-  EXPECT_NE(scene_content_hash(moved), h);
+  EXPECT_NE(moved.fingerprint(), h);
 
   Scene brighter = small_box();
   bool changed = false;
   for (auto& m : brighter.materials)
     if (m.is_emissive()) m.emission = m.emission * 2.0f, changed = true;
   ASSERT_TRUE(changed);
-  EXPECT_NE(scene_content_hash(brighter), h);
+  EXPECT_NE(brighter.fingerprint(), h);
 
   Scene rougher = small_box();
   rougher.materials[0].roughness += 0.1f;
-  EXPECT_NE(scene_content_hash(rougher), h);
+  EXPECT_NE(rougher.fingerprint(), h);
 
   Scene camera = small_box();
   camera.camera.fov += 1;
-  EXPECT_NE(scene_content_hash(camera), h);
+  EXPECT_NE(camera.fingerprint(), h);
 
-  EXPECT_NE(scene_content_hash(load_scene("builtin:cornell-box", {8, 6})), h);
+  EXPECT_NE(load_scene("builtin:cornell-box", {8, 6}).fingerprint(), h);
 
   Scene renamed = small_box();
   renamed.materials[0].name += "-renamed";  // names do not change the image
-  EXPECT_EQ(scene_content_hash(renamed), h);
+  EXPECT_EQ(renamed.fingerprint(), h);
 }
 
 TEST(ReferenceCache, SettingsHashSeesIntegratorChanges) {

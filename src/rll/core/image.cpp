@@ -6,6 +6,7 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
 #include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
 #include <unistd.h>
@@ -79,10 +80,18 @@ uint64_t min_hdr_bytes(int64_t w, int64_t h) {
   return line * uint64_t(h);
 }
 
-Image read_exr(const fs::path& path) {
+ExrFile read_exr(const fs::path& path, bool extras) {
   const std::string name = path.string();
   Imf::InputFile file(path.c_str());
   const Imf::Header& header = file.header();
+  ExrFile out;
+  const bool has_counts = extras && header.channels().findChannel("count") != nullptr;
+  if (has_counts && header.channels().findChannel("count")->type != Imf::UINT)
+    fail("cannot read '{}': its channel 'count' is not 32-bit unsigned", name);
+  if (extras)
+    for (auto a = header.begin(); a != header.end(); ++a)
+      if (const auto* v = dynamic_cast<const Imf::StringAttribute*>(&a.attribute()))
+        out.attributes.emplace_back(a.name(), v->value());
   const Imath::Box2i dw = header.dataWindow();
   const int64_t w = int64_t(dw.max.x) - dw.min.x + 1, h = int64_t(dw.max.y) - dw.min.y + 1;
   check_claimed_size(w, h, name);
@@ -102,13 +111,13 @@ Image read_exr(const fs::path& path) {
   // first missing chunk, having allocated little. 256 rows is a whole number of chunks for
   // every compression (1, 16, 32 or 256 rows each).
   constexpr int64_t kBand = 256;
-  Image img;
-  std::vector<Rgb>& px = img.pixels();
+  std::vector<Rgb> px;
   for (int64_t y0 = 0; y0 < h; y0 += kBand) {
     const int64_t rows = std::min(kBand, h - y0);
     const size_t need = size_t((y0 + rows) * w);
     if (need > px.capacity()) px.reserve(std::min(size_t(w * h), std::max(need, 2 * px.capacity())));
     px.resize(need);
+    if (has_counts) out.counts.resize(need);
     // OpenEXR addresses pixel (x, y) at base + x * xs + y * ys in data-window coordinates.
     const ptrdiff_t origin = ptrdiff_t(((dw.min.y + y0) * w + dw.min.x) * int64_t(sizeof(Rgb)));
     char* base = reinterpret_cast<char*>(px.data() + y0 * w) - origin;
@@ -117,13 +126,93 @@ Image read_exr(const fs::path& path) {
     fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys, 1, 1, 0.0));
     fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys, 1, 1, 0.0));
     fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys, 1, 1, 0.0));
+    if (has_counts) {
+      const ptrdiff_t corigin = ptrdiff_t(((dw.min.y + y0) * w + dw.min.x) * int64_t(sizeof(uint32_t)));
+      char* cbase = reinterpret_cast<char*>(out.counts.data() + y0 * w) - corigin;
+      fb.insert("count", Imf::Slice(Imf::UINT, cbase, sizeof(uint32_t), sizeof(uint32_t) * size_t(w)));
+    }
     file.setFrameBuffer(fb);
     file.readPixels(int(dw.min.y + y0), int(dw.min.y + y0 + rows - 1));
   }
-  return Image(int(w), int(h), std::move(px));
+  out.image = Image(int(w), int(h), std::move(px));
+  return out;
+}
+
+// A folder, a missing file or a device gets a clear message before any reader sees it.
+void read_image_checks(const fs::path& path) {
+  std::error_code ec;
+  const auto status = fs::status(path, ec);
+  if (fs::is_directory(status)) fail("cannot read '{}': it is a folder, not an image", path.string());
+  if (!fs::exists(status)) fail("image '{}' not found", path.string());
+  if (!fs::is_regular_file(status))
+    fail("cannot read '{}': it is not a regular file (a device or a pipe?)", path.string());
+}
+
+// Writes the EXR to `tmp` (removed on failure; the caller commits it to `path`).
+void write_exr_to(const fs::path& tmp, const fs::path& path, const Image& image,
+                  const std::vector<std::pair<std::string, std::string>>& attributes,
+                  const std::vector<uint32_t>* counts) {
+  try {
+    Imf::Header header(image.width(), image.height());
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+    if (counts) header.channels().insert("count", Imf::Channel(Imf::UINT));
+    for (const auto& [name, value] : attributes) header.insert(name, Imf::StringAttribute(value));
+    Imf::OutputFile file(tmp.c_str(), header);
+    Imf::FrameBuffer fb;
+    char* base = (char*)image.pixels().data();
+    size_t xs = sizeof(Rgb), ys = sizeof(Rgb) * image.width();
+    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+    if (counts)
+      fb.insert("count", Imf::Slice(Imf::UINT, (char*)counts->data(), sizeof(uint32_t),
+                                    sizeof(uint32_t) * image.width()));
+    file.setFrameBuffer(fb);
+    file.writePixels(image.height());
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    fail("cannot write '{}': {}", path.string(), e.what());
+  }
+}
+
+// Refuses what no reader can open: an empty image, a missing folder.
+void check_writable_image(const fs::path& path, const Image& image) {
+  if (image.width() <= 0 || image.height() <= 0) fail("cannot write '{}': empty image", path.string());
+  if (path.has_parent_path() && !fs::exists(path.parent_path()))
+    fail("cannot write '{}': folder '{}' does not exist", path.string(), path.parent_path().string());
 }
 
 }  // namespace
+
+const std::string* ExrFile::attribute(const std::string& name) const {
+  for (const auto& [n, v] : attributes)
+    if (n == name) return &v;
+  return nullptr;
+}
+
+void write_exr(const fs::path& path, const ExrFile& file) {
+  check_writable_image(path, file.image);
+  if (!file.counts.empty() && file.counts.size() != file.image.pixel_count())
+    fail("cannot write '{}': {} sample counts for {} pixels", path.string(), file.counts.size(),
+         file.image.pixel_count());
+  const fs::path tmp = temp_sibling(path);
+  write_exr_to(tmp, path, file.image, file.attributes, file.counts.empty() ? nullptr : &file.counts);
+  commit(tmp, path);
+}
+
+ExrFile read_exr_file(const fs::path& path) {
+  if (lower_ext(path) != ".exr") fail("'{}' is not an OpenEXR file (.exr)", path.string());
+  read_image_checks(path);
+  try {
+    return read_exr(path, true);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail("cannot read '{}': {}", path.string(), e.what());
+  }
+}
 
 uint8_t to_srgb8(float v, float scale) {
   v *= scale;
@@ -150,30 +239,11 @@ void write_file_atomic(const fs::path& path, const std::string& bytes) {
 }
 
 void write_image(const fs::path& path, const Image& image, float exposure_stops) {
-  if (image.width() <= 0 || image.height() <= 0) fail("cannot write '{}': empty image", path.string());
-  if (path.has_parent_path() && !fs::exists(path.parent_path()))
-    fail("cannot write '{}': folder '{}' does not exist", path.string(), path.parent_path().string());
+  check_writable_image(path, image);
   std::string ext = lower_ext(path);
   fs::path tmp = temp_sibling(path);
   if (ext == ".exr") {
-    try {
-      Imf::Header header(image.width(), image.height());
-      header.compression() = Imf::ZIP_COMPRESSION;
-      for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
-      Imf::OutputFile file(tmp.c_str(), header);
-      Imf::FrameBuffer fb;
-      char* base = (char*)image.pixels().data();
-      size_t xs = sizeof(Rgb), ys = sizeof(Rgb) * image.width();
-      fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
-      fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
-      fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
-      file.setFrameBuffer(fb);
-      file.writePixels(image.height());
-    } catch (const std::exception& e) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      fail("cannot write '{}': {}", path.string(), e.what());
-    }
+    write_exr_to(tmp, path, image, {}, nullptr);
   } else if (ext == ".png") {
     float scale = std::exp2(exposure_stops);
     std::vector<uint8_t> px(image.pixel_count() * 3);
@@ -196,16 +266,12 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
 }
 
 Image read_image(const fs::path& path, bool srgb) {
+  read_image_checks(path);
   std::error_code ec;
-  const auto status = fs::status(path, ec);
-  if (fs::is_directory(status)) fail("cannot read '{}': it is a folder, not an image", path.string());
-  if (!fs::exists(status)) fail("image '{}' not found", path.string());
-  if (!fs::is_regular_file(status))
-    fail("cannot read '{}': it is not a regular file (a device or a pipe?)", path.string());
   std::string ext = lower_ext(path);
   if (ext == ".exr") {
     try {
-      return read_exr(path);
+      return read_exr(path, false).image;
     } catch (const Error&) {
       throw;
     } catch (const std::exception& e) {

@@ -46,6 +46,22 @@ void write_image(const std::filesystem::path& path, const Image& image, float ex
 // from sRGB to linear when `srgb` is true.
 Image read_image(const std::filesystem::path& path, bool srgb = true);
 
+// An OpenEXR file with what rll keeps beside the pixels: string attributes of the header (a
+// render share's metadata) and, optionally, the number of samples behind each pixel (channel
+// "count", 32-bit unsigned).
+struct ExrFile {
+  Image image;
+  std::vector<std::pair<std::string, std::string>> attributes;
+  std::vector<uint32_t> counts;  // empty, or one per pixel
+
+  // The value of attribute `name`, or nullptr.
+  const std::string* attribute(const std::string& name) const;
+};
+// Writes atomically, as write_image does for .exr (32-bit float RGB, ZIP).
+void write_exr(const std::filesystem::path& path, const ExrFile& file);
+// Reads an .exr with its string attributes and its "count" channel (empty if it has none).
+ExrFile read_exr_file(const std::filesystem::path& path);
+
 // Decodes an image file held in memory (PNG, JPEG and the other formats stb_image reads);
 // `name` is for messages.
 Image decode_image(const unsigned char* bytes, size_t size, bool srgb, const std::string& name);

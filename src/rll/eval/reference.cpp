@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rll/core/error.h"
+#include "rll/core/hash.h"
 #include "rll/core/rng.h"
 #include "rll/eval/metrics.h"
 #include "rll/render/session.h"
@@ -20,44 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// A 64-bit streaming hash over 8-byte words (splitmix64 finaliser per word), not cryptographic:
-// it only has to tell scenes apart.
-class Hasher {
- public:
-  void bytes(const void* data, size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    word(n);
-    for (; n >= 8; n -= 8, p += 8) {
-      uint64_t w;
-      std::memcpy(&w, p, 8);
-      word(w);
-    }
-    if (n > 0) {
-      uint64_t w = 0;
-      std::memcpy(&w, p, n);
-      word(w);
-    }
-  }
-  void word(uint64_t w) { m_h = mix64(m_h ^ (w + 0x9e3779b97f4a7c15ull)); }
-  void add(float f) { word(std::bit_cast<uint32_t>(f)); }
-  void add(const Vec3& v) {
-    add(v.x);
-    add(v.y);
-    add(v.z);
-  }
-  void add(int64_t i) { word(uint64_t(i)); }
-  template <typename T>
-  void vector(const std::vector<T>& v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    bytes(v.data(), v.size() * sizeof(T));
-  }
-  uint64_t value() const { return m_h; }
-
- private:
-  uint64_t m_h = 0xcbf29ce484222325ull;
-};
-
-static_assert(sizeof(Vec3) == 12 && sizeof(Vec2) == 8, "hashed as packed floats");
 
 std::string entry_stem(const ReferenceKey& key, int spp, uint64_t seed) {
   return fmt::format("{}-{}spp-seed{}", key.hex(), spp, seed);
@@ -94,61 +57,6 @@ std::optional<ReferenceInfo> info_from_json(const nlohmann::json& j, const fs::p
 
 }  // namespace
 
-uint64_t scene_content_hash(const Scene& s) {
-  Hasher h;
-  h.vector(s.mesh.positions);
-  h.vector(s.mesh.normals);
-  h.vector(s.mesh.uvs);
-  h.vector(s.mesh.triangles);
-  h.vector(s.mesh.material);
-  h.vector(s.mesh.light);
-  h.word(s.materials.size());
-  for (const Material& m : s.materials) {
-    h.word(uint64_t(m.type));
-    h.add(m.albedo);
-    h.add(int64_t(m.albedo_texture));
-    h.add(m.specular);
-    h.add(m.eta);
-    h.add(m.k);
-    h.add(m.ior);
-    h.add(m.roughness);
-    h.add(m.emission);
-    h.word(m.two_sided_emission);
-  }
-  h.word(s.textures.size());
-  for (const Image& t : s.textures) {
-    h.add(int64_t(t.width()));
-    h.add(int64_t(t.height()));
-    h.vector(t.pixels());
-  }
-  h.word(s.lights.size());
-  for (const Light& l : s.lights) {
-    h.word(uint64_t(l.type));
-    h.add(l.p0);
-    h.add(l.p1);
-    h.add(l.p2);
-    h.add(l.n);
-    h.add(l.area);
-    h.add(l.radiance);
-    h.word(l.two_sided);
-    h.word(l.triangle);
-  }
-  h.add(s.camera.position);
-  h.add(s.camera.target);
-  h.add(s.camera.up);
-  h.add(s.camera.fov);
-  h.add(int64_t(s.width));
-  h.add(int64_t(s.height));
-  h.word(s.sky.has_value());
-  if (s.sky) {
-    h.add(int64_t(s.sky->triangles));
-    h.add(s.sky->radiance);
-    h.add(s.sky->up);
-    h.add(s.sky->radius_scale);
-  }
-  return h.value();
-}
-
 uint64_t integrator_settings_hash(const IntegratorSettings& st) {
   Hasher h;
   h.add(int64_t(kReferenceCacheVersion));
@@ -164,7 +72,7 @@ std::string ReferenceKey::hex() const {
 }
 
 ReferenceKey reference_key(const Scene& scene, const IntegratorSettings& settings) {
-  return {scene_content_hash(scene), integrator_settings_hash(settings)};
+  return {scene.fingerprint(), integrator_settings_hash(settings)};
 }
 
 fs::path default_cache_dir() {

@@ -20,15 +20,11 @@ namespace rll {
 // integrator setting with a non-neutral default): every cached reference becomes stale.
 inline constexpr int kReferenceCacheVersion = 1;
 
-// Hash of everything in a finalized scene that the expected image depends on: mesh positions,
-// normals, uvs, triangles, per-triangle materials and lights, materials (not their names),
-// textures, lights, camera, sky and film size.
-uint64_t scene_content_hash(const Scene& scene);
 // Hash of the integrator settings (and kReferenceCacheVersion).
 uint64_t integrator_settings_hash(const IntegratorSettings& settings);
 
 struct ReferenceKey {
-  uint64_t scene = 0;       // scene_content_hash
+  uint64_t scene = 0;       // Scene::fingerprint
   uint64_t settings = 0;    // integrator_settings_hash
   std::string hex() const;  // 32 hex digits, the prefix of the cache entry's file names
   bool operator==(const ReferenceKey&) const = default;

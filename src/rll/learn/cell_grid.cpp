@@ -1,5 +1,7 @@
 #include "rll/learn/cell_grid.h"
 
+#include <algorithm>
+
 #include "rll/core/error.h"
 #include "rll/core/rng.h"
 #include "rll/core/sampling.h"
@@ -199,6 +201,18 @@ void CellTable::remove_and_rebuild(const std::vector<uint32_t>& cells) {
   m_next_free.store(0, std::memory_order_relaxed);
   m_failed.store(0, std::memory_order_relaxed);
   std::atomic_thread_fence(std::memory_order_release);
+}
+
+bool CellTable::restore(const std::vector<uint64_t>& key_of) {
+  if (key_of.size() != m_capacity) return false;
+  std::vector<uint64_t> keys;
+  for (uint64_t k : key_of)
+    if (k != 0) keys.push_back(k);
+  std::sort(keys.begin(), keys.end());
+  if (std::adjacent_find(keys.begin(), keys.end()) != keys.end()) return false;
+  m_key_of = key_of;
+  remove_and_rebuild({});
+  return true;
 }
 
 }  // namespace rll

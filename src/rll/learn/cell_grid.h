@@ -89,6 +89,9 @@ class CellTable {
 
   // Between passes only. Removes the given cells and rebuilds the index and the free list.
   void remove_and_rebuild(const std::vector<uint32_t>& cells);
+  // Between passes only. Replaces every cell's key (0: free) and rebuilds the index; false if
+  // the keys cannot come from a table of this capacity (wrong count, a key twice).
+  bool restore(const std::vector<uint64_t>& key_of);
   bool in_use(uint32_t cell) const { return m_key_of[cell] != 0; }
   uint64_t key_of(uint32_t cell) const { return m_key_of[cell]; }
   uint32_t used() const { return m_used; }

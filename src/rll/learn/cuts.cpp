@@ -359,4 +359,64 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
   return st;
 }
 
+void CutStore::save_cell(uint32_t cell, BinaryWriter& w) const {
+  const size_t base = size_t(cell) * m_m;
+  const uint32_t K = m_size[cell];
+  w.put(K);
+  w.put_array(&m_node[base], K);
+  w.put_array(&m_q[base], K);
+  w.put_array(&m_m2[base], K);
+  w.put_array(&m_n[base], K);
+  w.put_array(&m_weight[base], K);
+  w.put_array(&m_cdf[base], K);
+  w.put(m_learnt[cell]);
+  w.put(m_seen[cell]);
+  w.put(m_eps[cell]);
+  w.put(m_anchor[cell]);
+  w.put(m_inv_unit[cell]);
+}
+
+void CutStore::load_cell(uint32_t cell, BinaryReader& r) {
+  auto damaged = [&](const char* what) {
+    fail("cannot read '{}': the file is damaged (cell {}: {})", r.name(), cell, what);
+  };
+  const size_t base = size_t(cell) * m_m;
+  const uint32_t K = r.get<uint32_t>();
+  if (K > uint32_t(m_m)) damaged("a cut larger than rll.cut_size");
+  clear(cell);
+  r.get_array(&m_node[base], K);
+  r.get_array(&m_q[base], K);
+  r.get_array(&m_m2[base], K);
+  r.get_array(&m_n[base], K);
+  r.get_array(&m_weight[base], K);
+  r.get_array(&m_cdf[base], K);
+  m_learnt[cell] = r.get<uint8_t>();
+  m_seen[cell] = r.get<float>();
+  m_eps[cell] = r.get<float>();
+  m_anchor[cell] = r.get<CellAnchor>();
+  m_inv_unit[cell] = r.get<double>();
+  if (K > 0) {
+    const std::vector<uint32_t> nodes(m_node.begin() + long(base), m_node.begin() + long(base + K));
+    if (!is_valid_cut(m_tree, nodes)) damaged("its cut is not a cut of this scene's light tree");
+    float last = 0;
+    for (size_t k = 0; k < K; ++k) {
+      m_end[base + k] = m_tree.node(nodes[k]).end;
+      const size_t i = base + k;
+      // q < 0 marks a cluster never visited; every other value is finite and non-negative.
+      if (!std::isfinite(m_q[i]) || !(m_m2[i] >= 0) || !std::isfinite(m_m2[i]) || !(m_n[i] >= 0) ||
+          !std::isfinite(m_n[i]) || !(m_weight[i] >= 0) || !std::isfinite(m_weight[i]))
+        damaged("a learnt value is negative or not finite");
+      if (!(m_cdf[i] >= last && m_cdf[i] <= 1)) damaged("its CDF is not increasing in [0, 1]");
+      last = m_cdf[i];
+    }
+    if (last != 1.0f) damaged("its CDF does not end at 1");
+  }
+  const CellAnchor& a = m_anchor[cell];
+  if (!(m_eps[cell] >= 0 && m_eps[cell] <= 1) || !(m_seen[cell] >= 0) || !std::isfinite(m_seen[cell]) ||
+      !(m_inv_unit[cell] > 0) || !std::isfinite(m_inv_unit[cell]) || m_learnt[cell] > 1 ||
+      !std::isfinite(a.p.x + a.p.y + a.p.z + a.n.x + a.n.y + a.n.z))
+    damaged("a cell value is out of range");
+  m_size[cell] = K;
+}
+
 }  // namespace rll

@@ -12,6 +12,7 @@
 #include <memory>
 #include <vector>
 
+#include "rll/core/binary_io.h"
 #include "rll/learn/cell_grid.h"
 #include "rll/lights/light_tree.h"
 
@@ -259,6 +260,12 @@ class CutStore {
   void assign(uint32_t cell, const std::vector<uint32_t>& nodes, const std::vector<float>& q);
 
   size_t bytes() const;
+
+  // A cell's learnt state between passes (cut, values, prior weights, CDF, anchor), for saved
+  // sampler states. load_cell checks what it reads against the tree and throws rll::Error
+  // naming the file if the state could not have been written by save_cell.
+  void save_cell(uint32_t cell, BinaryWriter& w) const;
+  void load_cell(uint32_t cell, BinaryReader& r);
 
  private:
   static constexpr double kMaxRootOfSquare = 0x1p18;  // squares saturate at 2^36 too

@@ -16,6 +16,8 @@ struct Scene;
 class Params;
 class LightTree;
 class Accel;
+class BinaryWriter;
+class BinaryReader;
 
 inline constexpr uint32_t kNoCell = ~0u;
 
@@ -86,6 +88,13 @@ class LightSampler {
   virtual void end_pass() {}
   // Lights moved or changed power (animation): refit whatever depends on them.
   virtual void lights_changed(const Scene& scene) { (void)scene; }
+
+  // Learnt state that travels between renders (--rll-state, sampler_state.h): a sampler that has
+  // one writes it, between passes, and reads it back into a sampler made with the same
+  // parameters for the same scene, throwing rll::Error if what it reads is damaged.
+  virtual bool has_state() const { return false; }
+  virtual void save_state(BinaryWriter& w) const { (void)w; }
+  virtual void load_state(BinaryReader& r) { (void)r; }
 
   // Name, parameters and statistics for --stats and reports.
   virtual nlohmann::json describe() const { return {{"name", name()}}; }

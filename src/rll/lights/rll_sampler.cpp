@@ -6,6 +6,7 @@
 #include <bit>
 #include <cmath>
 
+#include "rll/core/binary_io.h"
 #include "rll/core/error.h"
 #include "rll/core/hash.h"
 #include "rll/core/parallel.h"
@@ -421,6 +422,53 @@ void RllLightSampler::lights_changed(const Scene& scene) {
   parallel_for(m_s.capacity, 256, [&](size_t b, size_t e) {
     for (size_t c = b; c < e; ++c) m_cuts->refresh(uint32_t(c));
   });
+}
+
+void RllLightSampler::save_state(BinaryWriter& w) const {
+  w.put(m_s.capacity);
+  w.put(m_pass);
+  w.put(m_resets);
+  w.put(m_table->used());
+  for (uint32_t c = 0; c < m_s.capacity; ++c) {
+    if (!m_table->in_use(c)) continue;
+    w.put(c);
+    w.put(m_table->key_of(c));
+    w.put(m_last_used[c].load(std::memory_order_relaxed));
+    m_cuts->save_cell(c, w);
+  }
+}
+
+void RllLightSampler::load_state(BinaryReader& r) {
+  auto damaged = [&](const std::string& what) {
+    fail("cannot read '{}': the file is damaged ({})", r.name(), what);
+  };
+  if (r.get<uint32_t>() != m_s.capacity) damaged("its cell table has another capacity");
+  const uint64_t pass = r.get<uint64_t>(), resets = r.get<uint64_t>();
+  const uint32_t used = r.get<uint32_t>();
+  if (used > m_s.capacity) damaged("more cells than the table holds");
+  for (uint32_t c = 0; c < m_s.capacity; ++c) {
+    m_cuts->clear(c);
+    m_last_used[c].store(0, std::memory_order_relaxed);
+  }
+  std::vector<uint64_t> key_of(m_s.capacity, 0);
+  long previous = -1;
+  for (uint32_t i = 0; i < used; ++i) {
+    const uint32_t c = r.get<uint32_t>();
+    if (c >= m_s.capacity || long(c) <= previous) damaged("a cell id out of order");
+    previous = long(c);
+    key_of[c] = r.get<uint64_t>();
+    if (key_of[c] == 0) damaged("a cell without a key");
+    const uint32_t last = r.get<uint32_t>();
+    if (last > pass) damaged("a cell used after the last pass");
+    m_last_used[c].store(last, std::memory_order_relaxed);
+    m_cuts->load_cell(c, r);
+  }
+  if (r.remaining() != 0) damaged("bytes after the last cell");
+  if (!m_table->restore(key_of)) damaged("a cell key twice");
+  for (size_t i = 0; i < size_t(m_s.capacity) * kPointWords; ++i) m_points[i].store(0, std::memory_order_relaxed);
+  m_pass = pass;
+  m_resets = resets;
+  m_keyer.set_pass(m_pass, 0);
 }
 
 nlohmann::json RllLightSampler::describe() const {

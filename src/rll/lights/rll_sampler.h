@@ -79,6 +79,10 @@ class RllLightSampler final : public LightSampler {
   void end_pass() override;
   void lights_changed(const Scene& scene) override;
   nlohmann::json describe() const override;
+  // The cells in use, their keys, last use and cuts, and the pass count; not the statistics.
+  bool has_state() const override { return true; }
+  void save_state(BinaryWriter& w) const override;
+  void load_state(BinaryReader& r) override;
 
   // Stops learning: record() and end_pass() do nothing from now on (the oracle).
   void freeze() { m_frozen = true; }

@@ -24,6 +24,7 @@ class Film {
   }
   uint32_t count(int x, int y) const { return m_count[size_t(y) * m_w + x]; }
   uint32_t min_count() const;
+  const std::vector<uint32_t>& counts() const { return m_count; }
   // Mean of the samples per pixel (black where no sample landed yet).
   Image resolve() const;
   void clear();

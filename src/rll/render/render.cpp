@@ -21,6 +21,10 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
                       const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
   if (settings.spp < 1) fail("--spp must be at least 1 (got {})", settings.spp);
   if (settings.pass_spp < 1) fail("pass size must be at least 1 sample per pixel");
+  if (settings.first_sample + uint64_t(settings.spp) > (uint64_t(1) << 32) &&
+      settings.spp != kUnlimitedSpp)
+    fail("samples {} to {} of a pixel are past the 2^32 the sample points hold", settings.first_sample,
+         settings.first_sample + uint64_t(settings.spp));
   const int max_pass = std::max(settings.pass_spp, settings.max_pass_spp);
   if (film.width() != scene.width || film.height() != scene.height)
     fail("film size does not match the scene");
@@ -54,7 +58,8 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
       for (int y = y0; y < std::min(h, y0 + ts); ++y)
         for (int x = x0; x < std::min(w, x0 + ts); ++x)
           for (int s = first; s < first + count; ++s) {
-            SampleStream stream(frame_seed, uint64_t(y) * w + x, uint64_t(s), settings.points);
+            SampleStream stream(frame_seed, uint64_t(y) * w + x, settings.first_sample + uint64_t(s),
+                                settings.points);
             Vec2 jitter = stream.next2();
             Ray ray = scene.camera.generate_ray(x + jitter.x, y + jitter.y);
             Rgb L = integrator.li(ray, stream, rays);

@@ -20,6 +20,9 @@ struct RenderSettings {
   int spp = 16;           // samples per pixel to reach (upper limit), or kUnlimitedSpp
   double time_limit = 0;  // seconds; 0 = none
   uint64_t seed = 1;
+  // The sample index of the film's first sample: a share of a render split by samples
+  // (--task) renders indices [first_sample, first_sample + spp) of each pixel.
+  uint64_t first_sample = 0;
   // Pass sizes in samples per pixel: pass_spp for the first two passes, then doubling every
   // two passes up to max_pass_spp (learning samplers adapt fast at first, then the end-of-pass
   // work is spread over more samples).

@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "rll/core/error.h"
+#include "rll/core/hash.h"
 #include "rll/lights/light_tree.h"
 #include "rll/scene/interaction.h"
 
@@ -348,6 +349,64 @@ void Scene::refresh_lights_from_mesh() {
     refresh_triangle_light(l);
   }
   if (light_tree) light_tree->refit(lights);
+}
+
+static_assert(sizeof(Vec3) == 12 && sizeof(Vec2) == 8, "hashed as packed floats");
+
+uint64_t Scene::fingerprint() const {
+  const Scene& s = *this;
+  Hasher h;
+  h.vector(s.mesh.positions);
+  h.vector(s.mesh.normals);
+  h.vector(s.mesh.uvs);
+  h.vector(s.mesh.triangles);
+  h.vector(s.mesh.material);
+  h.vector(s.mesh.light);
+  h.word(s.materials.size());
+  for (const Material& m : s.materials) {
+    h.word(uint64_t(m.type));
+    h.add(m.albedo);
+    h.add(int64_t(m.albedo_texture));
+    h.add(m.specular);
+    h.add(m.eta);
+    h.add(m.k);
+    h.add(m.ior);
+    h.add(m.roughness);
+    h.add(m.emission);
+    h.word(m.two_sided_emission);
+  }
+  h.word(s.textures.size());
+  for (const Image& t : s.textures) {
+    h.add(int64_t(t.width()));
+    h.add(int64_t(t.height()));
+    h.vector(t.pixels());
+  }
+  h.word(s.lights.size());
+  for (const Light& l : s.lights) {
+    h.word(uint64_t(l.type));
+    h.add(l.p0);
+    h.add(l.p1);
+    h.add(l.p2);
+    h.add(l.n);
+    h.add(l.area);
+    h.add(l.radiance);
+    h.word(l.two_sided);
+    h.word(l.triangle);
+  }
+  h.add(s.camera.position);
+  h.add(s.camera.target);
+  h.add(s.camera.up);
+  h.add(s.camera.fov);
+  h.add(int64_t(s.width));
+  h.add(int64_t(s.height));
+  h.word(s.sky.has_value());
+  if (s.sky) {
+    h.add(int64_t(s.sky->triangles));
+    h.add(s.sky->radiance);
+    h.add(s.sky->up);
+    h.add(s.sky->radius_scale);
+  }
+  return h.value();
 }
 
 }  // namespace rll

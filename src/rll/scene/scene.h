@@ -89,6 +89,12 @@ struct Scene {
   // builds the light tree (reordering the lights). Throws rll::Error naming `source`.
   void finalize();
 
+  // A hash of everything in the finalized scene that the expected image depends on (mesh
+  // positions, normals, uvs, triangles, per-triangle materials and lights, materials but not
+  // their names, textures, lights, camera, sky, film size), whatever file or path it was read
+  // from: the key of cached references, and what render shares and learnt states are tied to.
+  uint64_t fingerprint() const;
+
   // Light id of a mesh triangle, or -1.
   int32_t light_of_triangle(uint32_t tri) const { return mesh.light[tri]; }
   // Reorders lights: new_lights[i] = lights[order[i]]; triangle->light ids follow.

@@ -1,0 +1,170 @@
+// Learnt sampler states in files (--rll-state): a loaded sampler is the saved one (the same pmf
+// for every light at the same points, the same samples), and a state of another scene, sampler,
+// parameters or version, a truncated or a damaged file is refused with an rll::Error.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "rll/accel/accel.h"
+#include "rll/core/hash.h"
+#include "rll/core/params.h"
+#include "rll/lights/sampler_state.h"
+#include "support/sampler_contexts.h"
+#include "support/test_support.h"
+
+using namespace rll;
+using namespace rll::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string read_bytes(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+void write_bytes(const fs::path& p, const std::string& bytes) {
+  std::ofstream f(p, std::ios::binary);
+  f.write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+struct Trained {
+  Scene scene = small_builtin_scene("cornell-boxes-room", 32, 24);
+  Accel accel{scene.mesh};
+  std::unique_ptr<LightSampler> make(const std::string& name, std::vector<std::string> set = {}) const {
+    return make_light_sampler(name, scene, Params::parse(set), &accel);
+  }
+  // Trains `sampler` for a few passes and saves its state to dir/state.bin.
+  fs::path train_and_save(LightSampler& sampler, const TempDir& dir) const {
+    train_sampler(scene, accel, sampler, 4);
+    const fs::path file = dir / "state.bin";
+    save_sampler_state(file, sampler, scene);
+    return file;
+  }
+};
+
+// The largest |pmf_a - pmf_b| over every light at `contexts`, each prepared by its sampler with
+// the same random number.
+float largest_pmf_difference(const LightSampler& a, const LightSampler& b,
+                             const std::vector<LightContext>& contexts, size_t lights) {
+  float worst = 0;
+  for (size_t i = 0; i < contexts.size(); ++i) {
+    LightContext ca = contexts[i], cb = contexts[i];
+    const float u = float(i % 97) / 97.0f;
+    a.prepare(ca, u);
+    b.prepare(cb, u);
+    for (uint32_t l = 0; l < lights; ++l) worst = std::max(worst, std::abs(a.pmf(ca, l) - b.pmf(cb, l)));
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST(SamplerState, LoadedSamplerHasTheSavedPmfsAndSamples) {
+  for (const std::string name : {"rll", "fermat"}) {
+    Trained t;
+    auto trained = t.make(name);
+    train_sampler(t.scene, t.accel, *trained, 24);
+    TempDir dir;
+    const fs::path file = dir / "state.bin";
+    save_sampler_state(file, *trained, t.scene);
+    auto loaded = t.make(name);
+    load_sampler_state(file, *loaded, t.scene);
+    // Saving the loaded sampler gives the same bytes: nothing was lost or reinterpreted.
+    const fs::path again = dir / "again.bin";
+    save_sampler_state(again, *loaded, t.scene);
+    EXPECT_TRUE(read_bytes(file) == read_bytes(again)) << name;
+    const std::vector<LightContext> contexts = make_contexts(t.scene, t.accel, 300, 7);
+    const size_t lights = t.scene.lights.size();
+    EXPECT_EQ(largest_pmf_difference(*trained, *loaded, contexts, lights), 0.0f) << name;
+    // The test can fail: the trained state is not the fresh one.
+    auto fresh = t.make(name);
+    EXPECT_GT(largest_pmf_difference(*trained, *fresh, contexts, lights), 1e-3f) << name;
+    for (size_t i = 0; i < contexts.size(); ++i) {
+      LightContext ca = contexts[i], cb = contexts[i];
+      trained->prepare(ca, 0.5f);
+      loaded->prepare(cb, 0.5f);
+      for (double u : {0.01, 0.3, 0.77, 0.999}) {
+        const SampledLight sa = trained->sample(ca, u), sb = loaded->sample(cb, u);
+        EXPECT_EQ(sa.light, sb.light);
+        EXPECT_EQ(sa.pmf, sb.pmf);
+      }
+    }
+  }
+}
+
+TEST(SamplerState, RefusesOtherScenesSamplersAndParameters) {
+  Trained t;
+  auto rll = t.make("rll");
+  TempDir dir;
+  const fs::path file = t.train_and_save(*rll, dir);
+
+  const Scene other = small_builtin_scene("cornell-boxes-room", 32, 16);
+  auto on_other = make_light_sampler("rll", other, Params::parse({}), nullptr);
+  expect_mentions(error_of([&] { load_sampler_state(file, *on_other, other); }), {"state.bin", "another scene"});
+  auto fermat = t.make("fermat");
+  expect_mentions(error_of([&] { load_sampler_state(file, *fermat, t.scene); }), {"sampler 'rll'", "'fermat'"});
+  auto epsilon = t.make("rll", {"rll.epsilon=0.3"});
+  expect_mentions(error_of([&] { load_sampler_state(file, *epsilon, t.scene); }), {"epsilon 0.1", "this render: 0.3"});
+  auto tree = t.make("tree");
+  expect_mentions(error_of([&] { save_sampler_state(dir / "tree.bin", *tree, t.scene); }), {"'tree'", "nothing"});
+  expect_mentions(error_of([&] { load_sampler_state(dir / "missing.bin", *rll, t.scene); }), {"missing.bin"});
+}
+
+TEST(SamplerState, TruncatedDamagedAndForeignFilesAreErrors) {
+  Trained t;
+  auto rll = t.make("rll");
+  TempDir dir;
+  const fs::path file = t.train_and_save(*rll, dir);
+  const std::string bytes = read_bytes(file);
+  ASSERT_GT(bytes.size(), 1000u);
+  const fs::path bad = dir / "bad.bin";
+  auto load = [&] {
+    auto s = t.make("rll");
+    load_sampler_state(bad, *s, t.scene);
+  };
+  // Cut anywhere: never a crash, always a message.
+  for (size_t n : {size_t(0), size_t(5), size_t(18), size_t(25), size_t(40), bytes.size() / 3, bytes.size() - 9,
+                   bytes.size() - 1}) {
+    write_bytes(bad, bytes.substr(0, n));
+    expect_mentions(error_of(load), {"bad.bin"});
+  }
+  write_bytes(bad, bytes.substr(0, bytes.size() / 2));
+  expect_mentions(error_of(load), {"truncated"});
+  // One byte changed in the learnt values: the checksum says so.
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] ^= 0x10;
+  write_bytes(bad, flipped);
+  expect_mentions(error_of(load), {"damaged", "checksum"});
+  // Not a state at all.
+  write_bytes(bad, "P6\n1 1\n255\n...");
+  expect_mentions(error_of(load), {"not an rll sampler state"});
+  // Another format version (the 4 bytes after the 18-byte magic).
+  std::string version = bytes;
+  version[18] = char(kSamplerStateVersion + 1);
+  write_bytes(bad, version);
+  expect_mentions(error_of(load), {"version"});
+  // A damaged cell with a consistent checksum: the cut no longer fits the light tree. The first
+  // cell's first node id sits after its id (4 bytes), key (8), last use (4) and cut size (4),
+  // after the payload's capacity (4), pass (8), resets (8) and cell count (4).
+  std::string cut = bytes;
+  const size_t magic = 18, name_at = magic + 4 + 8;
+  uint64_t name_len = 0, params_len = 0;
+  std::memcpy(&name_len, cut.data() + name_at, 8);
+  const size_t params_at = name_at + 8 + name_len;
+  std::memcpy(&params_len, cut.data() + params_at, 8);
+  const size_t payload_at = params_at + 8 + params_len + 8;
+  const size_t first_node = payload_at + 4 + 8 + 8 + 4 + 4 + 8 + 4 + 4;
+  const uint32_t huge = 0x7fffffff;
+  std::memcpy(cut.data() + first_node, &huge, 4);
+  Hasher h;
+  h.bytes(cut.data(), cut.size() - 8);
+  const uint64_t sum = h.value();
+  std::memcpy(cut.data() + cut.size() - 8, &sum, 8);
+  write_bytes(bad, cut);
+  expect_mentions(error_of(load), {"damaged", "light tree"});
+}
