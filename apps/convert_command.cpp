@@ -7,8 +7,8 @@
 
 #include "commands.h"
 #include "rll/core/error.h"
-#include "rll/scene/load.h"
-#include "rll/scene/save.h"
+#include "rll/io/load.h"
+#include "rll/io/save.h"
 
 namespace rll::cli {
 namespace fs = std::filesystem;

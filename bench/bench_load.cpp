@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "rll/core/error.h"
-#include "rll/scene/load.h"
-#include "rll/scene/save.h"
+#include "rll/io/load.h"
+#include "rll/io/save.h"
 
 using namespace rll;
 using Clock = std::chrono::steady_clock;

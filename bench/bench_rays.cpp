@@ -10,7 +10,7 @@
 #include "rll/core/params.h"
 #include "rll/core/parallel.h"
 #include "rll/render/render.h"
-#include "rll/scene/load.h"
+#include "rll/io/load.h"
 
 using namespace rll;
 using Clock = std::chrono::steady_clock;

@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-#include "rll/scene/load.h"
+#include "rll/io/load.h"
 
 namespace rll::fuzz {
 

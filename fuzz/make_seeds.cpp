@@ -9,8 +9,8 @@
 
 #include "rll/core/error.h"
 #include "rll/scene/builder.h"
-#include "rll/scene/save.h"
-#include "rll/scene/text_scan.h"
+#include "rll/io/save.h"
+#include "rll/io/text_scan.h"
 #include "../fuzz/fuzz_input.h"
 
 namespace fs = std::filesystem;

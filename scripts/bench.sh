@@ -42,8 +42,25 @@ fi
 # at the same cost, its reference is the least noisy on the occluded scenes, which keeps the
 # ratios from being compressed towards 1 by reference noise.
 common=(--res "$res" --repeats "$repeats" --reference-sampler "$ref_sampler" --quiet)
+# BENCH_RESUME=1 keeps a comparison whose summary.json a run of this script already wrote (its
+# reference noise measured, every sampler asked for present): an interrupted suite goes on where
+# it stopped.
+done_already() {  # name, then compare arguments
+  local name=$1; shift
+  [ "${BENCH_RESUME:-0}" = 1 ] && [ -f "$out/$name/summary.json" ] || return 1
+  local want_samplers=""
+  while [ $# -gt 0 ]; do [ "$1" = --samplers ] && want_samplers=$2; shift; done
+  python3 - "$out/$name/summary.json" "$want_samplers" <<'PY'
+import json, sys
+j = json.load(open(sys.argv[1]))
+have = {s["name"] for s in j.get("samplers", [])}
+ok = "noise_relmse" in j.get("reference", {}) and set(sys.argv[2].split(",")) <= have
+sys.exit(0 if ok else 1)
+PY
+}
 run() {  # name, then compare arguments
   local name=$1; shift
+  if done_already "$name" "$@"; then echo "bench: $name (kept from the last run)"; return 0; fi
   echo "bench: $name"
   "$rll" compare "$@" "${common[@]}" --out "$out/$name" > "$out/$name.txt" 2>&1 || { cat "$out/$name.txt"; exit 1; }
 }

@@ -19,7 +19,8 @@ def load(name):
     if not os.path.exists(path):
         return None
     with open(path) as f:
-        return json.load(f)
+        j = json.load(f)
+    return j if j.get("samplers") else None  # an interrupted compare leaves no samplers
 
 
 def med(s, key):
@@ -114,25 +115,27 @@ P(f"Measured on {date.today().isoformat()}, commit `{commit}`, {os.cpu_count()} 
 
 scenes = ["cornell-boxes-room", "arch-interior", "many-lights-open", "cornell-boxes-dynamic"]
 integrators = ["direct", "path"]
-order = ["power", "tree", "rll", "oracle"]
+order = ["power", "tree", "fermat", "ltc", "rll", "oracle"]
 
 # --- Headline and goals ------------------------------------------------------------------------
 P("## Headline\n")
 P("relMSE at equal time (lower is better), median of the repeats, and rll's ratio to the others. "
   "`tree (v1)` is the first version's tree in the first version's renderer (light sampling only, "
   "independent points), run on the same reference: what the ratios of the first RESULTS were "
-  "measured against.\n")
-P("| scene | integrator | power | tree (v1) | tree | rll | oracle | rll / power | rll / tree |")
-P("|---|---|---|---|---|---|---|---|---|")
+  "measured against. `fermat` is the published RLL (docs/fermat.md), `ltc` Wang et al. 2021 "
+  "(docs/ltc.md). Where the reference was rendered as two halves, its noise is subtracted from "
+  "every error (`rll compare`).\n")
+P("| scene | integrator | power | tree (v1) | tree | fermat | ltc | rll | oracle | rll / ltc | rll / tree |")
+P("|---|---|---|---|---|---|---|---|---|---|---|")
 goal_rows = []
 for scene, integ, s in comparisons():
     b = by_name(s)
     r = {n: med(b[n], "relmse") if n in b else None for n in order}
     v1 = v1_tree(scene, integ)
-    rp = r["rll"] / r["power"] if r["rll"] and r["power"] else None
+    rl = r["rll"] / r["ltc"] if r["rll"] and r["ltc"] else None
     rt = r["rll"] / r["tree"] if r["rll"] and r["tree"] else None
     P(f"| {scene} | {integ} | {fmt(r['power'])} | {fmt(med(v1, 'relmse') if v1 else None)} | {fmt(r['tree'])} | "
-      f"{fmt(r['rll'])} | {fmt(r['oracle'])} | {fmt(rp)} | {fmt(rt)} |")
+      f"{fmt(r['fermat'])} | {fmt(r['ltc'])} | {fmt(r['rll'])} | {fmt(r['oracle'])} | {fmt(rl)} | {fmt(rt)} |")
     goal_rows.append((scene, integ, s, b, r))
 P("")
 
@@ -220,8 +223,8 @@ for scene, integ, s, b, r in goal_rows:
     P(f"{budget}, {s['repeats']} repeat(s), {s['resolution'][0]}x{s['resolution'][1]}, "
       f"reference {s['reference'].get('spp', '?')} spp ({s['reference'].get('sampler', '?')})"
       + (f", {s.get('frames', 1)} frames (the last measured)" if s.get("frames", 1) > 1 else "") + ".\n")
-    P("| sampler | spp | samples/s | relMSE median [min, max] | trimmed relMSE | / power | / tree | / oracle | memory |")
-    P("|---|---|---|---|---|---|---|---|---|")
+    P("| sampler | spp | samples/s | relMSE median [min, max] | trimmed relMSE | / power | / tree | / ltc | / oracle | memory |")
+    P("|---|---|---|---|---|---|---|---|---|---|")
     v1 = v1_tree(scene, integ)
     rows = [(n, b[n]) for n in order if n in b]
     if v1:
@@ -231,7 +234,7 @@ for scene, integ, s, b, r in goal_rows:
         def ratio(other):
             return fmt(rel["median"] / r[other]) if r.get(other) else "—"
         P(f"| {n} | {med(x, 'spp'):.0f} | {rate(s, x) / 1e6:.2f} M | {fmt(rel['median'])} [{fmt(rel['min'])}, "
-          f"{fmt(rel['max'])}] | {fmt(trimmed(x))} | {ratio('power')} | {ratio('tree')} | {ratio('oracle')} | "
+          f"{fmt(rel['max'])}] | {fmt(trimmed(x))} | {ratio('power')} | {ratio('tree')} | {ratio('ltc')} | {ratio('oracle')} | "
           f"{x['memory']['peak_rss_bytes'] / 2**20:.0f} MiB |")
     P("")
 
@@ -250,34 +253,47 @@ for scene, integ, s in spp_rows:
 P("")
 
 # --- Ablation ----------------------------------------------------------------------------------
-names = {
-    0: "paper: uniform within, full-pdf reward, power prior and split, prior in the cell CDF, exponential Q, jitter",
-    1: "+ cluster reward (DESIGN 2)",
-    2: "+ tree descent within clusters",
-    3: "+ importance prior and split",
-    4: "+ tree's probability as the defensive term",
-    5: "+ shrinkage Q, trust schedule, coarse-to-fine cells",
-    6: "+ no jitter = rll's defaults",
-}
+# The rows of scripts/bench.sh's ablation, by the sampler spec's last addition.
+ABLATION = [
+    ("fermat", "published RLL: `fermat` (75% uniform over 256 clusters, exponential Q, max-RGB reward, jitter, reset)"),
+    ("reward=cluster", "+ cluster reward (estimate over P(light | cluster))"),
+    ("target=moment", "+ target sqrt(second moment) instead of the mean"),
+    ("alpha=0.02", "+ shrinkage learning (1/n settling at alpha 0.02)"),
+    ("q_init=-1", "+ importance prior and split, epsilon 0.1, trust 256, unvisited clusters from the prior"),
+    ("within=tree", "+ tree descent within clusters"),
+    ("rll", "rll's defaults (its cut size, splits, cells, no jitter, no reset, cold cells from the tree)"),
+]
+
+
+def ablation_label(name):
+    for suffix, label in ABLATION:
+        if name == suffix or name.endswith(":" + suffix):
+            return label
+    return f"`{name}`"
+
+
 P("## Ablation\n")
 if not any(load(f"ablation-{sc}") for sc in ["cornell-boxes-room", "arch-interior"]):
     keep_previous("Ablation")
 else:
-    P("Equal time, direct lighting; each row adds one correction to the row above. relMSE median, "
-      "and its ratio to tree's in the same run.\n")
+    P("Equal time, direct lighting, from the published RLL to rll's defaults; each row adds one of "
+      "rll's changes to the row above (the sampler specs are in `scripts/bench.sh`). relMSE and "
+      "trimmed relMSE medians, reference noise subtracted, and their ratios to tree's in the same run.\n")
 for scene in ["cornell-boxes-room", "arch-interior"]:
     s = load(f"ablation-{scene}")
     if not s:
         continue
     b = s["samplers"]
     tree = med(b[0], "relmse")
+    tree_t = trimmed(b[0])
     P(f"### {scene}\n")
-    P("| settings | spp | relMSE | / tree |")
-    P("|---|---|---|---|")
-    P(f"| tree (reference point) | {med(b[0], 'spp'):.0f} | {fmt(tree)} | 1 |")
-    for i, x in enumerate(b[1:]):
-        P(f"| {names.get(i, x['name'])} | {med(x, 'spp'):.0f} | {fmt(med(x, 'relmse'))} | "
-          f"{fmt(med(x, 'relmse') / tree)} |")
+    P("| settings | spp | relMSE | trimmed relMSE | / tree (relMSE; trimmed) |")
+    P("|---|---|---|---|---|")
+    P(f"| tree (reference point) | {med(b[0], 'spp'):.0f} | {fmt(tree)} | {fmt(tree_t)} | 1 |")
+    for x in b[1:]:
+        t = trimmed(x)
+        P(f"| {ablation_label(x['name'])} | {med(x, 'spp'):.0f} | {fmt(med(x, 'relmse'))} | {fmt(t)} | "
+          f"{fmt(med(x, 'relmse') / tree)}; {fmt(t / tree_t) if t and tree_t else '—'} |")
     P("")
 
 # --- Ray rate, sampler costs -------------------------------------------------------------------

@@ -5,7 +5,7 @@
 
 #include <filesystem>
 
-#include "rll/scene/save.h"
+#include "rll/io/save.h"
 #include "support/test_support.h"
 
 using namespace rll;

@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "rll/scene/builtin.h"
-#include "rll/scene/load.h"
-#include "rll/scene/save.h"
+#include "rll/io/load.h"
+#include "rll/io/save.h"
 #include "support/test_support.h"
 
 using namespace rll;

@@ -7,7 +7,7 @@
 
 #include "../../fuzz/fuzz_input.h"
 #include "rll/core/error.h"
-#include "rll/scene/text_scan.h"
+#include "rll/io/text_scan.h"
 
 using namespace rll;
 namespace fs = std::filesystem;

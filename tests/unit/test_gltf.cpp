@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include "rll/scene/builder.h"
-#include "rll/scene/load.h"
-#include "rll/scene/save.h"
+#include "rll/io/load.h"
+#include "rll/io/save.h"
 #include "support/test_support.h"
 
 using namespace rll;

@@ -5,8 +5,8 @@
 
 #include "rll/core/error.h"
 #include "rll/scene/builder.h"
-#include "rll/scene/load.h"
-#include "rll/scene/text_scan.h"
+#include "rll/io/load.h"
+#include "rll/io/text_scan.h"
 #include "support/test_support.h"
 
 using namespace rll;

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "rll/core/error.h"
-#include "rll/scene/load.h"
+#include "rll/io/load.h"
 #include "support/test_support.h"
 
 using namespace rll;

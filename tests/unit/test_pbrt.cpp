@@ -5,8 +5,8 @@
 
 #include <cmath>
 
-#include "rll/scene/load.h"
-#include "rll/scene/save.h"
+#include "rll/io/load.h"
+#include "rll/io/save.h"
 #include "support/test_support.h"
 
 using namespace rll;

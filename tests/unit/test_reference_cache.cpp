@@ -4,7 +4,7 @@
 
 #include "rll/eval/reference.h"
 #include "rll/render/session.h"
-#include "rll/scene/load.h"
+#include "rll/io/load.h"
 #include "support/test_support.h"
 
 using namespace rll;

@@ -13,7 +13,7 @@
 #include "rll/core/params.h"
 #include "rll/render/integrator.h"
 #include "rll/render/render.h"
-#include "rll/scene/load.h"
+#include "rll/io/load.h"
 #include "rll/scene/scene.h"
 
 namespace rll {

@@ -7,7 +7,7 @@
 #include <set>
 
 #include "rll/core/error.h"
-#include "rll/scene/save.h"
+#include "rll/io/save.h"
 #include "rll/scene/transform.h"
 
 namespace rll {

@@ -1,4 +1,4 @@
-#include "rll/scene/save.h"
+#include "rll/io/save.h"
 
 #include <fmt/format.h>
 

@@ -1,10 +1,10 @@
-#include "rll/scene/load.h"
+#include "rll/io/load.h"
 
 #include <fmt/format.h>
 
 #include "rll/core/error.h"
 #include "rll/scene/builtin.h"
-#include "rll/scene/text_scan.h"
+#include "rll/io/text_scan.h"
 
 namespace rll {
 namespace fs = std::filesystem;

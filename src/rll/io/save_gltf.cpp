@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rll/core/error.h"
-#include "rll/scene/save.h"
+#include "rll/io/save.h"
 
 namespace rll {
 namespace fs = std::filesystem;

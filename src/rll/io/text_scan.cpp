@@ -1,4 +1,4 @@
-#include "rll/scene/text_scan.h"
+#include "rll/io/text_scan.h"
 
 #include <charconv>
 #include <cmath>

@@ -18,8 +18,8 @@
 #include <tuple>
 
 #include "rll/core/error.h"
-#include "rll/scene/load.h"
-#include "rll/scene/text_scan.h"
+#include "rll/io/load.h"
+#include "rll/io/text_scan.h"
 #include "rll/scene/transform.h"
 
 namespace rll {
