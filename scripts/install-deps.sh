@@ -7,7 +7,7 @@
 set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config libembree-dev libtbb-dev libopenexr-dev libstb-dev
       libtinyobjloader-dev libtinygltf-dev libcli11-dev nlohmann-json3-dev libfmt-dev libgtest-dev
-      libbenchmark-dev libboost-dev python3)
+      libbenchmark-dev libboost-dev python3 zlib1g-dev)
 daemons=()
 if [ "${1:-}" = "--test" ]; then
   pkgs+=(chromium slurmctld slurmd slurm-client munge)

@@ -19,15 +19,7 @@ TEST_P(BsdfSampling, SampledDirectionsFollowPdf) {
   const Vec3 wo = c.wo();
   SphereBins bins;
   bins.frame = Frame(c.ng());
-  auto sample = [&](Pcg32& rng) -> std::optional<Vec3> {
-    BsdfSample s;
-    float u_lobe = rng.next_float();
-    Vec2 u{rng.next_float(), rng.next_float()};
-    if (!bsdf.sample(wo, u_lobe, u, s)) return std::nullopt;
-    return s.wi;
-  };
-  auto pdf = [&](const Vec3& wi) { return double(bsdf.pdf(wo, wi)); };
-  SphereChi2 r = sphere_chi2(bins, 400000, seed_of(c.name()), sample, pdf);
+  SphereChi2 r = bsdf_chi2(bsdf, wo, bins, 400000, seed_of(c.name()));
   EXPECT_TRUE(r.passes(chi2_alpha())) << r.describe();
   // The pdf of a reflection-only BSDF holds at most all of the sphere's mass; a Lambertian lobe
   // of a front-facing wo holds exactly all of it.
@@ -115,6 +107,7 @@ INSTANTIATE_TEST_SUITE_P(Alphas, GgxVisibleNormals, ::testing::ValuesIn(ggx_case
 
 // Every chi-square test of the suite is counted in kSuiteChi2Tests, the basis of the Sidak
 // correction; the BSDF and GGX ones are generated from these lists.
+size_t glass_chi2_test_count();  // tests/stat/test_bsdf_glass.cpp
 size_t bsdf_chi2_test_count() {
-  return bsdf_cases().size() + ggx_cases().size();
+  return bsdf_cases().size() + ggx_cases().size() + glass_chi2_test_count();
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rll/scene/bsdf.h"
+#include "support/sphere_chi2.h"
 
 namespace rll::test {
 
@@ -26,7 +27,11 @@ inline Material test_material(MaterialType type, float roughness) {
       m.k = Rgb(9.22f, 6.27f, 4.84f);
       break;
     case MaterialType::Plastic:
+    case MaterialType::CoatedDiffuse:
       m.albedo = Rgb(0.5f, 0.4f, 0.3f);
+      break;
+    case MaterialType::Dielectric:  // glass: ior 1.5 (the default)
+    case MaterialType::ThinDielectric:
       break;
   }
   return m;
@@ -65,6 +70,19 @@ inline std::vector<BsdfCase> bsdf_cases() {
   for (MaterialType t : {MaterialType::Diffuse, MaterialType::Conductor, MaterialType::Plastic})
     for (float a : {-70.0f, 10.0f, 70.0f}) cases.push_back({t, 0.3f, a, 25});
   return cases;
+}
+
+// The chi-square test of a BSDF's sampled directions (u_lobe, then u) against its pdf.
+inline SphereChi2 bsdf_chi2(const Bsdf& bsdf, const Vec3& wo, const SphereBins& bins, size_t samples,
+                            uint64_t seed) {
+  auto sample = [&](Pcg32& rng) -> std::optional<Vec3> {
+    BsdfSample s;
+    float u_lobe = rng.next_float();
+    Vec2 u{rng.next_float(), rng.next_float()};
+    if (!bsdf.sample(wo, u_lobe, u, s)) return std::nullopt;
+    return s.wi;
+  };
+  return sphere_chi2(bins, samples, seed, sample, [&](const Vec3& wi) { return double(bsdf.pdf(wo, wi)); });
 }
 
 }  // namespace rll::test

@@ -183,4 +183,32 @@ std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx,
   return out;
 }
 
+void expect_images_agree(const Image& a, const Image& b, const std::string& what) {
+  Estimate d = difference_estimate(a, b);
+  EXPECT_LE(std::abs(d.mean), 4.5 * d.stderr_)
+      << what << ": mean difference " << d.mean << " +- " << d.stderr_ << " (means "
+      << image_mean(a) << ", " << image_mean(b) << ")";
+  ::testing::Test::RecordProperty(
+      what, fmt::format("{} +- {} (mean {})", d.mean, d.stderr_, image_mean(a)));
+  const auto regions = region_differences(a, b, 4, 4);
+  for (size_t i = 0; i < regions.size(); ++i)
+    EXPECT_LE(std::abs(regions[i].mean), 4.5 * regions[i].stderr_)
+        << what << ", region " << i << ": difference " << regions[i].mean << " +- "
+        << regions[i].stderr_;
+}
+
+RenderRequest request(const std::string& sampler, const std::string& integrator, int max_depth,
+                      const std::string& strategy, int spp, uint64_t seed,
+                      PointSet points) {
+  RenderRequest r;
+  r.sampler = sampler;
+  std::vector<std::string> set;
+  if (!strategy.empty()) set.push_back(integrator + ".strategy=" + strategy);
+  r.integrator = make_integrator_settings(integrator, max_depth, Params::parse(set));
+  r.spp = spp;
+  r.seed = seed;
+  r.points = points;
+  return r;
+}
+
 }  // namespace rll::test

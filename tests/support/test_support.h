@@ -75,6 +75,12 @@ struct RenderRequest {
   PointSet points = PointSet::Sobol;
 };
 // A built-in scene (builtin:NAME) at the given film size, finalized.
+// A request for `sampler` with `integrator` ("direct" or "path") at `max_depth`, its strategy
+// set when not empty ("mis", "nee", "bsdf").
+RenderRequest request(const std::string& sampler, const std::string& integrator, int max_depth,
+                      const std::string& strategy, int spp, uint64_t seed,
+                      PointSet points = PointSet::Sobol);
+
 Scene small_builtin_scene(const std::string& name, int width, int height);
 
 // Renders an already finalized scene and returns the per-pixel mean image.
@@ -98,6 +104,10 @@ bool agree(const Estimate& a, const Estimate& b, double z = 4.0, double abs_tol 
 Estimate difference_estimate(const Image& a, const Image& b);
 // difference_estimate over each of nx x ny image regions (row by row), so that a bias confined to
 // one part of the image (one box of a room, where a learnt cut went wrong) cannot hide in the mean.
+// a and b agree over the image and in each of 4 x 4 regions (`what` names them in failures).
+// The regional bound is Bonferroni-corrected: 16 regions at z = 4.5 falsely fail with
+// probability 1e-4 together.
+void expect_images_agree(const Image& a, const Image& b, const std::string& what);
 std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx, int ny);
 
 }  // namespace rll::test

@@ -3,10 +3,13 @@
 // are skipped with one warning naming them and the line; syntax errors name file and line.
 #include <gtest/gtest.h>
 
+#include <zlib.h>
+
 #include <cmath>
 
 #include "rll/io/load.h"
 #include "rll/io/save.h"
+#include "rll/io/text_scan.h"
 #include "support/test_support.h"
 
 using namespace rll;
@@ -213,17 +216,17 @@ TEST(PbrtReader, PlyMeshTextureAndMaterialMapping) {
   ASSERT_EQ(s.mesh.triangle_count(), 4u);
   ASSERT_EQ(s.mesh.uvs.size(), s.mesh.positions.size());
   const Material& coated = s.materials[s.mesh.material[0]];
-  EXPECT_EQ(coated.type, MaterialType::Plastic);
+  EXPECT_EQ(coated.type, MaterialType::CoatedDiffuse);
   EXPECT_FLOAT_EQ(coated.roughness, 0.01f);
   ASSERT_GE(coated.albedo_texture, 0);
   EXPECT_FLOAT_EQ(s.textures[size_t(coated.albedo_texture)].at(0, 0).x, 0.25f);
   EXPECT_TRUE(near(coated.albedo, Rgb(2)));
   const Material& glass = s.materials[s.mesh.material[2]];
-  EXPECT_EQ(glass.type, MaterialType::Plastic);
-  EXPECT_TRUE(near(glass.albedo, Rgb(0)));
+  EXPECT_EQ(glass.type, MaterialType::Dielectric);
   EXPECT_FLOAT_EQ(glass.ior, 1.33f);
-  // The approximation is announced once, with the number of times it was made.
-  EXPECT_TRUE(has_warning(s, {"s.pbrt:9:", "dielectric", "no transmission", "1 more"}));
+  EXPECT_FLOAT_EQ(glass.roughness, 0);  // pbrt's default: smooth
+  EXPECT_FLOAT_EQ(s.materials[s.mesh.material[3]].ior, 1.5f);
+  EXPECT_TRUE(s.warnings.empty());
 }
 
 TEST(PbrtReader, PointDistantAndInfiniteLights) {
@@ -405,7 +408,9 @@ TEST(PbrtWriter, RoundTripKeepsMaterialsLightsCameraAndSky) {
   sky.radiance = Rgb(0.5f, 0.6f, 0.7f);
   a.sky = sky;
   const auto lost = save_pbrt_scene(a, dir / "out.pbrt");
-  ASSERT_EQ(lost.size(), 1u);  // the hemisphere, as a map with a black lower half
+  // The hemisphere, as a map with a black lower half, and rll's plastic, as pbrt's layered
+  // coateddiffuse.
+  ASSERT_EQ(lost.size(), 2u);
   Scene r;
   load_pbrt(dir / "out.pbrt", r);
   EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
@@ -416,7 +421,7 @@ TEST(PbrtWriter, RoundTripKeepsMaterialsLightsCameraAndSky) {
   }
   const Material &p = r.materials[r.mesh.material[0]], &g = r.materials[r.mesh.material[1]],
                  &t = r.materials[r.mesh.material[2]], &l = r.materials[r.mesh.material[3]];
-  EXPECT_EQ(p.type, MaterialType::Plastic);
+  EXPECT_EQ(p.type, MaterialType::CoatedDiffuse);  // pbrt's coateddiffuse reads as itself
   EXPECT_TRUE(near(p.albedo, plastic.albedo));
   EXPECT_FLOAT_EQ(p.roughness, plastic.roughness);
   EXPECT_FLOAT_EQ(p.ior, plastic.ior);
@@ -442,4 +447,300 @@ TEST(PbrtWriter, RoundTripKeepsMaterialsLightsCameraAndSky) {
   EXPECT_TRUE(r.sky->full_sphere);
   EXPECT_TRUE(near(r.sky->map->lookup(Vec3(0.3f, 1, 0.2f)) * r.sky->radiance, sky.radiance, 1e-3f));
   EXPECT_TRUE(near(r.sky->map->lookup(Vec3(0.3f, -1, 0.2f)), Rgb(0)));
+}
+
+// --- the reader's later additions (issue 14) ---
+
+TEST(PbrtReader, SummaryWarningListsEverythingLeftOut) {
+  TempDir dir;
+  Scene s = read_pbrt(dir, std::string(kCamera) +
+                               "Shape \"curve\" \"point3 P\" [ 0 0 0 1 1 1 2 2 2 3 3 3 ]\n"
+                               "Shape \"curve\" \"point3 P\" [ 0 0 0 1 1 1 2 2 2 3 3 3 ]\n"
+                               "Shape \"hyperboloid\"\n"
+                               "LightSource \"spot\" \"point3 from\" [0 1 0]\n"
+                               "Material \"hair\"\n" +
+                               kTriangle + "Material \"measured\"\n" + kTriangle);
+  EXPECT_EQ(s.mesh.triangle_count(), 2u);
+  // One warning per directive, naming it, the file and the line...
+  EXPECT_TRUE(has_warning(s, {"s.pbrt:6:", "Shape \"curve\"", "1 more"}));
+  EXPECT_TRUE(has_warning(s, {"s.pbrt:10:", "Material \"hair\""}));
+  // ... and one at the end that adds them up.
+  EXPECT_TRUE(has_warning(s, {"s.pbrt: summary: 3 shapes skipped (curve x2, hyperboloid x1)",
+                              "1 light skipped (spot x1)",
+                              "materials not supported: hair, measured (rendered as diffuse "
+                              "grey)"}));
+  Scene clean = read_pbrt(dir, std::string(kCamera) + kTriangle);
+  EXPECT_TRUE(clean.warnings.empty());
+}
+
+TEST(PbrtReader, LoopSubdivisionSurface) {
+  TempDir dir;
+  // The regular tetrahedron of test_subdivide.cpp: one level ends with the vertex (1, 1, 1) at its
+  // limit position (1, 1, 1) / 5 (derived there by hand).
+  const std::string tetra =
+      "Shape \"loopsubdiv\" \"point3 P\" [ 1 1 1  1 -1 -1  -1 1 -1  -1 -1 1 ] "
+      "\"integer indices\" [ 0 1 2  0 3 1  0 2 3  1 3 2 ]";
+  Scene one = read_pbrt(dir, std::string(kCamera) + tetra + " \"integer levels\" 1\n");
+  ASSERT_EQ(one.mesh.triangle_count(), 16u);
+  EXPECT_TRUE(near(one.mesh.positions[0], Vec3(0.2f, 0.2f, 0.2f)));
+  ASSERT_EQ(one.mesh.normals.size(), one.mesh.positions.size());
+  EXPECT_TRUE(near(one.mesh.normals[0], normalize(Vec3(1, 1, 1)), 1e-5f));
+  Scene three = read_pbrt(dir, std::string(kCamera) + tetra + "\n");  // pbrt's default: 3 levels
+  EXPECT_EQ(three.mesh.triangle_count(), 4u * 64);
+  // The winding stays outward: every face's normal points away from the centre.
+  for (uint32_t t = 0; t < three.mesh.triangle_count(); ++t)
+    EXPECT_GT(dot(three.mesh.face_cross(t), three.mesh.vertex(t, 0)), 0);
+  EXPECT_TRUE(three.warnings.empty());
+  const std::string e =
+      pbrt_error(dir, std::string(kCamera) +
+                          "Shape \"loopsubdiv\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 0 -1 0 0 0 1 ] "
+                          "\"integer indices\" [ 0 1 2  1 0 3  0 1 4 ]\n");
+  expect_mentions(e, {"bad.pbrt:6:", "loopsubdiv", "not a manifold"});
+  expect_mentions(pbrt_error(dir, std::string(kCamera) + tetra + " \"integer levels\" -1\n"),
+                  {"bad.pbrt:6:", "levels"});
+}
+
+TEST(PbrtReader, GzippedPlyMesh) {
+  TempDir dir;
+  Mesh quad;
+  quad.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  quad.triangles = {{0, 1, 2}, {0, 2, 3}};
+  const std::string plain = ply_bytes(quad, PlyEncoding::BinaryLittleEndian);
+  // gzip through zlib's gz* file interface.
+  const auto gz_path = dir / "quad.ply.gz";
+  gzFile f = gzopen(gz_path.string().c_str(), "wb");
+  ASSERT_TRUE(f);
+  ASSERT_EQ(gzwrite(f, plain.data(), unsigned(plain.size())), int(plain.size()));
+  ASSERT_EQ(gzclose(f), Z_OK);
+  dir.write("quad.ply", plain);
+  Scene a =
+      read_pbrt(dir, std::string(kCamera) + "Shape \"plymesh\" \"string filename\" \"quad.ply\"\n");
+  Scene b = read_pbrt(
+      dir, std::string(kCamera) + "Shape \"plymesh\" \"string filename\" \"quad.ply.gz\"\n");
+  ASSERT_EQ(a.mesh.triangle_count(), 2u);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+  EXPECT_EQ(a.mesh.positions.size(), b.mesh.positions.size());
+  for (size_t i = 0; i < a.mesh.positions.size(); ++i)
+    EXPECT_EQ(a.mesh.positions[i], b.mesh.positions[i]);
+  const std::string gz = read_text_file(gz_path);
+  dir.write("cut.ply.gz", gz.substr(0, gz.size() - 12));
+  expect_mentions(pbrt_error(dir, std::string(kCamera) +
+                                      "Shape \"plymesh\" \"string filename\" \"cut.ply.gz\"\n"),
+                  {"bad.pbrt:6:", "plymesh", "cut.ply.gz", "truncated"});
+}
+
+TEST(PbrtReader, ImageFloatScaleAndMixTextures) {
+  TempDir dir;
+  Image wood(2, 1);
+  wood.at(0, 0) = Rgb(0.2f, 0.4f, 0.6f);
+  wood.at(1, 0) = Rgb(1, 1, 1);
+  write_image(dir / "wood.exr", wood);
+  Image rough(2, 1);
+  rough.at(0, 0) = Rgb(0.25f, 0, 0);
+  rough.at(1, 0) = Rgb(0.64f, 0, 0);
+  write_image(dir / "rough.exr", rough);
+  Scene s = read_pbrt(
+      dir,
+      std::string(kCamera) +
+          "Texture \"wood\" \"spectrum\" \"imagemap\" \"string filename\" \"wood.exr\"\n"
+          "Texture \"rough\" \"float\" \"imagemap\" \"string filename\" \"rough.exr\"\n"
+          "Texture \"dim\" \"spectrum\" \"scale\" \"texture tex\" \"wood\" \"float scale\" 0.5\n"
+          "Texture \"blend\" \"spectrum\" \"mix\" \"texture tex1\" \"wood\" "
+          "\"rgb tex2\" [ 0 0 1 ] \"float amount\" 0.25\n"
+          "Texture \"flat\" \"spectrum\" \"mix\" \"rgb tex1\" [ 1 0 0 ] "
+          "\"rgb tex2\" [ 0 1 0 ]\n"
+          "Material \"diffuse\" \"texture reflectance\" \"dim\"\n" +
+          kTriangle +
+          "Material \"coateddiffuse\" \"texture reflectance\" \"blend\" "
+          "\"texture roughness\" \"rough\"\n" +
+          kTriangle +
+          "Material \"conductor\" \"texture roughness\" \"rough\" "
+          "\"bool remaproughness\" false\n" +
+          kTriangle + "Material \"diffuse\" \"texture reflectance\" \"flat\"\n" + kTriangle +
+          "Material \"diffuse\" \"texture reflectance\" \"nosuch\"\n" + kTriangle +
+          "Material \"dielectric\" \"texture roughness\" \"rough\"\n" + kTriangle);
+  ASSERT_EQ(s.mesh.triangle_count(), 6u);
+  // The same remapped roughness texture is baked once.
+  EXPECT_EQ(s.materials[s.mesh.material[5]].roughness_texture,
+            s.materials[s.mesh.material[1]].roughness_texture);
+  const Material& dim = s.materials[s.mesh.material[0]];
+  // An image times a constant keeps the image and scales it.
+  ASSERT_GE(dim.albedo_texture, 0);
+  EXPECT_TRUE(near(dim.albedo, Rgb(0.5f)));
+  EXPECT_TRUE(near(s.textures[size_t(dim.albedo_texture)].at(0, 0), Rgb(0.2f, 0.4f, 0.6f)));
+  // The mix is baked: 0.75 wood + 0.25 blue.
+  const Material& coated = s.materials[s.mesh.material[1]];
+  ASSERT_GE(coated.albedo_texture, 0);
+  EXPECT_TRUE(near(coated.albedo, Rgb(1)));
+  const Image& blend = s.textures[size_t(coated.albedo_texture)];
+  EXPECT_TRUE(near(blend.at(0, 0), Rgb(0.15f, 0.3f, 0.7f)));
+  EXPECT_TRUE(near(blend.at(1, 0), Rgb(0.75f, 0.75f, 1)));
+  // Roughness textures become images of GGX alphas: sqrt(0.25) = 0.5, sqrt(0.64) = 0.8.
+  ASSERT_GE(coated.roughness_texture, 0);
+  EXPECT_NEAR(s.textures[size_t(coated.roughness_texture)].at(0, 0).x, 0.5f, 1e-6);
+  EXPECT_NEAR(s.textures[size_t(coated.roughness_texture)].at(1, 0).x, 0.8f, 1e-6);
+  const Material& metal = s.materials[s.mesh.material[2]];
+  ASSERT_GE(metal.roughness_texture, 0);
+  EXPECT_NE(metal.roughness_texture, coated.roughness_texture);  // not remapped: another image
+  EXPECT_NEAR(s.textures[size_t(metal.roughness_texture)].at(1, 0).x, 0.64f, 1e-6);
+  // Constants mix to a constant: half red, half green.
+  const Material& flat = s.materials[s.mesh.material[3]];
+  EXPECT_EQ(flat.albedo_texture, -1);
+  EXPECT_TRUE(near(flat.albedo, Rgb(0.5f, 0.5f, 0)));
+  // An unknown texture is a warning, and the material keeps its default.
+  EXPECT_TRUE(near(s.materials[s.mesh.material[4]].albedo, Rgb(0.5f)));
+  EXPECT_TRUE(has_warning(s, {"texture \"nosuch\""}));
+}
+
+TEST(PbrtReader, ConductorsFromNamedSpectraRgbFloatAndReflectance) {
+  TempDir dir;
+  Scene s = read_pbrt(
+      dir, std::string(kCamera) +
+               "Material \"conductor\" \"spectrum eta\" \"metal-Al-eta\" \"spectrum k\" "
+               "\"metal-Al-k\" \"float uroughness\" 0.04 \"float vroughness\" 0.16\n" +
+               kTriangle +
+               "Material \"conductor\" \"rgb eta\" [ 0.2 0.3 0.4 ] \"rgb k\" [ 3 2 1 ] "
+               "\"float roughness\" 0.09 \"bool remaproughness\" false\n" +
+               kTriangle + "Material \"conductor\" \"float eta\" 1.7 \"float k\" 2\n" + kTriangle +
+               "Material \"conductor\" \"rgb reflectance\" [ 0.5 0.2 0.9 ]\n" + kTriangle +
+               "Material \"conductor\" \"spectrum eta\" \"metal-TiO2-eta\" \"spectrum k\" "
+               "\"metal-TiO2-k\"\n" +
+               kTriangle + "Material \"conductor\"\n" + kTriangle);
+  const auto mat = [&](int i) { return s.materials[s.mesh.material[size_t(i)]]; };
+  EXPECT_EQ(mat(0).type, MaterialType::Conductor);
+  EXPECT_TRUE(near(mat(0).eta, Rgb(1.65746f, 0.880369f, 0.521229f)));
+  EXPECT_TRUE(near(mat(0).k, Rgb(9.22387f, 6.26952f, 4.837f)));
+  // Each of u and v mapped to alpha = sqrt(roughness), then averaged: (0.2 + 0.4) / 2.
+  EXPECT_NEAR(mat(0).roughness, 0.3f, 1e-6);
+  EXPECT_TRUE(near(mat(1).eta, Rgb(0.2f, 0.3f, 0.4f)));
+  EXPECT_TRUE(near(mat(1).k, Rgb(3, 2, 1)));
+  EXPECT_NEAR(mat(1).roughness, 0.09f, 1e-7);  // not remapped
+  EXPECT_TRUE(near(mat(2).eta, Rgb(1.7f)));
+  EXPECT_TRUE(near(mat(2).k, Rgb(2)));
+  // Reflectance: eta = 1, k = 2 sqrt(r) / sqrt(1 - r), so that the Fresnel reflectance at normal
+  // incidence, k^2 / (4 + k^2), is r.
+  EXPECT_TRUE(near(mat(3).eta, Rgb(1)));
+  const Rgb r(0.5f, 0.2f, 0.9f);
+  for (int i = 0; i < 3; ++i) {
+    const float k = mat(3).k[i];
+    EXPECT_NEAR(k * k / (4 + k * k), r[i], 1e-5);
+  }
+  EXPECT_TRUE(near(mat(4).eta, Rgb(2.574f, 2.648f, 2.813f)));
+  EXPECT_TRUE(near(mat(4).k, Rgb(0)));
+  // pbrt's default conductor: copper, smooth.
+  EXPECT_TRUE(near(mat(5).eta, Rgb(0.200438f, 0.924033f, 1.10221f)));
+  EXPECT_FLOAT_EQ(mat(5).roughness, 0);
+  EXPECT_TRUE(s.warnings.empty());
+}
+
+TEST(PbrtReader, DielectricThinAndCoatedDiffuseMapToRllsModels) {
+  TempDir dir;
+  Scene s = read_pbrt(
+      dir, std::string(kCamera) +
+               "Material \"dielectric\" \"float eta\" 1.33 \"float roughness\" 0.01\n" + kTriangle +
+               "Material \"dielectric\" \"spectrum eta\" \"glass-BK7\"\n" + kTriangle +
+               "Material \"thindielectric\" \"float eta\" 1.4\n" + kTriangle +
+               "Material \"coateddiffuse\" \"rgb reflectance\" [ 0.1 0.2 0.3 ] \"float roughness\" "
+               "0.25 \"float thickness\" 0.05 \"float eta\" 1.6\n" +
+               kTriangle + "Material \"coateddiffuse\"\n" + kTriangle);
+  const auto mat = [&](int i) { return s.materials[s.mesh.material[size_t(i)]]; };
+  EXPECT_EQ(mat(0).type, MaterialType::Dielectric);
+  EXPECT_FLOAT_EQ(mat(0).ior, 1.33f);
+  EXPECT_NEAR(mat(0).roughness, 0.1f, 1e-7);
+  EXPECT_NEAR(mat(1).ior, 1.5168f, 1e-6);
+  EXPECT_EQ(mat(2).type, MaterialType::ThinDielectric);
+  EXPECT_FLOAT_EQ(mat(2).ior, 1.4f);
+  EXPECT_EQ(mat(3).type, MaterialType::CoatedDiffuse);
+  EXPECT_TRUE(near(mat(3).albedo, Rgb(0.1f, 0.2f, 0.3f)));
+  EXPECT_NEAR(mat(3).roughness, 0.5f, 1e-7);
+  EXPECT_FLOAT_EQ(mat(3).thickness, 0.05f);
+  EXPECT_FLOAT_EQ(mat(3).ior, 1.6f);
+  // pbrt-v4's defaults: reflectance 0.5, roughness 0, thickness 0.01, eta 1.5.
+  EXPECT_TRUE(near(mat(4).albedo, Rgb(0.5f)));
+  EXPECT_FLOAT_EQ(mat(4).roughness, 0);
+  EXPECT_FLOAT_EQ(mat(4).thickness, 0.01f);
+  EXPECT_FLOAT_EQ(mat(4).ior, 1.5f);
+  EXPECT_TRUE(s.warnings.empty());
+}
+
+TEST(PbrtReader, ThinLensAndScreenWindow) {
+  TempDir dir;
+  std::string cam = kCamera;
+  cam.replace(cam.find("[ 40 ]"), 6,
+              "[ 40 ] \"float lensradius\" 0.1 \"float focaldistance\" 4 "
+              "\"float screenwindow\" [ 0 1 -0.5 0.5 ]");
+  Scene s = read_pbrt(dir, cam + kTriangle);
+  EXPECT_FLOAT_EQ(s.camera.lens_radius, 0.1f);
+  EXPECT_FLOAT_EQ(s.camera.focal_distance, 4);
+  EXPECT_FLOAT_EQ(s.camera.screen_window[0], 0);
+  EXPECT_FLOAT_EQ(s.camera.screen_window[3], 0.5f);
+  s.camera.setup(s.width, s.height);
+  // The screen window [0, 1] x [-0.5, 0.5]: the image's left edge looks straight ahead, its top
+  // edge up by tan(20 deg) / 2.
+  const Ray left = s.camera.generate_ray(0, 16);
+  EXPECT_TRUE(near(left.d, Vec3(0, 0, -1), 1e-5f));
+  const Ray top = s.camera.generate_ray(0, 0);
+  EXPECT_NEAR(top.d.y / -top.d.z, std::tan(20 * M_PI / 180) / 2, 1e-5);
+  // Every lens sample's ray through one pixel meets the others in the plane of focus, z = 1
+  // (4 in front of the camera at z = 5), and leaves from within the lens's radius.
+  Vec3 focus[3];
+  int i = 0;
+  for (Vec2 u : {Vec2{0.5f, 0.5f}, Vec2{0.1f, 0.9f}, Vec2{0.95f, 0.3f}}) {
+    const Ray r = s.camera.generate_ray(40, 10, u);
+    EXPECT_LE(length(r.o - s.camera.position), 0.1f + 1e-6f);
+    const float t = (1 - r.o.z) / r.d.z;
+    focus[i++] = r.o + r.d * t;
+  }
+  EXPECT_TRUE(near(focus[0], focus[1], 1e-4f));
+  EXPECT_TRUE(near(focus[0], focus[2], 1e-4f));
+  EXPECT_FALSE(near(s.camera.generate_ray(40, 10, {0.1f, 0.9f}).o, s.camera.position, 1e-3f));
+  // Without a lens the two-argument call is the pinhole ray, unchanged.
+  Scene pin = read_pbrt(dir, std::string(kCamera) + kTriangle);
+  EXPECT_FALSE(pin.camera.has_lens());
+  expect_mentions(pbrt_error(dir, "Camera \"perspective\" \"float screenwindow\" [ 1 0 0 1 ]\n"),
+                  {"bad.pbrt:1:", "screenwindow"});
+}
+
+TEST(PbrtReader, FilmIsoAndShutterScaleEmission) {
+  TempDir dir;
+  const std::string scene = kTriangle +
+                            std::string(
+                                "AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" "
+                                "[ 1 2 3 ]\n") +
+                            kTriangle +
+                            "AttributeEnd\n"
+                            "LightSource \"point\" \"rgb I\" [ 1 1 1 ]\n"
+                            "LightSource \"infinite\" \"rgb L\" [ 0.5 0.5 0.5 ]\n";
+  std::string cam = kCamera;
+  cam.replace(cam.find("[ 40 ]"), 6, "[ 40 ] \"float shutterclose\" 0.5");
+  cam.replace(cam.find("\"integer yresolution\" 32"), 24,
+              "\"integer yresolution\" 32 \"float iso\" 800");
+  Scene s = read_pbrt(dir, cam + scene);
+  // Imaging ratio: exposure time 0.5 * ISO 800 / 100 = 4.
+  EXPECT_TRUE(near(s.materials[s.mesh.material[1]].emission, Rgb(4, 8, 12)));
+  EXPECT_TRUE(near(s.lights[0].radiance, Rgb(4)));
+  EXPECT_TRUE(near(s.sky->radiance, Rgb(2)));
+  EXPECT_TRUE(s.warnings.empty());
+  Scene plain = read_pbrt(dir, std::string(kCamera) + scene);
+  EXPECT_TRUE(near(plain.materials[plain.mesh.material[1]].emission, Rgb(1, 2, 3)));
+}
+
+TEST(PbrtReader, OptionIsIgnoredAndOnlySrgbIsAColorSpace) {
+  TempDir dir;
+  Scene s = read_pbrt(dir,
+                      "Option \"bool disablepixeljitter\" true\n"
+                      "Option \"string rendercoordsys\" \"world\"\n"
+                      "ColorSpace \"srgb\"\n" +
+                          std::string(kCamera) + kTriangle);
+  EXPECT_EQ(s.mesh.triangle_count(), 1u);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_TRUE(has_warning(s, {"s.pbrt:1:", "Option", "ignored", "1 more"}));
+  // rll's own pixel filter is pbrt's box of radius 0.5; another is announced.
+  Scene box = read_pbrt(
+      dir, "PixelFilter \"box\" \"float xradius\" 0.5\n" + std::string(kCamera) + kTriangle);
+  EXPECT_TRUE(box.warnings.empty());
+  Scene gauss = read_pbrt(dir, "PixelFilter \"gaussian\"\n" + std::string(kCamera) + kTriangle);
+  EXPECT_TRUE(has_warning(gauss, {"s.pbrt:1:", "PixelFilter \"gaussian\"", "box"}));
+  expect_mentions(pbrt_error(dir, "ColorSpace \"aces2065-1\"\n"),
+                  {"bad.pbrt:1:", "ColorSpace \"aces2065-1\"", "srgb"});
 }

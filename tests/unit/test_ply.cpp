@@ -3,6 +3,8 @@
 // the file and the line or byte offset.
 #include <gtest/gtest.h>
 
+#include <zlib.h>
+
 #include <cstring>
 
 #include "rll/io/load.h"
@@ -178,4 +180,68 @@ TEST(PlyReader, BinaryErrorsNameTheByteOffset) {
   std::string lie = good;
   lie.replace(lie.find("vertex 4"), 8, "vertex 400000000");
   expect_mentions(ply_error(lie), {"bad.ply", "truncated"});
+}
+
+namespace {
+
+// gzip-compresses `bytes` with zlib (a gzip header and trailer: window bits 16 + MAX_WBITS).
+std::string gzip_bytes(const std::string& bytes) {
+  z_stream z{};
+  EXPECT_EQ(deflateInit2(&z, 9, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY), Z_OK);
+  std::string out(deflateBound(&z, uLong(bytes.size())), '\0');
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
+  z.avail_in = uInt(bytes.size());
+  z.next_out = reinterpret_cast<Bytef*>(out.data());
+  z.avail_out = uInt(out.size());
+  EXPECT_EQ(deflate(&z, Z_FINISH), Z_STREAM_END);
+  out.resize(z.total_out);
+  deflateEnd(&z);
+  return out;
+}
+
+void expect_same_mesh(const Mesh& a, const Mesh& b) {
+  ASSERT_EQ(a.positions.size(), b.positions.size());
+  ASSERT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(Vec3)),
+            0);
+  ASSERT_EQ(a.uvs.size(), b.uvs.size());
+  EXPECT_EQ(std::memcmp(a.uvs.data(), b.uvs.data(), a.uvs.size() * sizeof(Vec2)), 0);
+  ASSERT_EQ(a.normals.size(), b.normals.size());
+}
+
+}  // namespace
+
+TEST(PlyReader, GzipCompressedPlyReadsLikeThePlainFile) {
+  TempDir dir;
+  for (PlyEncoding e : {PlyEncoding::Ascii, PlyEncoding::BinaryLittleEndian}) {
+    const std::string plain = ply_bytes(quad_mesh(), e);
+    const std::string gz = gzip_bytes(plain);
+    ASSERT_TRUE(is_gzip(gz));
+    ASSERT_FALSE(is_gzip(plain));
+    const Mesh a = read_ply_file(dir.write("quad.ply", plain));
+    const Mesh b = read_ply_file(dir.write("quad.ply.gz", gz));
+    expect_same_mesh(a, b);
+    EXPECT_EQ(gunzip(gz, "x.gz"), plain);
+    // Two gzip members one after the other are one file (RFC 1952).
+    EXPECT_EQ(gunzip(gzip_bytes(plain.substr(0, 10)) + gzip_bytes(plain.substr(10)), "x.gz"),
+              plain);
+  }
+  // The command's reader takes the compressed file too.
+  Scene s;
+  load_ply(dir / "quad.ply.gz", s);
+  EXPECT_EQ(s.mesh.triangle_count(), quad_mesh().triangle_count());
+}
+
+TEST(PlyReader, TruncatedOrCorruptGzipIsAClearError) {
+  TempDir dir;
+  const std::string gz = gzip_bytes(ply_bytes(quad_mesh(), PlyEncoding::BinaryLittleEndian));
+  auto p = dir.write("cut.ply.gz", gz.substr(0, gz.size() / 2));
+  expect_mentions(error_of([&] { read_ply_file(p); }), {"cut.ply.gz", "truncated"});
+  std::string bad = gz;
+  bad[12] = char(~bad[12]);
+  bad[13] = char(~bad[13]);
+  auto q = dir.write("bad.ply.gz", bad);
+  expect_mentions(error_of([&] { read_ply_file(q); }), {"bad.ply.gz"});
+  expect_mentions(error_of([&] { gunzip(gz + "xyz", "tail.gz"); }), {"tail.gz", "after the end"});
+  expect_mentions(error_of([&] { gunzip(gz, "big.gz", 10); }), {"big.gz", "more than 10 bytes"});
 }

@@ -16,12 +16,6 @@ using rll::test::TempDir;
 
 namespace {
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream f(p);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
 
 void expect_same_material(const Material& a, const Material& b, size_t tri) {
   EXPECT_EQ(a.type, b.type) << "triangle " << tri;
@@ -39,9 +33,11 @@ void expect_same_material(const Material& a, const Material& b, size_t tri) {
     EXPECT_EQ(a.eta, b.eta) << "triangle " << tri;
     EXPECT_EQ(a.k, b.k) << "triangle " << tri;
   }
-  if (a.type == MaterialType::Plastic) {
+  if (a.type != MaterialType::Diffuse && a.type != MaterialType::Conductor) {
     EXPECT_EQ(a.ior, b.ior) << "triangle " << tri;
   }
+  EXPECT_EQ(a.thickness, b.thickness) << "triangle " << tri;
+  EXPECT_EQ(a.roughness_texture >= 0, b.roughness_texture >= 0) << "triangle " << tri;
 }
 
 // Both scenes finalized: same mesh, materials per triangle, lights, camera and film.
@@ -106,11 +102,11 @@ TEST(SaveJson, SkyDomeIsWrittenAsSkyNotAsTriangles) {
   Scene a = finalized_builtin("arch-interior");
   ASSERT_GT(a.sky_triangle_count, 0u);
   save_json_scene(a, dir / "arch.json");
-  std::string obj = slurp(dir / "arch.obj");
+  std::string obj = rll::test::read_text(dir / "arch.obj");
   size_t faces = 0;
   for (size_t p = obj.find("\nf "); p != std::string::npos; p = obj.find("\nf ", p + 1)) ++faces;
   EXPECT_EQ(faces, a.mesh.triangle_count() - a.sky_triangle_count);
-  std::string json = slurp(dir / "arch.json");
+  std::string json = rll::test::read_text(dir / "arch.json");
   EXPECT_NE(json.find("\"sky\""), std::string::npos);
   EXPECT_NE(json.find("\"directional\""), std::string::npos);
   EXPECT_EQ(json.find("0.7300000"),

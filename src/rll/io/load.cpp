@@ -32,15 +32,16 @@ void drop_unused_materials(Scene& scene) {
     if (m < material_id.size()) m = uint32_t(material_id[m]);
   std::vector<int> texture_id(scene.textures.size(), -1);
   std::vector<Image> textures;
-  for (auto& m : kept) {
-    if (m.albedo_texture < 0 || m.albedo_texture >= int(scene.textures.size())) continue;
-    int& id = texture_id[size_t(m.albedo_texture)];
-    if (id < 0) {
-      id = int(textures.size());
-      textures.push_back(std::move(scene.textures[size_t(m.albedo_texture)]));
+  for (auto& m : kept)
+    for (int* tex : {&m.albedo_texture, &m.roughness_texture}) {
+      if (*tex < 0 || *tex >= int(scene.textures.size())) continue;
+      int& id = texture_id[size_t(*tex)];
+      if (id < 0) {
+        id = int(textures.size());
+        textures.push_back(std::move(scene.textures[size_t(*tex)]));
+      }
+      *tex = id;
     }
-    m.albedo_texture = id;
-  }
   scene.materials = std::move(kept);
   scene.textures = std::move(textures);
 }

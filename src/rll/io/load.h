@@ -50,6 +50,13 @@ void load_pbrt(const std::filesystem::path& path, Scene& scene);
 // A PLY file's triangles (polygons fan-triangulated), positions, and normals and uvs when it has
 // them; `material` and `light` are left empty.
 Mesh parse_ply(std::string_view bytes, const std::string& name);
+// A PLY file from disk, gzip-compressed (.ply.gz, recognized by its magic bytes) or not.
+Mesh read_ply_file(const std::filesystem::path& path);
+// Whether `bytes` begin like gzip data, and that data inflated (concatenated members included);
+// a truncated or corrupt stream, or more than `max_bytes` out, is an error naming `name`.
+bool is_gzip(std::string_view bytes);
+std::string gunzip(std::string_view bytes, const std::string& name,
+                   size_t max_bytes = size_t(1) << 33);
 void parse_gltf(std::string_view bytes, const std::string& name,
                 const std::filesystem::path& base_dir, Scene& scene,
                 const ReadPolicy& policy = {});

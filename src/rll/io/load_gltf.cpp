@@ -24,7 +24,8 @@ namespace {
 // Extensions whose meaning rll renders (or, for KHR_mesh_quantization, reads).
 const std::set<std::string> kSupportedExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
-    "KHR_materials_ior", "KHR_mesh_quantization"};
+    "KHR_materials_ior", "KHR_materials_transmission", "KHR_materials_volume",
+    "KHR_mesh_quantization"};
 
 // tinygltf decodes images with stb_image into 8-bit RGBA, without the sRGB decoding rll needs;
 // this keeps the encoded bytes of images given by URI, which rll decodes when a material uses
@@ -552,6 +553,23 @@ class GltfReader {
       if (pbr.baseColorTexture.texCoord != 0)
         warn(fmt::format("{}: only TEXCOORD_0 is read; the base colour texture uses it", mw));
     }
+    const tinygltf::Value* transmission = extension(gm, "KHR_materials_transmission");
+    const float transmit =
+        transmission ? to_float(number_or(*transmission, "transmissionFactor", 0)) : 0.0f;
+    if (!(transmit >= 0 && transmit <= 1))
+      fail("{}: KHR_materials_transmission transmissionFactor must be in [0, 1]", mw);
+    float ior = 1.5f;
+    if (const tinygltf::Value* e = extension(gm, "KHR_materials_ior")) {
+      ior = to_float(number_or(*e, "ior", 1.5));
+      if (!std::isfinite(ior) || ior < 0)
+        fail("{}: KHR_materials_ior ior must be finite and >= 0", mw);
+      ior = std::max(1.0f, ior);
+    }
+    if (metallic < 0.5f && transmit > 0 && transmit < 0.5f)
+      warn(
+          fmt::format("{}: a transmissionFactor below 0.5 ({}) is ignored: the material is "
+                      "rendered opaque",
+                      mw, transmit));
     if (metallic >= 0.5f) {
       m.type = MaterialType::Conductor;
       m.specular = base;
@@ -559,6 +577,33 @@ class GltfReader {
       m.k = kTintableK;
       if (base_texture >= 0)
         warn(fmt::format("{}: a metal's base colour texture is not supported; its factor is used",
+                         mw));
+    } else if (transmit >= 0.5f) {
+      // Glass. glTF's transmission without KHR_materials_volume is thin-walled (a pane: light
+      // goes straight through); with a volume (thicknessFactor > 0) it refracts.
+      const tinygltf::Value* volume = extension(gm, "KHR_materials_volume");
+      const bool solid = volume && number_or(*volume, "thicknessFactor", 0) > 0;
+      m.type = solid ? MaterialType::Dielectric : MaterialType::ThinDielectric;
+      m.ior = ior;
+      if (!solid) m.roughness = 0;
+      if (transmit < 1)
+        warn(fmt::format("{}: transmissionFactor {} is rendered as fully transmissive glass", mw,
+                         transmit));
+      if (transmission->Has("transmissionTexture"))
+        warn(fmt::format("{}: the transmissionTexture is not supported; ignored", mw));
+      if (!solid && rough > 0)
+        warn(
+            fmt::format("{}: thin-walled transmission is rendered smooth (roughnessFactor {} "
+                        "ignored)",
+                        mw, rough));
+      if (!(base == Rgb(1)) || base_texture >= 0)
+        warn(
+            fmt::format("{}: glass is rendered clear: its base colour (and texture) does not "
+                        "tint the transmitted light",
+                        mw));
+      if (volume && (volume->Has("attenuationDistance") || volume->Has("attenuationColor")))
+        warn(fmt::format("{}: KHR_materials_volume attenuation is not supported; the glass is "
+                         "rendered without absorption",
                          mw));
     } else {
       m.albedo = base;
@@ -577,10 +622,9 @@ class GltfReader {
       } else {
         m.type = MaterialType::Plastic;
         m.specular = spec_colour * specular;
-        if (const tinygltf::Value* ior = extension(gm, "KHR_materials_ior"))
-          m.ior = std::max(1.0f, to_float(number_or(*ior, "ior", 1.5)));
-        if (!is_finite(m.specular) || min_component(m.specular) < 0 || !std::isfinite(m.ior))
-          fail("{}: KHR_materials_specular/ior values must be finite and >= 0", mw);
+        m.ior = ior;
+        if (!is_finite(m.specular) || min_component(m.specular) < 0)
+          fail("{}: KHR_materials_specular values must be finite and >= 0", mw);
       }
     }
     Converted c;
@@ -601,12 +645,31 @@ class GltfReader {
     }
     if (gm.alphaMode != "OPAQUE" && !gm.alphaMode.empty())
       warn(fmt::format("{}: alphaMode {} is not supported; rendered opaque", mw, gm.alphaMode));
-    if (pbr.metallicRoughnessTexture.index >= 0 || gm.normalTexture.index >= 0 ||
-        gm.occlusionTexture.index >= 0)
-      warn(
-          fmt::format("{}: metallic-roughness, normal and occlusion textures are not supported; "
-                      "ignored",
-                      m_name));
+    if (pbr.metallicRoughnessTexture.index >= 0) {
+      if (m.type == MaterialType::ThinDielectric || m.type == MaterialType::Diffuse) {
+        warn(
+            fmt::format("{}: the metallic-roughness texture has no use on a {} material; "
+                        "ignored",
+                        mw, material_type_name(m.type)));
+      } else {
+        m.roughness_texture = roughness_texture(pbr.metallicRoughnessTexture.index, rough,
+                                                mw + " metallicRoughnessTexture");
+        if (pbr.metallicRoughnessTexture.texCoord != 0)
+          warn(fmt::format("{}: only TEXCOORD_0 is read; the roughness texture uses it", mw));
+        // The blue channel (metallic) cannot turn parts of a material into metal or back.
+        const Image& mr = m_scene.textures[size_t(
+            texture(pbr.metallicRoughnessTexture.index, mw + " metallicRoughnessTexture", false))];
+        if (std::any_of(mr.pixels().begin(), mr.pixels().end(), [&](const Rgb& c) {
+              return (c.z * metallic >= 0.5f) != (metallic >= 0.5f);
+            }))
+          warn(
+              fmt::format("{}: the metallic channel (blue) of the metallic-roughness texture "
+                          "is not supported; metallicFactor decides the material",
+                          mw));
+      }
+    }
+    if (gm.normalTexture.index >= 0 || gm.occlusionTexture.index >= 0)
+      warn(fmt::format("{}: normal and occlusion textures are not supported; ignored", m_name));
     m_scene.materials.push_back(m);
     c.material = uint32_t(m_scene.materials.size() - 1);
     return m_materials[index] = c;
@@ -617,29 +680,41 @@ class GltfReader {
     return it == m.extensions.end() || !it->second.IsObject() ? nullptr : &it->second;
   }
 
-  // A texture's image, decoded (sRGB) into Scene::textures once.
-  int texture(int index, const std::string& where) {
+  // A texture's image, decoded (colours from sRGB, data as stored) into Scene::textures once.
+  int texture(int index, const std::string& where, bool srgb = true) {
     if (index < 0 || size_t(index) >= m_model.textures.size())
       fail("{}: texture {} does not exist ({} textures)", where, index, m_model.textures.size());
     const int source = m_model.textures[size_t(index)].source;
     if (source < 0 || size_t(source) >= m_model.images.size())
       fail("{}: texture {} has no image (source {})", where, index, source);
-    if (auto it = m_images.find(source); it != m_images.end()) return it->second;
+    if (auto it = m_images.find({source, srgb}); it != m_images.end()) return it->second;
     const auto& img = m_model.images[size_t(source)];
     const std::string iw = fmt::format("{}: image {}", m_name, source);
     Image decoded;
     if (img.bufferView >= 0) {
       const auto [bytes, size] = view_bytes(img.bufferView, iw);
-      decoded = decode_image(bytes, size, true, iw);
+      decoded = decode_image(bytes, size, srgb, iw);
     } else {
       if (img.image.empty())
         fail("{} ('{}') could not be read{}", iw, img.uri,
              m_policy.read_files ? " (missing file?)" : " (reading files is turned off)");
-      decoded = decode_image(img.image.data(), img.image.size(), true, iw);
+      decoded = decode_image(img.image.data(), img.image.size(), srgb, iw);
     }
     if (decoded.width() <= 0 || decoded.height() <= 0) fail("{}: empty image", iw);
     m_scene.textures.push_back(std::move(decoded));
-    return m_images[source] = int(m_scene.textures.size() - 1);
+    return m_images[{source, srgb}] = int(m_scene.textures.size() - 1);
+  }
+
+  // rll's roughness texture (GGX alpha in the first channel) from a metallic-roughness texture:
+  // alpha = (green channel x roughnessFactor)^2, glTF's roughness being perceptual.
+  int roughness_texture(int index, float factor, const std::string& where) {
+    const int data = texture(index, where, false);
+    auto key = std::make_pair(data, factor);
+    if (auto it = m_roughness.find(key); it != m_roughness.end()) return it->second;
+    Image alpha = m_scene.textures[size_t(data)];
+    for (size_t i = 0; i < alpha.pixel_count(); ++i) alpha[i] = Rgb(sqr(alpha[i].y * factor));
+    m_scene.textures.push_back(std::move(alpha));
+    return m_roughness[key] = int(m_scene.textures.size() - 1);
   }
 
   // --- camera and lights ---
@@ -706,7 +781,8 @@ class GltfReader {
   ReadPolicy m_policy;
   std::vector<bool> m_visited;
   std::map<int, Converted> m_materials;
-  std::map<int, int> m_images;
+  std::map<std::pair<int, bool>, int> m_images;  // (image, sRGB) -> Scene::textures
+  std::map<std::pair<int, float>, int> m_roughness;  // (linear image, factor) -> alpha texture
   std::map<std::tuple<uint32_t, float, float, float>, uint32_t> m_textured_emitters;
   std::set<std::string> m_warned;
 };

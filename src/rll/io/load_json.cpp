@@ -227,25 +227,39 @@ class JsonSceneReader {
   uint32_t add_material(const json& v, const std::string& ptr, const std::string& name) {
     check_object(v, ptr,
                  {"type", "albedo", "roughness", "eta", "k", "ior", "specular", "emission",
-                  "two_sided", "texture"});
+                  "two_sided", "texture", "roughness_texture", "thickness"});
     Material m;
     m.name = name;
     std::string type = optional_field(v, ptr, "type", to_string).value_or("diffuse");
     std::vector<std::string_view> applies;
     if (type == "diffuse") {
       m.type = MaterialType::Diffuse;
-      applies = {"type", "albedo", "texture", "emission", "two_sided"};
+      applies = {"albedo", "texture"};
     } else if (type == "conductor") {
       m.type = MaterialType::Conductor;
-      applies = {"type", "eta", "k", "specular", "roughness", "emission", "two_sided"};
+      applies = {"eta", "k", "specular", "roughness", "roughness_texture"};
     } else if (type == "plastic") {
       m.type = MaterialType::Plastic;
-      applies = {"type",      "albedo", "texture",  "specular",
-                 "roughness", "ior",    "emission", "two_sided"};
+      applies = {"albedo", "texture", "specular", "roughness", "roughness_texture", "ior"};
+    } else if (type == "dielectric") {
+      m.type = MaterialType::Dielectric;
+      m.roughness = 0;  // smooth glass unless said otherwise
+      applies = {"ior", "roughness", "roughness_texture"};
+    } else if (type == "thindielectric") {
+      m.type = MaterialType::ThinDielectric;
+      m.roughness = 0;  // a smooth pane
+      applies = {"ior"};
+    } else if (type == "coateddiffuse") {
+      m.type = MaterialType::CoatedDiffuse;
+      m.roughness = 0;  // a smooth coating unless said otherwise (pbrt-v4's default)
+      applies = {"albedo", "texture", "roughness", "roughness_texture", "ior", "thickness"};
     } else {
-      fail("{}: unknown material type '{}' (rll knows diffuse, conductor, plastic)",
-           child(ptr, "type"), printable(type));
+      fail(
+          "{}: unknown material type '{}' (rll knows diffuse, conductor, plastic, dielectric, "
+          "thindielectric, coateddiffuse)",
+          child(ptr, "type"), printable(type));
     }
+    applies.insert(applies.end(), {"type", "emission", "two_sided"});
     for (const auto& item : v.items())
       if (std::find(applies.begin(), applies.end(), item.key()) == applies.end())
         fail("{}: field \"{}\" does not apply to a {} material", ptr, printable(item.key()), type);
@@ -259,23 +273,32 @@ class JsonSceneReader {
     m.roughness = optional_field(v, ptr, "roughness", to_number).value_or(m.roughness);
     if (!(m.roughness >= 0))
       fail("{} must not be negative (got {})", child(ptr, "roughness"), m.roughness);
+    m.thickness = optional_field(v, ptr, "thickness", to_number).value_or(m.thickness);
+    if (!(m.thickness > 0))
+      fail("{} must be positive (got {})", child(ptr, "thickness"), m.thickness);
     m.emission = optional_field(v, ptr, "emission", to_colour).value_or(m.emission);
     m.two_sided_emission = optional_field(v, ptr, "two_sided", to_bool).value_or(false);
-    if (v.contains("texture")) m.albedo_texture = texture(v["texture"], child(ptr, "texture"));
+    if (v.contains("texture"))
+      m.albedo_texture = texture(v["texture"], child(ptr, "texture"), true);
+    if (v.contains("roughness_texture"))
+      m.roughness_texture =
+          texture(v["roughness_texture"], child(ptr, "roughness_texture"), false);
     m_scene.materials.push_back(m);
     return uint32_t(m_scene.materials.size() - 1);
   }
 
-  int texture(const json& v, const std::string& ptr) {
+  // An image file read once per decoding: colours from sRGB (8-bit files), data such as
+  // roughness as it is stored.
+  int texture(const json& v, const std::string& ptr, bool srgb) {
     fs::path p = referenced_file(v, ptr);
-    auto it = m_textures.find(p);
+    auto it = m_textures.find({p, srgb});
     if (it != m_textures.end()) return it->second;
     try {
-      m_scene.textures.push_back(read_image(p));
+      m_scene.textures.push_back(read_image(p, srgb));
     } catch (const Error& e) {
       fail("{}: {}", ptr, e.what());
     }
-    return m_textures[p] = int(m_scene.textures.size() - 1);
+    return m_textures[{p, srgb}] = int(m_scene.textures.size() - 1);
   }
 
   // A material given by name (from /materials) or inline.
@@ -308,7 +331,8 @@ class JsonSceneReader {
   // The quads' vertices from v0 on come in fours: p, p+e1, p+e1+e2, p+e2.
   void quad_uvs(uint32_t material, size_t v0) {
     Mesh& mesh = m_scene.mesh;
-    if (m_scene.materials[material].albedo_texture < 0) return;
+    const Material& m = m_scene.materials[material];
+    if (m.albedo_texture < 0 && m.roughness_texture < 0) return;
     mesh.uvs.resize(mesh.positions.size(), Vec2{});
     static const Vec2 kCorners[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
     for (size_t i = v0; i < mesh.positions.size(); ++i) mesh.uvs[i] = kCorners[(i - v0) % 4];
@@ -523,7 +547,7 @@ class JsonSceneReader {
   Scene& m_scene;
   ReadPolicy m_policy;
   std::map<std::string, uint32_t> m_named;
-  std::map<fs::path, int> m_textures;
+  std::map<std::pair<fs::path, bool>, int> m_textures;  // (file, sRGB) -> Scene::textures
   std::optional<uint32_t> m_default_material;
 };
 

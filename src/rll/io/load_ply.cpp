@@ -10,6 +10,8 @@
 #include <cstring>
 #include <optional>
 
+#include <zlib.h>
+
 #include "rll/core/error.h"
 #include "rll/io/load.h"
 #include "rll/io/text_scan.h"
@@ -160,8 +162,8 @@ class PlyReader {
         if (!next_token(rest, name) || !next_token(rest, count) || next_token(rest, tok))
           fail_line(line_no, "expected 'element NAME COUNT'");
         if (!parse_long(count, n) || n < 0)
-          fail_line(line_no,
-                    fmt::format("element count '{}' is not a non-negative integer", printable(count)));
+          fail_line(line_no, fmt::format("element count '{}' is not a non-negative integer",
+                                         printable(count)));
         m_elements.push_back({std::string(name), size_t(n), {}, line_no});
         current = &m_elements.back();
       } else if (kw == "property") {
@@ -176,9 +178,8 @@ class PlyReader {
           p.list = true;
           p.count_type = parse_type(count_type, line_no);
           if (!is_integer(p.count_type))
-            fail_line(line_no,
-                      fmt::format("a list count must have an integer type, not '{}'",
-                                  printable(count_type)));
+            fail_line(line_no, fmt::format("a list count must have an integer type, not '{}'",
+                                           printable(count_type)));
         }
         p.type = parse_type(type, line_no);
         if (!next_token(rest, name) || next_token(rest, tok))
@@ -294,7 +295,8 @@ class PlyReader {
       m_mesh.normals[i] = is_finite(n) ? n : Vec3(0);  // an unusable normal: "none"
     }
     if (m_layout.uv[0] >= 0) {
-      Vec2 uv{to_float(m_values[size_t(m_layout.uv[0])]), to_float(m_values[size_t(m_layout.uv[1])])};
+      Vec2 uv{to_float(m_values[size_t(m_layout.uv[0])]),
+              to_float(m_values[size_t(m_layout.uv[1])])};
       if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {
         std::string what = fmt::format("vertex {} has a non-finite texture coordinate", i);
         if (m_encoding == Encoding::Ascii) fail_line(line, what);
@@ -393,9 +395,8 @@ class PlyReader {
       case NumberStatus::Malformed:
         break;
     }
-    fail_line(line,
-              fmt::format("'{}' of '{}' is not a number (got '{}')", prop.name, el.name,
-                          printable(tok)));
+    fail_line(line, fmt::format("'{}' of '{}' is not a number (got '{}')", prop.name, el.name,
+                                printable(tok)));
   }
 
   static bool in_range(double v, PlyType t) {
@@ -551,10 +552,71 @@ Mesh parse_ply(std::string_view bytes, const std::string& name) {
   return PlyReader(bytes, name).read();
 }
 
+bool is_gzip(std::string_view bytes) {
+  return bytes.size() >= 2 && uint8_t(bytes[0]) == 0x1f && uint8_t(bytes[1]) == 0x8b;
+}
+
+std::string gunzip(std::string_view bytes, const std::string& name, size_t max_bytes) {
+  z_stream z{};
+  // 16 + MAX_WBITS: a gzip header and trailer around the deflate stream.
+  if (inflateInit2(&z, 16 + MAX_WBITS) != Z_OK) fail("{}: cannot start zlib", name);
+  std::string out;
+  char buf[1 << 16];
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
+  size_t left = bytes.size();
+  int rc = Z_OK;
+  try {
+    for (;;) {
+      if (z.avail_in == 0 && left > 0) {
+        const uInt n = uInt(std::min<size_t>(left, 1u << 30));
+        z.avail_in = n;
+        left -= n;
+      }
+      z.next_out = reinterpret_cast<Bytef*>(buf);
+      z.avail_out = sizeof buf;
+      rc = inflate(&z, Z_NO_FLUSH);
+      out.append(buf, sizeof buf - z.avail_out);
+      if (out.size() > max_bytes) fail("{}: decompresses to more than {} bytes", name, max_bytes);
+      if (rc == Z_STREAM_END) {
+        // Concatenated gzip members are one file (RFC 1952); anything else after the end is not.
+        if (z.avail_in == 0 && left == 0) break;
+        if (z.avail_in == 0) {
+          const uInt n = uInt(std::min<size_t>(left, 1u << 30));
+          z.avail_in = n;
+          left -= n;
+        }
+        if (z.avail_in < 2 || z.next_in[0] != 0x1f || z.next_in[1] != 0x8b)
+          fail("{}: data after the end of the gzip stream", name);
+        inflateReset(&z);
+        continue;
+      }
+      if (rc == Z_BUF_ERROR && z.avail_in == 0 && left == 0)
+        fail(
+            "{}: the gzip data is truncated (it ends after {} compressed bytes, inside the "
+            "stream)",
+            name, bytes.size());
+      if (rc != Z_OK && rc != Z_BUF_ERROR)
+        fail("{}: corrupt gzip data ({})", name, z.msg ? z.msg : "zlib error");
+    }
+  } catch (...) {
+    inflateEnd(&z);
+    throw;
+  }
+  inflateEnd(&z);
+  return out;
+}
+
+Mesh read_ply_file(const fs::path& path) {
+  const std::string file = path.string();
+  std::string bytes = read_text_file(path);
+  if (is_gzip(bytes)) bytes = gunzip(bytes, file);
+  return parse_ply(bytes, file);
+}
+
 void load_ply(const fs::path& path, Scene& scene) {
   const std::string file = path.string();
   if (!fs::exists(path)) fail("{}: file not found", file);
-  Mesh mesh = parse_ply(read_text_file(path), file);
+  Mesh mesh = read_ply_file(path);
   Material m;
   m.name = "default";
   const uint32_t material = uint32_t(scene.materials.size());

@@ -49,22 +49,29 @@ std::string escape_spaces(const std::string& s) {
   return e;
 }
 
-json material_json(const Material& m, const std::string& texture) {
+// Every field that applies to the material's type (docs/scene-format.md), so that reading the
+// JSON back gives the same material whatever the type's defaults.
+json material_json(const Material& m, const std::string& texture,
+                   const std::string& roughness_texture) {
+  const MaterialType t = m.type;
   json j;
-  j["type"] = material_type_name(m.type);
-  if (m.type != MaterialType::Conductor) {
+  j["type"] = material_type_name(t);
+  if (t == MaterialType::Diffuse || t == MaterialType::Plastic ||
+      t == MaterialType::CoatedDiffuse) {
     j["albedo"] = vec(m.albedo);
     if (!texture.empty()) j["texture"] = texture;
   }
-  if (m.type != MaterialType::Diffuse) {
-    j["specular"] = vec(m.specular);
+  if (t == MaterialType::Conductor || t == MaterialType::Plastic) j["specular"] = vec(m.specular);
+  if (t != MaterialType::Diffuse && t != MaterialType::ThinDielectric) {
     j["roughness"] = number(m.roughness);
+    if (!roughness_texture.empty()) j["roughness_texture"] = roughness_texture;
   }
-  if (m.type == MaterialType::Conductor) {
+  if (t == MaterialType::Conductor) {
     j["eta"] = vec(m.eta);
     j["k"] = vec(m.k);
   }
-  if (m.type == MaterialType::Plastic) j["ior"] = number(m.ior);
+  if (t != MaterialType::Diffuse && t != MaterialType::Conductor) j["ior"] = number(m.ior);
+  if (t == MaterialType::CoatedDiffuse) j["thickness"] = number(m.thickness);
   if (m.is_emissive()) j["emission"] = vec(m.emission);
   if (m.two_sided_emission) j["two_sided"] = true;
   return j;
@@ -87,6 +94,13 @@ void append_mtl(std::string& out, const std::string& name, const Material& m,
     case MaterialType::Plastic:
       out += fmt::format("Kd {}\nKs {}\nNs {}\nNi {}\nillum 2\n", rgb(m.albedo), rgb(m.specular),
                          ns, m.ior);
+      break;
+    case MaterialType::CoatedDiffuse:
+      out += fmt::format("Kd {}\nKs 1 1 1\nNs {}\nNi {}\nillum 2\n", rgb(m.albedo), ns, m.ior);
+      break;
+    case MaterialType::Dielectric:
+    case MaterialType::ThinDielectric:  // glass: refraction and Fresnel reflection
+      out += fmt::format("Kd 0 0 0\nKs 1 1 1\nNs {}\nNi {}\nTf 1 1 1\nillum 7\n", ns, m.ior);
       break;
   }
   if (m.is_emissive()) out += fmt::format("Ke {}\n", rgb(m.emission));
@@ -141,15 +155,18 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
   std::set<std::string> taken;
   std::vector<std::string> names;
   std::map<int, std::string> texture_files;
-  for (uint32_t m : used_materials) {
-    names.push_back(unique_name(scene.materials[m].name, taken));
-    int tex = scene.materials[m].albedo_texture;
+  auto add_texture = [&](int tex) {
     if (tex >= 0 && !texture_files.count(tex))
       texture_files[tex] = fmt::format("{}_tex{}.exr", stem, texture_files.size());
-  }
-  auto texture_of = [&](const Material& m) {
-    return m.albedo_texture >= 0 ? texture_files.at(m.albedo_texture) : std::string();
   };
+  for (uint32_t m : used_materials) {
+    names.push_back(unique_name(scene.materials[m].name, taken));
+    add_texture(scene.materials[m].albedo_texture);
+    const MaterialType t = scene.materials[m].type;
+    if (t != MaterialType::Diffuse && t != MaterialType::ThinDielectric)  // where it applies
+      add_texture(scene.materials[m].roughness_texture);
+  }
+  auto texture_of = [&](int tex) { return tex >= 0 ? texture_files.at(tex) : std::string(); };
 
   json j;
   if (scene.has_camera)  // otherwise the reader fits one to the scene, as it was here
@@ -203,8 +220,10 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
     json materials = json::object(), material_map = json::object();
     for (size_t i = 0; i < used_materials.size(); ++i) {
       const Material& m = scene.materials[used_materials[i]];
-      append_mtl(mtl, names[i], m, texture_of(m));
-      materials[names[i]] = material_json(m, texture_of(m));
+      append_mtl(mtl, names[i], m, texture_of(m.albedo_texture));
+      const bool rough = texture_files.count(m.roughness_texture) > 0;
+      materials[names[i]] = material_json(m, texture_of(m.albedo_texture),
+                                          rough ? texture_of(m.roughness_texture) : "");
       material_map[names[i]] = names[i];
     }
 

@@ -142,21 +142,34 @@ class GltfWriter {
     }
     const int indices = accessor(m.triangles.data(), m.triangles.size() * 12,
                                  m.triangles.size() * 3, 5125, "SCALAR");
-    return {
-        {"attributes", attributes}, {"indices", indices}, {"material", material(part.material)}};
+    return {{"attributes", attributes},
+            {"indices", indices},
+            {"material", material(part.material, hi - lo)}};
   }
 
-  int material(uint32_t index) {
+  // `extent`: the size of the material's triangles' bounding box (a glass's thickness).
+  int material(uint32_t index, const Vec3& extent) {
     if (auto it = m_material_index.find(index); it != m_material_index.end()) return it->second;
     const Material& m = m_scene.materials[index];
     json g;
     g["name"] = m.name;
     json pbr;
     json extensions = json::object();
-    pbr["roughnessFactor"] = std::sqrt(std::min(1.0f, std::max(0.0f, m.roughness)));
-    if (m.roughness > 1)
+    auto extend = [&](const char* name, json value) {
+      extensions[name] = std::move(value);
+      m_extensions.insert(name);
+    };
+    const bool thin = m.type == MaterialType::ThinDielectric;
+    pbr["roughnessFactor"] = thin ? 0.0f : std::sqrt(std::min(1.0f, std::max(0.0f, m.roughness)));
+    if (m.roughness > 1 && !thin && m.roughness_texture < 0)
       m_warnings.push_back(
           fmt::format("material '{}': roughness {} is clamped to glTF's 1", m.name, m.roughness));
+    if (m.roughness_texture >= 0 && m.type != MaterialType::Diffuse && !thin) {
+      // glTF's roughness texture: perceptual roughness (sqrt of alpha) in green, metallic in blue.
+      pbr["roughnessFactor"] = 1;
+      pbr["metallicRoughnessTexture"] = {
+          {"index", roughness_texture(m.roughness_texture, m.type == MaterialType::Conductor)}};
+    }
     if (m.type == MaterialType::Conductor) {
       pbr["metallicFactor"] = 1;
       Rgb base = m.specular;
@@ -172,18 +185,34 @@ class GltfWriter {
             m.name));
       }
       pbr["baseColorFactor"] = {base.x, base.y, base.z, 1};
+    } else if (m.type == MaterialType::Dielectric || thin) {
+      // Clear glass: full transmission; KHR_materials_volume makes it a solid that refracts,
+      // its absence a thin wall (glTF's semantics), which is rll's thin dielectric.
+      pbr["metallicFactor"] = 0;
+      pbr["baseColorFactor"] = {1, 1, 1, 1};
+      extend("KHR_materials_transmission", {{"transmissionFactor", 1}});
+      extend("KHR_materials_ior", {{"ior", m.ior}});
+      if (!thin) {
+        float thickness = std::min({extent.x, extent.y, extent.z});
+        if (!(thickness > 0)) thickness = std::max({extent.x, extent.y, extent.z, 1e-3f});
+        extend("KHR_materials_volume", {{"thicknessFactor", thickness}});
+      }
     } else {
       pbr["metallicFactor"] = 0;
       pbr["baseColorFactor"] = {m.albedo.x, m.albedo.y, m.albedo.z, 1};
       if (m.albedo_texture >= 0) pbr["baseColorTexture"] = {{"index", texture(m.albedo_texture)}};
       if (m.type == MaterialType::Diffuse) {
-        extensions["KHR_materials_specular"] = {{"specularFactor", 0}};
+        extend("KHR_materials_specular", {{"specularFactor", 0}});
       } else {
-        extensions["KHR_materials_specular"] = {{"specularColorFactor", vec(m.specular)}};
-        extensions["KHR_materials_ior"] = {{"ior", m.ior}};
-        m_extensions.insert("KHR_materials_ior");
+        extend("KHR_materials_specular", {{"specularColorFactor", vec(m.specular)}});
+        extend("KHR_materials_ior", {{"ior", m.ior}});
       }
-      m_extensions.insert("KHR_materials_specular");
+      if (m.type == MaterialType::CoatedDiffuse)
+        m_warnings.push_back(fmt::format(
+            "material '{}': glTF has no layered coated diffuse; written as a dielectric "
+            "specular layer over the base colour (rll reads it back as plastic), without the "
+            "coating's thickness",
+            m.name));
     }
     g["pbrMetallicRoughness"] = pbr;
     if (m.is_emissive()) {
@@ -214,6 +243,34 @@ class GltfWriter {
     return m_texture_index[index] = int(m_textures.size() - 1);
   }
 
+  // A roughness texture as glTF's metallic-roughness PNG: green = sqrt(alpha), blue = metallic,
+  // stored linearly (write_image encodes PNGs as sRGB, so each value is given as the linear
+  // value of its sRGB code).
+  int roughness_texture(int index, bool metal) {
+    const auto key = std::make_pair(index, metal);
+    if (auto it = m_roughness_index.find(key); it != m_roughness_index.end()) return it->second;
+    const std::string file =
+        fmt::format("{}_rough{}{}.png", m_path.stem().string(), index, metal ? "_metal" : "");
+    auto code = [](float v) {
+      const float c = std::round(std::clamp(v, 0.0f, 1.0f) * 255) / 255;
+      return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+    };
+    const Image& alpha = m_scene.textures[size_t(index)];
+    Image img(alpha.width(), alpha.height());
+    bool clamped = false;
+    for (size_t i = 0; i < img.pixel_count(); ++i) {
+      clamped = clamped || alpha[i].x > 1;
+      img[i] = Rgb(0, code(std::sqrt(std::max(0.0f, alpha[i].x))), code(metal ? 1 : 0));
+    }
+    if (clamped)
+      m_warnings.push_back(
+          fmt::format("texture {}: roughness above 1 is clamped to glTF's 1", index));
+    write_image(m_path.parent_path() / file, img);
+    m_images.push_back({{"uri", file}});
+    m_textures.push_back({{"source", m_images.size() - 1}});
+    return m_roughness_index[key] = int(m_textures.size() - 1);
+  }
+
   json camera() {
     const Camera& c = m_scene.camera;
     const Vec3 f = normalize(c.target - c.position), r = normalize(cross(f, c.up)), u = cross(r, f);
@@ -234,6 +291,7 @@ class GltfWriter {
        m_textures = json::array(), m_images = json::array();
   std::map<uint32_t, int> m_material_index;
   std::map<int, int> m_texture_index;
+  std::map<std::pair<int, bool>, int> m_roughness_index;
   std::set<std::string> m_extensions;
   std::vector<std::string> m_warnings;
 };

@@ -64,6 +64,8 @@ std::vector<std::string> save_pbrt_scene(const Scene& scene, const fs::path& pat
   }
   out += fmt::format("Film \"rgb\" \"integer xresolution\" [ {} ] \"integer yresolution\" [ {} ]\n",
                      scene.width, scene.height);
+  // rll's pixel filter: a box of one pixel (pbrt-v4's default is a Gaussian of radius 1.5).
+  out += "PixelFilter \"box\" \"float xradius\" [ 0.5 ] \"float yradius\" [ 0.5 ]\n";
   out += "WorldBegin\n\n";
 
   for (const Light& l : scene.lights) {
@@ -125,37 +127,84 @@ std::vector<std::string> save_pbrt_scene(const Scene& scene, const fs::path& pat
     return fmt::format("\"texture reflectance\" \"{}\"", texture(m.albedo_texture, scale));
   };
 
+  // A roughness texture: pbrt-v4's float image texture averages the channels, so the first
+  // channel (the one rll reads) is written to all three.
+  auto roughness_texture = [&](int index) {
+    const std::string file = fmt::format("{}_rough{}.exr", stem, index);
+    const std::string name = fmt::format("rough{}", index);
+    if (textures.insert(file).second) {
+      Image grey = scene.textures[size_t(index)];
+      for (size_t i = 0; i < grey.pixel_count(); ++i) grey[i] = Rgb(grey[i].x);
+      write_image(dir / file, grey);
+      pending += fmt::format(
+          "Texture \"{}\" \"float\" \"imagemap\" \"string filename\" \"{}\" "
+          "\"string encoding\" \"linear\"\n",
+          name, file);
+    }
+    return name;
+  };
+  // GGX alpha as it is: "remaproughness" false makes pbrt-v4 read roughness as alpha.
+  auto roughness = [&](const Material& m) {
+    if (m.roughness_texture >= 0)
+      return fmt::format("\"texture roughness\" \"{}\" \"bool remaproughness\" false",
+                         roughness_texture(m.roughness_texture));
+    return fmt::format("\"float roughness\" {} \"bool remaproughness\" false", m.roughness);
+  };
+
   int index = 0;
   for (const MaterialMesh& part : split_by_material(scene)) {
     const Material& m = scene.materials[part.material];
     std::string material;
-    const std::string rough =
-        fmt::format("\"float roughness\" {} \"bool remaproughness\" false", m.roughness);
+    auto no_tint = [&](const char* pbrt_name) {
+      if (!(m.specular == Rgb(1)))
+        warn(fmt::format("material '{}': pbrt-v4's {} has no specular tint; written without it",
+                         m.name, pbrt_name));
+    };
     switch (m.type) {
       case MaterialType::Diffuse:
         material = fmt::format("Material \"diffuse\" {}", reflectance(m));
         break;
       case MaterialType::Plastic:
-        material = fmt::format("Material \"coateddiffuse\" {} {} \"float eta\" {}", reflectance(m),
-                               rough, m.ior);
-        if (!(m.specular == Rgb(1)))
-          warn(
-              fmt::format("material '{}': pbrt's coateddiffuse has no specular tint; written "
-                          "without it",
-                          m.name));
+        material = fmt::format("Material \"coateddiffuse\" {} {} \"float eta\" {}",
+                               reflectance(m), roughness(m), m.ior);
+        warn(fmt::format(
+            "material '{}': rll's plastic is written as pbrt-v4's coateddiffuse, which exchanges "
+            "light between the coating and the base (rll's plastic does not): pbrt-v4 renders "
+            "it darker and more saturated",
+            m.name));
+        no_tint("coateddiffuse");
+        break;
+      case MaterialType::CoatedDiffuse:
+        material = fmt::format(
+            "Material \"coateddiffuse\" {} {} \"float thickness\" {} \"float eta\" {}",
+            reflectance(m), roughness(m), m.thickness, m.ior);
+        break;
+      case MaterialType::Dielectric:
+        material = fmt::format("Material \"dielectric\" \"float eta\" {} {}", m.ior, roughness(m));
+        break;
+      case MaterialType::ThinDielectric:
+        material = fmt::format("Material \"thindielectric\" \"float eta\" {}", m.ior);
         break;
       case MaterialType::Conductor:
-        if (m.eta == kTintableEta && m.k == kTintableK) {
-          material = fmt::format("Material \"conductor\" \"rgb reflectance\" {} {}",
-                                 rgb(m.specular), rough);
-        } else {
+        if (m.specular == Rgb(1)) {
           material = fmt::format("Material \"conductor\" \"rgb eta\" {} \"rgb k\" {} {}",
-                                 rgb(m.eta), rgb(m.k), rough);
-          if (!(m.specular == Rgb(1)))
-            warn(
-                fmt::format("material '{}': pbrt's conductor has no tint besides eta and k; "
-                            "written without it",
-                            m.name));
+                                 rgb(m.eta), rgb(m.k), roughness(m));
+        } else {
+          // pbrt-v4's conductor has no tint; its "reflectance" r is a metal whose reflectance at
+          // normal incidence is r (eta 1, k from r), which keeps the colour rll renders head-on.
+          Rgb r;
+          for (int i = 0; i < 3; ++i)
+            r[i] = std::clamp(m.specular[i] * (sqr(m.eta[i] - 1) + sqr(m.k[i])) /
+                                  (sqr(m.eta[i] + 1) + sqr(m.k[i])),
+                              0.0f, 0.999f);
+          material = fmt::format("Material \"conductor\" \"rgb reflectance\" {} {}", rgb(r),
+                                 roughness(m));
+          warn(fmt::format(
+              "material '{}': pbrt-v4's conductor has no specular tint: the tinted metal is "
+              "written as its reflectance at normal incidence (specular x the Fresnel "
+              "reflectance of eta, k), which pbrt-v4 renders with a slightly different "
+              "falloff towards grazing angles",
+              m.name));
         }
         break;
     }

@@ -1,6 +1,9 @@
 #include "rll/render/integrator.h"
 
+#include <bit>
+
 #include "rll/core/error.h"
+#include "rll/core/hash.h"
 #include "rll/core/params.h"
 #include "rll/core/sampling.h"
 #include "rll/scene/bsdf.h"
@@ -142,6 +145,7 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
   float footprint = 0, prev_dir_pdf = 1 / (pixel_angle * pixel_angle);
   LightContext prev_ctx;
   float prev_bsdf_pdf = 0;
+  bool prev_delta = false;  // the last bounce was a Dirac lobe: no light sampling competed
   ++counters.camera;
   for (int depth = 0;; ++depth) {
     Hit hit;
@@ -154,7 +158,7 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     if (sh.light >= 0) {
       Rgb Le = emitted_radiance(m_scene.lights[sh.light], wo);
       if (!is_black(Le)) {
-        if (depth == 0 || strategy == LightStrategy::Bsdf) {
+        if (depth == 0 || strategy == LightStrategy::Bsdf || prev_delta) {
           L += beta * Le;
         } else if (mis) {
           float light_pdf = m_sampler.pmf(prev_ctx, uint32_t(sh.light)) *
@@ -166,7 +170,15 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     if (depth >= max_depth) break;
 
     const Material& mat = m_scene.materials[sh.material];
-    Bsdf bsdf(mat, albedo_at(m_scene, sh), sh.ns, sh.ng, wo);
+    // The BSDF's own numbers, drawn here (their values depend on the dimension only) so that
+    // the walk of a stochastic BSDF (CoatedDiffuse) can be seeded from them.
+    seek(stream, depth, kLobe);
+    const float u_lobe = stream.next();
+    const Vec2 u_dir = stream.next2();
+    const uint64_t bsdf_seed =
+        mix64(std::bit_cast<uint32_t>(u_lobe) | uint64_t(std::bit_cast<uint32_t>(u_dir.x)) << 32) ^
+        mix64(std::bit_cast<uint32_t>(u_dir.y) + 0x9e3779b97f4a7c15ull * uint64_t(depth + 1));
+    Bsdf bsdf(mat, albedo_at(m_scene, sh), sh.ns, sh.ng, wo, roughness_at(m_scene, sh), bsdf_seed);
     if (bsdf.is_black()) break;
 
     float cos_in = std::max(1e-2f, absdot(wo, sh.ng));
@@ -177,29 +189,40 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     v.ctx.ns = bsdf.shading_normal();
     v.ctx.wo = wo;
     v.ctx.footprint = footprint;
+    if (bsdf.has_transmission()) {
+      // Light reaches a transmissive surface from both sides: no normal, so that no sampler
+      // culls the lights behind it.
+      v.ctx.n = Vec3(0);
+      v.ctx.ns = Vec3(0);
+    }
     v.wo = wo;
     v.bsdf = &bsdf;
     v.depth = depth;
-    if (m_prepares) {
+    // A BSDF of Dirac lobes only (smooth glass, a thin pane) gets no light sample, as in pbrt-v4:
+    // no shadow ray, no sampler record; the BSDF ray's light hit counts in full instead.
+    const bool delta_only = bsdf.is_delta();
+    if (m_prepares && !delta_only) {
       seek(stream, depth, kPrepare);
       m_sampler.prepare(v.ctx, stream.next());
     }
 
-    if (strategy != LightStrategy::Bsdf) L += beta * sample_light(v, beta, stream, counters, mis);
-    // The last vertex's BSDF ray only finds emission, which light sampling alone leaves out.
+    if (strategy != LightStrategy::Bsdf && !delta_only)
+      L += beta * sample_light(v, beta, stream, counters, mis);
+    // The last vertex's BSDF ray only finds emission, which light sampling alone leaves out
+    // (except through Dirac lobes, which light sampling never sees).
     const bool last = depth + 1 >= max_depth;
-    if (last && strategy == LightStrategy::Nee) break;
+    if (last && strategy == LightStrategy::Nee && !bsdf.has_delta()) break;
 
-    seek(stream, depth, kLobe);
-    float u_lobe = stream.next();
-    Vec2 u_dir = stream.next2();
     BsdfSample bs;
     if (!bsdf.sample(wo, u_lobe, u_dir, bs)) break;
+    if (last && strategy == LightStrategy::Nee && !bs.delta) break;
     beta *= bs.f * (absdot(bs.wi, bsdf.shading_normal()) / bs.pdf);
     if (is_black(beta) || !is_finite(beta)) break;
     prev_ctx = v.ctx;
     prev_bsdf_pdf = bs.pdf;
-    prev_dir_pdf = bs.pdf;
+    prev_delta = bs.delta;
+    // A Dirac lobe does not widen the footprint: carry the previous density on.
+    if (!bs.delta) prev_dir_pdf = bs.pdf;
     if (!last && depth + 1 >= m_settings.rr_depth) {
       float q = std::max(0.05f, 1 - max_component(beta));
       seek(stream, depth, kRoulette);

@@ -61,7 +61,11 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
             SampleStream stream(frame_seed, uint64_t(y) * w + x, settings.first_sample + uint64_t(s),
                                 settings.points);
             Vec2 jitter = stream.next2();
-            Ray ray = scene.camera.generate_ray(x + jitter.x, y + jitter.y);
+            // The lens sample is drawn only for a thin lens, so that pinhole images keep their
+            // sample streams (and stay bit-identical).
+            Ray ray = scene.camera.has_lens()
+                          ? scene.camera.generate_ray(x + jitter.x, y + jitter.y, stream.next2())
+                          : scene.camera.generate_ray(x + jitter.x, y + jitter.y);
             Rgb L = integrator.li(ray, stream, rays);
             if (!is_finite(L)) {
               ++nonfinite;

@@ -1,5 +1,10 @@
 #include "rll/scene/bsdf.h"
 
+#include <bit>
+#include <cmath>
+
+#include "rll/core/hash.h"
+#include "rll/core/rng.h"
 #include "rll/core/sampling.h"
 
 namespace rll {
@@ -79,28 +84,189 @@ Rgb fresnel_conductor(float cos_i, const Rgb& eta, const Rgb& k) {
           fresnel_complex(cos_i, eta.z, k.z)};
 }
 
+// --- Dielectric interface ------------------------------------------------------------------------
+
+namespace {
+// Refraction of w (pointing away from the surface) through the interface of normal +z, `eta` the
+// index below over the index above. etap: the relative index seen from w's side.
+bool refract_dir(const Vec3& w, Vec3 n, float eta, float& etap, Vec3& wt) {
+  float cos_i = dot(n, w);
+  if (cos_i < 0) {
+    eta = 1 / eta;
+    cos_i = -cos_i;
+    n = -n;
+  }
+  float sin2_t = std::max(0.0f, 1 - cos_i * cos_i) / (eta * eta);
+  if (sin2_t >= 1) return false;
+  float cos_t = safe_sqrt(1 - sin2_t);
+  wt = -w / eta + n * (cos_i / eta - cos_t);
+  etap = eta;
+  return true;
+}
+
+// Visible-normal density from either side: G1(w) |w.wm| D(wm) / |w.z|.
+float visible_density(const Ggx& ggx, const Vec3& w, const Vec3& wm) {
+  return ggx.g1(w) / std::abs(w.z) * ggx.d(wm) * std::abs(dot(w, wm));
+}
+
+// The microfacet normal of a pair (up-facing), its relative index and whether the pair reflects;
+// false where no microfacet joins them or one faces away from it.
+struct HalfVector {
+  Vec3 wm;
+  float etap;
+  bool reflect;
+};
+bool half_vector(const Vec3& wo, const Vec3& wi, float eta, HalfVector& h) {
+  if (wo.z == 0 || wi.z == 0) return false;
+  h.reflect = wo.z * wi.z > 0;
+  h.etap = h.reflect ? 1 : (wo.z > 0 ? eta : 1 / eta);
+  Vec3 wm = wi * h.etap + wo;
+  float len2 = length_sq(wm);
+  if (!(len2 > 0)) return false;
+  wm = wm / std::sqrt(len2);
+  if (wm.z < 0) wm = -wm;
+  if (dot(wm, wi) * wi.z < 0 || dot(wm, wo) * wo.z < 0) return false;
+  h.wm = wm;
+  return true;
+}
+}  // namespace
+
+float DielectricInterface::f(const Vec3& wo, const Vec3& wi, bool radiance) const {
+  HalfVector h;
+  if (smooth || !half_vector(wo, wi, eta, h)) return 0;
+  const Vec3& wm = h.wm;
+  float fr = fresnel_dielectric(dot(wo, wm), eta);
+  if (h.reflect) return ggx.d(wm) * ggx.g(wo, wi) * fr / std::abs(4 * wi.z * wo.z);
+  float denom = sqr(dot(wi, wm) + dot(wo, wm) / h.etap) * wi.z * wo.z;
+  float ft = ggx.d(wm) * (1 - fr) * ggx.g(wo, wi) * std::abs(dot(wi, wm) * dot(wo, wm) / denom);
+  if (radiance) ft /= sqr(h.etap);
+  return ft;
+}
+
+float DielectricInterface::pdf(const Vec3& wo, const Vec3& wi, Lobes lobes) const {
+  HalfVector h;
+  if (smooth || !half_vector(wo, wi, eta, h)) return 0;
+  const Vec3& wm = h.wm;
+  float r = fresnel_dielectric(dot(wo, wm), eta), t = 1 - r;
+  if (lobes == Lobes::Reflection) t = 0;
+  if (lobes == Lobes::Transmission) r = 0;
+  if (!(r + t > 0)) return 0;
+  float vd = visible_density(ggx, wo, wm);
+  if (h.reflect) return vd / (4 * std::abs(dot(wo, wm))) * r / (r + t);
+  float denom = sqr(dot(wi, wm) + dot(wo, wm) / h.etap);
+  return vd * std::abs(dot(wi, wm)) / denom * t / (r + t);
+}
+
+bool DielectricInterface::sample(const Vec3& wo, float uc, Vec2 u, bool radiance, Lobes lobes,
+                                 InterfaceSample& out) const {
+  if (wo.z == 0) return false;
+  if (smooth) {
+    float r = fresnel_dielectric(wo.z, eta), t = 1 - r;
+    if (lobes == Lobes::Reflection) t = 0;
+    if (lobes == Lobes::Transmission) r = 0;
+    if (!(r + t > 0)) return false;
+    out.delta = true;
+    if (uc < r / (r + t)) {
+      out.wi = Vec3(-wo.x, -wo.y, wo.z);
+      out.f = r / std::abs(wo.z);
+      out.pdf = r / (r + t);
+      out.transmission = false;
+      return true;
+    }
+    float etap;
+    Vec3 wi;
+    if (!refract_dir(wo, Vec3(0, 0, 1), eta, etap, wi) || wi.z == 0) return false;
+    out.wi = wi;
+    out.f = t / std::abs(wi.z);
+    if (radiance) out.f /= sqr(etap);
+    out.pdf = t / (r + t);
+    out.transmission = true;
+    return true;
+  }
+  Vec3 wm = ggx.sample_visible(wo.z > 0 ? wo : -wo, u);
+  float r = fresnel_dielectric(dot(wo, wm), eta), t = 1 - r;
+  if (lobes == Lobes::Reflection) t = 0;
+  if (lobes == Lobes::Transmission) r = 0;
+  if (!(r + t > 0)) return false;
+  Vec3 wi;
+  if (uc < r / (r + t)) {
+    wi = reflect(wo, wm);
+    if (!(wi.z * wo.z > 0)) return false;
+    out.transmission = false;
+  } else {
+    float etap;
+    if (!refract_dir(wo, wm, eta, etap, wi) || !(wi.z * wo.z < 0)) return false;
+    out.transmission = true;
+  }
+  out.wi = wi;
+  out.delta = false;
+  out.f = f(wo, wi, radiance);
+  out.pdf = pdf(wo, wi, lobes);
+  return out.pdf > 0 && out.f > 0;
+}
+
 // --- Bsdf ---------------------------------------------------------------------------------------
 
-Bsdf::Bsdf(const Material& m, const Rgb& albedo, const Vec3& ns, const Vec3& ng, const Vec3& wo)
+namespace {
+constexpr int kLayerMaxDepth = 10;  // pbrt-v4's coateddiffuse defaults: maxdepth 10, nsamples 1
+
+uint64_t bits_of(const Vec3& v) {
+  return mix64(std::bit_cast<uint32_t>(v.x) | uint64_t(std::bit_cast<uint32_t>(v.y)) << 32) ^
+         mix64(std::bit_cast<uint32_t>(v.z) + 0x9e3779b97f4a7c15ull);
+}
+}  // namespace
+
+Bsdf::Bsdf(const Material& m, const Rgb& albedo, const Vec3& ns, const Vec3& ng, const Vec3& wo,
+           float roughness, uint64_t seed)
     : m_type(m.type),
       m_albedo(albedo),
       m_specular(m.specular),
       m_eta(m.eta),
       m_k(m.k),
       m_ior(m.ior),
-      m_ggx{std::max(1e-3f, m.roughness)} {
+      m_ggx{std::max(1e-3f, roughness >= 0 ? roughness : m.roughness)},
+      m_seed(seed) {
   m_ng = face_forward(ng, wo);
   Vec3 n = dot(ns, m_ng) < 0 ? -ns : ns;
   m_frame = Frame(n);
+  const float alpha = roughness >= 0 ? roughness : m.roughness;
+  switch (m.type) {
+    case MaterialType::Dielectric:
+      // The geometric normal as wound points outside: from there, ior is inside over outside.
+      m_interface.eta = dot(wo, ng) >= 0 ? m.ior : 1 / m.ior;
+      m_interface.smooth = !(alpha >= kSmoothAlpha);
+      m_interface.ggx = Ggx{std::max(kSmoothAlpha, alpha)};
+      m_delta_only = m_has_delta = m_interface.smooth;
+      break;
+    case MaterialType::ThinDielectric:
+      m_delta_only = m_has_delta = true;
+      break;
+    case MaterialType::CoatedDiffuse:
+      // Two-sided like pbrt-v4's: the coating faces wo whatever the winding.
+      m_interface.eta = m.ior;
+      m_interface.smooth = !(alpha >= kSmoothAlpha);
+      m_interface.ggx = Ggx{std::max(kSmoothAlpha, alpha)};
+      m_has_delta = m_interface.smooth;
+      m_thickness = std::max(0.0f, m.thickness);
+      break;
+    default:
+      break;
+  }
   m_black = m.type == MaterialType::Diffuse ? rll::is_black(albedo)
             : m.type == MaterialType::Conductor ? rll::is_black(m.specular)
-                                                : rll::is_black(albedo) && rll::is_black(m.specular);
+            : m.type == MaterialType::Plastic ? rll::is_black(albedo) && rll::is_black(m.specular)
+                                              : false;
 }
 
 bool Bsdf::same_side(const Vec3& wo, const Vec3& wi) const {
   // Reflection only: both directions must lie above the geometric surface (no light leaks
   // through shading normals).
   return dot(wi, m_ng) > 0 && dot(wo, m_ng) > 0;
+}
+
+bool Bsdf::geometric_side_ok(const Vec3& wi, bool local_above) const {
+  float c = dot(wi, m_ng);
+  return local_above ? c > 0 : c < 0;
 }
 
 float Bsdf::specular_probability(const Vec3& wo) const {
@@ -111,11 +277,170 @@ float Bsdf::specular_probability(const Vec3& wo) const {
   return clamp(s / (s + d), 0.1f, 0.9f);
 }
 
+// --- CoatedDiffuse: the layered random walk ------------------------------------------------------
+
+float Bsdf::layer_transmittance(const Vec3& w) const {
+  // The medium between the layers absorbs with unit density (albedo 0) over `thickness`.
+  if (m_thickness <= 0) return 1;
+  return std::exp(-m_thickness / std::abs(w.z));
+}
+
+Rgb Bsdf::layered_eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const {
+  const DielectricInterface& top = m_interface;
+  Rgb f(top.f(wo, wi, true));  // reflection off the coating
+  InterfaceSample wos, wis;
+  // Into the layer from wo, and (adjoint) from wi: the latter is the exit every base vertex is
+  // joined to.
+  if (!top.sample(wo, rng.next_float(), {rng.next_float(), rng.next_float()}, true,
+                  Lobes::Transmission, wos) ||
+      !(wos.f > 0) || !(wos.pdf > 0) || wos.wi.z == 0)
+    return f;
+  if (!top.sample(wi, rng.next_float(), {rng.next_float(), rng.next_float()}, false,
+                  Lobes::Transmission, wis) ||
+      !(wis.f > 0) || !(wis.pdf > 0) || wis.wi.z == 0)
+    return f;
+  Rgb beta(wos.f * std::abs(wos.wi.z) / wos.pdf);
+  Vec3 w = wos.wi;  // travelling down
+  bool at_top = true;
+  for (int depth = 0; depth < kLayerMaxDepth; ++depth) {
+    if (depth > 3 && max_component(beta) < 0.25f) {
+      float q = std::max(0.0f, 1 - max_component(beta));
+      if (rng.next_float() < q) break;
+      beta /= 1 - q;
+    }
+    at_top = !at_top;
+    beta *= layer_transmittance(w);
+    if (at_top) {  // reflect off the coating's underside, back down
+      InterfaceSample bs;
+      if (!top.sample(-w, rng.next_float(), {rng.next_float(), rng.next_float()}, true,
+                      Lobes::Reflection, bs) ||
+          !(bs.f > 0) || !(bs.pdf > 0) || bs.wi.z == 0)
+        break;
+      beta *= bs.f * std::abs(bs.wi.z) / bs.pdf;
+      w = bs.wi;
+    } else {  // the Lambertian base
+      // Next-event: join to the presampled exit direction.
+      const float base_pdf = std::abs(wis.wi.z) * kInvPi;
+      float wt = top.smooth ? 1 : power_heuristic(wis.pdf, base_pdf);
+      f += beta * m_albedo * (kInvPi * std::abs(wis.wi.z) * wt * layer_transmittance(wis.wi) *
+                              wis.f / wis.pdf);
+      Vec3 d = sample_cosine_hemisphere({rng.next_float(), rng.next_float()});
+      if (!(d.z > 0)) break;
+      beta *= m_albedo;  // (albedo / pi) cos / (cos / pi)
+      w = d;
+      if (!top.smooth) {  // the base sample leaving through the coating towards wi
+        float f_exit = top.f(-w, wi, true);
+        if (f_exit > 0) {
+          // Against the density of the joining strategy: wis drawn from wi, here -w.
+          float wt2 = power_heuristic(d.z * kInvPi, top.pdf(wi, -w, Lobes::Transmission));
+          f += beta * (layer_transmittance(d) * f_exit * wt2);
+        }
+      }
+    }
+    if (rll::is_black(beta)) break;
+  }
+  return f;
+}
+
+float Bsdf::layered_pdf(const Vec3& wo, const Vec3& wi, Pcg32& rng) const {
+  const DielectricInterface& top = m_interface;
+  float sum = top.pdf(wo, wi, Lobes::Reflection);
+  InterfaceSample wos, wis;
+  if (top.sample(wo, rng.next_float(), {rng.next_float(), rng.next_float()}, true,
+                 Lobes::Transmission, wos) &&
+      wos.f > 0 && wos.pdf > 0 &&
+      top.sample(wi, rng.next_float(), {rng.next_float(), rng.next_float()}, false,
+                 Lobes::Transmission, wis) &&
+      wis.f > 0 && wis.pdf > 0) {
+    const float r_pdf = std::abs(wis.wi.z) * kInvPi;  // base: -wos.wi to -wis.wi
+    if (top.smooth) {
+      sum += r_pdf;
+    } else {
+      Vec3 d = sample_cosine_hemisphere({rng.next_float(), rng.next_float()});
+      if (d.z > 0) {
+        sum += power_heuristic(wis.pdf, r_pdf) * r_pdf;
+        float t_pdf = top.pdf(-d, wi, Lobes::All);
+        sum += power_heuristic(d.z * kInvPi, t_pdf) * t_pdf;
+      }
+    }
+  }
+  // Mixed with the uniform density, as pbrt-v4 does, so that it is never zero.
+  return 0.1f / (4 * kPi) + 0.9f * sum;
+}
+
+bool Bsdf::layered_sample(const Vec3& wo, float uc, Vec2 u, Pcg32& rng, Vec3& wi, Rgb& f,
+                          float& pdf, bool& delta) const {
+  const DielectricInterface& top = m_interface;
+  InterfaceSample bs;
+  if (!top.sample(wo, uc, u, true, Lobes::All, bs) || !(bs.f > 0) || !(bs.pdf > 0) || bs.wi.z == 0)
+    return false;
+  if (!bs.transmission) {
+    wi = bs.wi;
+    f = Rgb(bs.f);
+    pdf = bs.pdf;
+    delta = bs.delta;
+    return true;
+  }
+  Vec3 w = bs.wi;
+  bool specular = bs.delta;
+  f = Rgb(bs.f * std::abs(bs.wi.z));
+  pdf = bs.pdf;
+  bool at_top = true;
+  for (int depth = 0; depth < kLayerMaxDepth; ++depth) {
+    float rr = max_component(f) / pdf;
+    if (depth > 3 && rr < 0.25f) {
+      float q = std::max(0.0f, 1 - rr);
+      if (rng.next_float() < q) return false;
+      pdf *= 1 - q;
+    }
+    if (w.z == 0) return false;
+    at_top = !at_top;
+    f *= layer_transmittance(w);
+    if (!at_top) {  // the Lambertian base
+      Vec3 d = sample_cosine_hemisphere({rng.next_float(), rng.next_float()});
+      if (!(d.z > 0)) return false;
+      f *= m_albedo * (kInvPi * d.z);
+      pdf *= d.z * kInvPi;
+      specular = false;
+      w = d;
+    } else {
+      InterfaceSample s;
+      if (!top.sample(-w, rng.next_float(), {rng.next_float(), rng.next_float()}, true, Lobes::All,
+                      s) ||
+          !(s.f > 0) || !(s.pdf > 0) || s.wi.z == 0)
+        return false;
+      f *= Rgb(s.f);
+      pdf *= s.pdf;
+      specular = specular && s.delta;
+      w = s.wi;
+      if (s.transmission) {  // out through the coating: w points up
+        wi = w;
+        delta = specular;
+        return true;
+      }
+      f *= Rgb(std::abs(s.wi.z));
+    }
+  }
+  return false;
+}
+
+// --- Bsdf: eval, pdf, sample -------------------------------------------------------------------
+
 Rgb Bsdf::eval(const Vec3& wo_w, const Vec3& wi_w) const {
+  if (m_type == MaterialType::Dielectric) {
+    Vec3 wo = m_frame.to_local(wo_w), wi = m_frame.to_local(wi_w);
+    if (wo.z <= 0 || dot(wo_w, m_ng) <= 0 || !geometric_side_ok(wi_w, wi.z > 0)) return Rgb(0);
+    return Rgb(m_interface.f(wo, wi, true));
+  }
+  if (m_type == MaterialType::ThinDielectric) return Rgb(0);
   if (!same_side(wo_w, wi_w)) return Rgb(0);
   Vec3 wo = m_frame.to_local(wo_w), wi = m_frame.to_local(wi_w);
   if (wo.z <= 0 || wi.z <= 0) return Rgb(0);
   if (m_type == MaterialType::Diffuse) return m_albedo * kInvPi;
+  if (m_type == MaterialType::CoatedDiffuse) {
+    Pcg32 rng(mix64(m_seed ^ bits_of(wo)) ^ bits_of(wi), 0x3c6ef372fe94f82bull);
+    return layered_eval(wo, wi, rng);
+  }
   Vec3 wm = normalize(wo + wi);
   float spec = m_ggx.d(wm) * m_ggx.g(wo, wi) / (4 * wo.z * wi.z);
   if (m_type == MaterialType::Conductor)
@@ -127,10 +452,21 @@ Rgb Bsdf::eval(const Vec3& wo_w, const Vec3& wi_w) const {
 }
 
 float Bsdf::pdf(const Vec3& wo_w, const Vec3& wi_w) const {
+  if (m_type == MaterialType::Dielectric) {
+    Vec3 wo = m_frame.to_local(wo_w), wi = m_frame.to_local(wi_w);
+    if (wo.z <= 0 || dot(wo_w, m_ng) <= 0 || !geometric_side_ok(wi_w, wi.z > 0)) return 0;
+    return m_interface.pdf(wo, wi, Lobes::All);
+  }
+  if (m_type == MaterialType::ThinDielectric) return 0;
   if (!same_side(wo_w, wi_w)) return 0;
   Vec3 wo = m_frame.to_local(wo_w), wi = m_frame.to_local(wi_w);
   if (wo.z <= 0 || wi.z <= 0) return 0;
   if (m_type == MaterialType::Diffuse) return cosine_hemisphere_pdf(wi.z);
+  if (m_type == MaterialType::CoatedDiffuse) {
+    // Seeded by the directions alone: a fixed function, so MIS weights from it sum to one.
+    Pcg32 rng(bits_of(wo) ^ mix64(bits_of(wi)), 0x5851f42d4c957f2dull);
+    return layered_pdf(wo, wi, rng);
+  }
   Vec3 wm = normalize(wo + wi);
   float spec_pdf = m_ggx.visible_d(wo, wm) / (4 * dot(wo, wm));
   if (m_type == MaterialType::Conductor) return spec_pdf;
@@ -141,6 +477,59 @@ float Bsdf::pdf(const Vec3& wo_w, const Vec3& wi_w) const {
 bool Bsdf::sample(const Vec3& wo_w, float u_lobe, Vec2 u, BsdfSample& out) const {
   Vec3 wo = m_frame.to_local(wo_w);
   if (wo.z <= 0 || dot(wo_w, m_ng) <= 0) return false;
+  out.delta = false;
+  if (m_type == MaterialType::Dielectric) {
+    InterfaceSample s;
+    if (!m_interface.sample(wo, u_lobe, u, true, Lobes::All, s)) return false;
+    out.wi = m_frame.to_world(s.wi);
+    if (!geometric_side_ok(out.wi, s.wi.z > 0)) return false;
+    out.f = Rgb(s.f);
+    out.pdf = s.pdf;
+    out.delta = s.delta;
+    return out.pdf > 0;
+  }
+  if (m_type == MaterialType::ThinDielectric) {
+    // Light bouncing inside the pane: R' = R + T^2 R / (1 - R^2), T' = 1 - R'.
+    float r = fresnel_dielectric(wo.z, m_ior), t = 1 - r;
+    if (r < 1) r += t * t * r / (1 - r * r);
+    t = 1 - r;
+    out.delta = true;
+    if (u_lobe < r) {
+      out.wi = m_frame.to_world(Vec3(-wo.x, -wo.y, wo.z));
+      if (!geometric_side_ok(out.wi, true)) return false;
+      out.f = Rgb(r / wo.z);
+      out.pdf = r;
+    } else {
+      out.wi = -wo_w;
+      out.f = Rgb(t / wo.z);
+      out.pdf = t;
+    }
+    return out.pdf > 0;
+  }
+  if (m_type == MaterialType::CoatedDiffuse) {
+    Pcg32 rng(mix64(m_seed ^ std::bit_cast<uint32_t>(u_lobe)) ^
+                  mix64(std::bit_cast<uint32_t>(u.x) | uint64_t(std::bit_cast<uint32_t>(u.y)) << 32),
+              0x9b05688c2b3e6c1full);
+    Vec3 wi;
+    Rgb f;
+    float walk_pdf;
+    bool delta = false;
+    if (!layered_sample(wo, u_lobe, u, rng, wi, f, walk_pdf, delta) || !(walk_pdf > 0)) return false;
+    if (!(wi.z > 0)) return false;
+    out.wi = m_frame.to_world(wi);
+    if (!geometric_side_ok(out.wi, true)) return false;
+    out.delta = delta;
+    if (delta) {
+      out.f = f;
+      out.pdf = walk_pdf;
+      return true;
+    }
+    // The walk's weight f / walk_pdf, carried with pdf(): the pdf MIS weighs by.
+    out.pdf = pdf(wo_w, out.wi);
+    if (!(out.pdf > 0)) return false;
+    out.f = f * (out.pdf / walk_pdf);
+    return is_finite(out.f);
+  }
   Vec3 wi;
   bool specular = m_type == MaterialType::Conductor ||
                   (m_type == MaterialType::Plastic && u_lobe < specular_probability(wo));

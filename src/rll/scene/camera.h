@@ -1,5 +1,7 @@
-// Pinhole perspective camera.
+// Perspective camera: a pinhole, or a thin lens (depth of field) when lens_radius > 0.
 #pragma once
+
+#include <array>
 
 #include "rll/core/math.h"
 
@@ -10,18 +12,31 @@ struct Camera {
   Vec3 target{0, 0, 0};
   Vec3 up{0, 1, 0};
   float fov = 45;  // vertical field of view, degrees
+  // Thin lens: the lens's radius and the distance (along the viewing direction) of the plane in
+  // focus, in scene units. 0: a pinhole.
+  float lens_radius = 0;
+  float focal_distance = 1e6f;
+  // The part of the image plane the film sees, as {xmin, xmax, ymin, ymax} in units of
+  // tan(fov / 2) (y up); all zero: the whole plane, {-aspect, aspect, -1, 1}.
+  std::array<float, 4> screen_window{0, 0, 0, 0};
 
   // Precomputes the basis for a film of the given size; call before generate_ray.
   void setup(int width, int height);
-  // Primary ray through film position (x, y) in pixels, y down.
+  // Primary ray through film position (x, y) in pixels, y down (through the lens's centre).
   Ray generate_ray(float x, float y) const;
+  // The same through the thin lens, at the point `lens` (in [0,1)^2) maps to on its disk.
+  Ray generate_ray(float x, float y, Vec2 lens) const;
+  bool has_lens() const { return lens_radius > 0; }
   // Angle subtended by one pixel at the image centre (radians), for ray footprints.
   float pixel_angle() const { return m_pixel_angle; }
 
  private:
+  Vec3 image_plane_point(float x, float y) const;  // camera-relative, at distance 1 along forward
   Vec3 m_forward, m_right, m_up;
   float m_tan_half = 0, m_aspect = 1, m_pixel_angle = 0;
+  float m_x0 = -1, m_x1 = 1, m_y0 = -1, m_y1 = 1;  // the screen window times tan(fov / 2)
   int m_width = 1, m_height = 1;
+  bool m_whole = true;
 };
 
 }  // namespace rll

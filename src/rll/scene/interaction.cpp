@@ -74,4 +74,10 @@ Rgb albedo_at(const Scene& scene, const SurfaceHit& hit) {
   return m.albedo * sample_texture(scene.textures[m.albedo_texture], hit.uv);
 }
 
+float roughness_at(const Scene& scene, const SurfaceHit& hit) {
+  const Material& m = scene.materials[hit.material];
+  if (m.roughness_texture < 0) return m.roughness;
+  return std::max(0.0f, sample_texture(scene.textures[m.roughness_texture], hit.uv).x);
+}
+
 }  // namespace rll

@@ -31,5 +31,7 @@ Rgb sample_texture(const Image& texture, Vec2 uv);
 
 // Material albedo at a hit (texture applied).
 Rgb albedo_at(const Scene& scene, const SurfaceHit& hit);
+// Material roughness at a hit: the first channel of its roughness texture where it has one.
+float roughness_at(const Scene& scene, const SurfaceHit& hit);
 
 }  // namespace rll

@@ -10,7 +10,14 @@ namespace rll {
 enum class MaterialType : uint8_t {
   Diffuse,    // Lambertian
   Conductor,  // rough GGX metal with complex Fresnel
-  Plastic,    // rough dielectric coating (GGX, dielectric Fresnel) over a Lambertian base
+  Plastic,    // rll's own: rough dielectric coating (GGX, dielectric Fresnel) over a Lambertian
+              // base, without light exchanged between them (brighter than pbrt-v4's coateddiffuse)
+  Dielectric,      // glass: smooth (roughness < 1e-3: Dirac lobes) or rough GGX, reflection and
+                   // refraction, `ior` = inside over outside, the outside being the side the
+                   // geometric normal points to as wound (docs/materials.md)
+  ThinDielectric,  // a thin pane (pbrt-v4's thindielectric): Fresnel reflection, straight transmission
+  CoatedDiffuse,   // pbrt-v4's coateddiffuse: the layered model (a dielectric coating of `ior`,
+                   // `roughness` and `thickness` over a Lambertian `albedo`, light bouncing between)
 };
 
 struct Material {
@@ -21,8 +28,11 @@ struct Material {
   Rgb specular{1.0f};        // tint of the specular lobe (Conductor, Plastic)
   Rgb eta{0.2f, 0.92f, 1.1f};  // conductor: real part of the index of refraction (default: copper)
   Rgb k{3.9f, 2.45f, 2.14f};   //            imaginary part
-  float ior = 1.5f;          // plastic coating's index of refraction
-  float roughness = 0.3f;    // GGX alpha (isotropic), clamped to >= 1e-3
+  float ior = 1.5f;          // index of refraction: plastic and coated coatings, glass
+  float roughness = 0.3f;    // GGX alpha (isotropic; pbrt-v4's remapped alpha, not its "roughness"),
+                             // clamped to >= 1e-3 (Dielectric, CoatedDiffuse: below 1e-3 = smooth)
+  int roughness_texture = -1;  // index into Scene::textures (its first channel): replaces roughness
+  float thickness = 0.01f;   // CoatedDiffuse: the coating's thickness (pbrt-v4's default)
   Rgb emission{0.0f};        // emitted radiance; nonzero makes each triangle a light
   bool two_sided_emission = false;
   bool is_emissive() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }

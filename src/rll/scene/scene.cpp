@@ -66,6 +66,9 @@ const char* material_type_name(MaterialType t) {
     case MaterialType::Diffuse: return "diffuse";
     case MaterialType::Conductor: return "conductor";
     case MaterialType::Plastic: return "plastic";
+    case MaterialType::Dielectric: return "dielectric";
+    case MaterialType::ThinDielectric: return "thindielectric";
+    case MaterialType::CoatedDiffuse: return "coateddiffuse";
   }
   return "?";
 }
@@ -254,6 +257,9 @@ void Scene::finalize() {
   for (const auto& m : materials)
     if (m.albedo_texture >= int(textures.size()))
       fail("{}: material '{}' uses a texture that was not loaded", source, m.name);
+  for (const auto& m : materials)
+    if (m.roughness_texture >= int(textures.size()))
+      fail("{}: material '{}' uses a roughness texture that was not loaded", source, m.name);
   for (const auto& l : lights)
     if (!is_finite(l.p0) || !is_finite(l.radiance) || min_component(l.radiance) < 0)
       fail("{}: a light has a non-finite or negative parameter", source);
@@ -374,6 +380,12 @@ uint64_t Scene::fingerprint() const {
     h.add(m.roughness);
     h.add(m.emission);
     h.word(m.two_sided_emission);
+    // Fields added after the cache's first entries enter only where set, so that the key of a
+    // scene without them (every scene then) stays what it was.
+    if (m.roughness_texture >= 0 || m.thickness != 0.01f) {
+      h.add(int64_t(m.roughness_texture));
+      h.add(m.thickness);
+    }
   }
   h.word(s.textures.size());
   for (const Image& t : s.textures) {
@@ -397,6 +409,12 @@ uint64_t Scene::fingerprint() const {
   h.add(s.camera.target);
   h.add(s.camera.up);
   h.add(s.camera.fov);
+  // As the material fields above: a thin lens or a screen window enter only where set.
+  if (s.camera.has_lens() || s.camera.screen_window != std::array<float, 4>{0, 0, 0, 0}) {
+    h.add(s.camera.lens_radius);
+    h.add(s.camera.focal_distance);
+    for (float v : s.camera.screen_window) h.add(v);
+  }
   h.add(int64_t(s.width));
   h.add(int64_t(s.height));
   h.word(s.sky.has_value());

@@ -1,0 +1,313 @@
+// The pbrt reader's materials and textures (see pbrt_internal.h).
+#include <array>
+#include <cctype>
+#include <functional>
+
+#include "rll/io/pbrt_internal.h"
+#include "rll/io/spectra.h"
+
+namespace rll::pbrt {
+
+// --- textures ---
+
+// A texture parameter of a material or texture: a texture reference (`"texture NAME" "tex"`),
+// or a value (float, rgb, spectrum...). nullopt when absent or when the reference is to a
+// texture rll could not read (warned).
+std::optional<ImageTexture> PbrtReader::texture_operand(const Token& t, const Params& p,
+                                                        const char* name, bool is_float) {
+  if (auto tex = p.get_texture(name)) {
+    auto it = m_textures.find(*tex);
+    if (it == m_textures.end()) {
+      warn("texture " + *tex, fmt::format("{}: texture \"{}\" is not a texture rll read; the "
+                                          "parameter '{}' keeps its default",
+                                          where(t), *tex, name));
+      return std::nullopt;
+    }
+    return it->second;
+  }
+  ImageTexture c;
+  if (is_float) {
+    const Param* q = p.typed(name, {"float"});
+    if (!q) return std::nullopt;
+    c.scale = Rgb(float(p.one_number(*q)));
+    return c;
+  }
+  auto v = p.get_spectrum(name);
+  if (!v) return std::nullopt;
+  c.scale = *v;
+  return c;
+}
+
+// Combines textures texel by texel: constants give a constant, images (all of one size, with
+// constants broadcast) a new image in Scene::textures. nullopt (warned) for images of different
+// sizes.
+std::optional<ImageTexture> PbrtReader::bake(const Token& t, const std::string& what,
+                                             const std::vector<ImageTexture>& in,
+                                             const std::function<Rgb(const Rgb*)>& f) {
+  std::vector<Rgb> v(in.size());
+  int w = -1, h = -1;
+  for (size_t i = 0; i < in.size(); ++i) {
+    v[i] = in[i].scale;
+    if (in[i].index < 0) continue;
+    const Image& img = m_scene.textures[size_t(in[i].index)];
+    if (w >= 0 && (img.width() != w || img.height() != h)) {
+      unsupported(t, fmt::format("{} of images of different sizes", what));
+      return std::nullopt;
+    }
+    w = img.width();
+    h = img.height();
+  }
+  ImageTexture out;
+  if (w < 0) {
+    out.scale = f(v.data());
+    return out;
+  }
+  Image img(w, h);
+  for (size_t px = 0; px < img.pixel_count(); ++px) {
+    for (size_t i = 0; i < in.size(); ++i)
+      if (in[i].index >= 0) v[i] = m_scene.textures[size_t(in[i].index)][px] * in[i].scale;
+    img[px] = f(v.data());
+  }
+  m_scene.textures.push_back(std::move(img));
+  out.index = int(m_scene.textures.size() - 1);
+  return out;
+}
+
+void PbrtReader::texture(const Token& t) {
+  const std::string name = expect_string(t), kind = expect_string(t), cls = expect_string(t);
+  Params p(*this, t, fmt::format("Texture \"{}\"", name), param_list());
+  const bool is_float = kind == "float";
+  if (!is_float && kind != "spectrum" && kind != "color" && kind != "rgb") {
+    unsupported(t, fmt::format("Texture of type \"{}\"", kind));
+    return;
+  }
+  std::optional<ImageTexture> result;
+  if (cls == "imagemap") {
+    result = image_texture(t, name, p);
+  } else if (cls == "constant") {
+    result = texture_operand(t, p, "value", is_float).value_or(ImageTexture{});
+  } else if (cls == "scale") {
+    // tex * scale: an image times a constant keeps the image; anything else is baked.
+    auto tex = texture_operand(t, p, "tex", is_float).value_or(ImageTexture{});
+    auto s = texture_operand(t, p, "scale", true).value_or(ImageTexture{});
+    if (s.index < 0) {
+      result = tex;
+      result->scale = tex.scale * s.scale.x;
+    } else if (tex.index < 0 && is_float) {
+      result = s;
+      result->scale = s.scale * tex.scale.x;
+    } else {
+      // A colour or an image scaled by a float image: baked texel by texel.
+      result = bake(t, "Texture \"scale\"", {tex, s}, [](const Rgb* v) { return v[0] * v[1].x; });
+    }
+  } else if (cls == "mix") {
+    // (1 - amount) tex1 + amount tex2.
+    ImageTexture zero, one;
+    zero.scale = Rgb(0);
+    auto t1 = texture_operand(t, p, "tex1", is_float).value_or(zero);
+    auto t2 = texture_operand(t, p, "tex2", is_float).value_or(one);
+    ImageTexture half;
+    half.scale = Rgb(0.5f);
+    auto amount = texture_operand(t, p, "amount", true).value_or(half);
+    result = bake(t, "Texture \"mix\"", {t1, t2, amount},
+                  [](const Rgb* v) { return v[0] * (1 - v[2].x) + v[1] * v[2].x; });
+  } else {
+    unsupported(t, fmt::format("Texture class \"{}\"", cls));
+    return;
+  }
+  if (!result) return;
+  m_textures[name] = *result;
+  p.warn_unused();
+}
+
+std::optional<ImageTexture> PbrtReader::image_texture(const Token& t, const std::string& name,
+                                                      const Params& p) {
+  auto file = p.get_string("filename");
+  if (!file) fail("{}: Texture \"{}\": imagemap needs a \"string filename\"", where(t), name);
+  const fs::path path = referenced_file(t, "Texture", *file);
+  std::string encoding = p.get_string("encoding").value_or("sRGB");
+  if (encoding != "sRGB" && encoding != "linear") {
+    warn("encoding " + encoding,
+         fmt::format("{}: Texture: encoding \"{}\" is read as sRGB", where(t), encoding));
+    encoding = "sRGB";
+  }
+  ImageTexture tex;
+  tex.scale = Rgb(p.get_float("scale", 1));
+  if (p.get_bool("invert", false)) unsupported(t, "Texture \"invert\"");
+  for (const char* uv : {"uscale", "vscale"})
+    if (p.get_float(uv, 1) != 1) unsupported(t, fmt::format("Texture \"{}\"", uv));
+  for (const char* uv : {"udelta", "vdelta"})
+    if (p.get_float(uv, 0) != 0) unsupported(t, fmt::format("Texture \"{}\"", uv));
+  for (const char* ignored : {"filter", "maxanisotropy", "wrap", "mapping"}) p.find(ignored);
+  auto cached = m_image_cache.find(path.string() + "|" + encoding);
+  if (cached != m_image_cache.end()) {
+    tex.index = cached->second;
+  } else {
+    try {
+      m_scene.textures.push_back(read_image(path, encoding == "sRGB"));
+    } catch (const Error& e) {
+      fail("{}: Texture \"{}\": {}", where(t), name, e.what());
+    }
+    tex.index = int(m_scene.textures.size() - 1);
+    m_image_cache[path.string() + "|" + encoding] = tex.index;
+  }
+  return tex;
+}
+
+// --- materials ---
+
+// pbrt's roughness to rll's GGX alpha, as pbrt-v4's TrowbridgeReitzDistribution::RoughnessToAlpha:
+// with "remaproughness" (the default) alpha = sqrt(roughness), else alpha = roughness. rll's GGX
+// is isotropic: "uroughness" and "vroughness" (defaulting to "roughness") are mapped each and
+// their alphas averaged. A textured roughness is baked into an image of alphas (its first
+// channel), set as the material's roughness_texture.
+void PbrtReader::roughness(const Token& t, const Params& p, Material& m, const std::string& prefix,
+                           float def) {
+  const bool remap = p.get_bool("remaproughness", true);
+  auto op = [&](const std::string& n) { return texture_operand(t, p, (prefix + n).c_str(), true); };
+  ImageTexture d;
+  d.scale = Rgb(def);
+  const ImageTexture r = op("roughness").value_or(d);
+  const ImageTexture u = op("uroughness").value_or(r), v = op("vroughness").value_or(r);
+  auto alpha = [remap](float x) {
+    x = std::max(0.0f, x);
+    return remap ? std::sqrt(x) : x;
+  };
+  // Materials sharing a roughness texture share its image of alphas.
+  const auto key = std::make_tuple(u.index, v.index, u.scale.x, v.scale.x, remap);
+  std::optional<ImageTexture> baked;
+  if (u.index >= 0 || v.index >= 0) {
+    if (auto it = m_alpha_cache.find(key); it != m_alpha_cache.end()) baked = it->second;
+  }
+  if (!baked) {
+    baked = bake(t, "roughness", {u, v},
+                 [&](const Rgb* x) { return Rgb(0.5f * (alpha(x[0].x) + alpha(x[1].x))); });
+    if (baked && baked->index >= 0) m_alpha_cache[key] = *baked;
+  }
+  if (!baked) return;
+  if (baked->index < 0) {
+    m.roughness = baked->scale.x;
+  } else {
+    m.roughness_texture = baked->index;
+    m.roughness = 0.5f * (alpha(u.scale.x) + alpha(v.scale.x));  // unused while textured
+  }
+}
+
+// The reflectance of a material: a colour, or an image texture (times its scale).
+void PbrtReader::reflectance(const Token& t, const Params& p, const char* name, Material& m,
+                             Rgb def) {
+  m.albedo = def;
+  auto tex = texture_operand(t, p, name, false);
+  if (!tex) return;
+  m.albedo = tex->scale;
+  m.albedo_texture = tex->index;
+}
+
+// A texture's mean value (a conductor's reflectance cannot vary over the surface in rll).
+Rgb PbrtReader::mean_value(const ImageTexture& tex) const {
+  if (tex.index < 0) return tex.scale;
+  const Image& img = m_scene.textures[size_t(tex.index)];
+  double s[3] = {0, 0, 0};
+  for (const Rgb& c : img.pixels())
+    for (int i = 0; i < 3; ++i) s[i] += c[i];
+  const double n = std::max<double>(1, double(img.pixel_count()));
+  return Rgb(float(s[0] / n), float(s[1] / n), float(s[2] / n)) * tex.scale;
+}
+
+// An index of refraction given as "float eta", a spectrum (named, such as "glass-BK7") or an
+// rgb (its green value).
+float PbrtReader::ior_of(const Params& p, const char* name, float def) {
+  const Param* e = p.find(name);
+  if (!e) return def;
+  if (e->type == "float") return float(p.one_number(*e));
+  if (auto c = p.get_spectrum(name)) return c->y;
+  return def;
+}
+
+int PbrtReader::make_material(const Token& t, const std::string& type, const Params& p) {
+  Material m;
+  m.name = fmt::format("{} (line {})", type, t.line);
+  p.find("normalmap");
+  p.find("displacement");
+  if (type == "diffuse") {
+    m.type = MaterialType::Diffuse;
+    reflectance(t, p, "reflectance", m, Rgb(0.5f));
+  } else if (type == "coateddiffuse") {
+    // pbrt-v4's layered model: a dielectric coating (eta, roughness, thickness) over a
+    // Lambertian base (reflectance).
+    m.type = MaterialType::CoatedDiffuse;
+    reflectance(t, p, "reflectance", m, Rgb(0.5f));
+    roughness(t, p, m, "", 0);
+    m.ior = ior_of(p, "eta", 1.5f);
+    m.thickness = p.get_float("thickness", 0.01f);
+    if (!(m.thickness > 0)) syntax(t, "Material \"coateddiffuse\": thickness must be positive");
+    m.specular = Rgb(1);
+    if (auto a = p.get_spectrum("albedo"); a && max_component(*a) > 0)
+      unsupported(t, "Material \"coateddiffuse\" with a scattering layer (\"albedo\" > 0)");
+    for (const char* name : {"g", "maxdepth", "nsamples"}) p.find(name);
+  } else if (type == "conductor" || type == "coatedconductor") {
+    m.type = MaterialType::Conductor;
+    const std::string prefix = type == "conductor" ? "" : "conductor.";
+    m.eta = *named_spectrum_rgb("metal-Cu-eta");  // pbrt's default metal is copper
+    m.k = *named_spectrum_rgb("metal-Cu-k");
+    if (auto e = p.get_spectrum((prefix + "eta").c_str())) m.eta = max(*e, Rgb(1e-3f));
+    if (auto k = p.get_spectrum((prefix + "k").c_str())) m.k = *k;
+    std::optional<Rgb> refl;
+    if (p.get_texture("reflectance")) {
+      if (auto tex = texture_operand(t, p, "reflectance", false)) {
+        if (tex->index >= 0)
+          unsupported(t, "a conductor's textured \"reflectance\" (its mean is used)");
+        refl = mean_value(*tex);
+      }
+    } else {
+      refl = p.get_spectrum("reflectance");
+    }
+    if (refl) {
+      // pbrt-v4: eta = 1 and k = 2 sqrt(r) / sqrt(1 - r), r clamped to [0, 0.9999], which makes
+      // the Fresnel reflectance at normal incidence, ((eta-1)^2 + k^2) / ((eta+1)^2 + k^2),
+      // exactly r in each channel.
+      m.eta = Rgb(1);
+      for (int i = 0; i < 3; ++i) {
+        const float r = clamp((*refl)[i], 0.0f, 0.9999f);
+        m.k[i] = 2 * std::sqrt(r) / std::sqrt(1 - r);
+      }
+      m.specular = Rgb(1);
+    }
+    roughness(t, p, m, prefix, 0);
+    if (type == "coatedconductor") {
+      warn("coatedconductor", fmt::format("{}: Material \"coatedconductor\" is rendered as its "
+                                          "conductor without the coating",
+                                          where(t)));
+      for (const char* name :
+           {"interface.eta", "interface.roughness", "interface.uroughness", "interface.vroughness",
+            "thickness", "albedo", "g", "maxdepth", "nsamples"})
+        p.find(name);
+    }
+  } else if (type == "dielectric" || type == "thindielectric") {
+    m.type = type == "dielectric" ? MaterialType::Dielectric : MaterialType::ThinDielectric;
+    m.albedo = Rgb(0);
+    m.specular = Rgb(1);
+    m.ior = std::max(1.0f, ior_of(p, "eta", 1.5f));
+    if (type == "dielectric") {
+      roughness(t, p, m, "", 0);
+    } else {
+      m.roughness = 0;  // pbrt's thin dielectric is smooth
+    }
+  } else if (type == "interface") {
+    warn("interface", fmt::format("{}: Material \"interface\" (an invisible medium boundary) "
+                                  "is not supported; its shapes are skipped",
+                                  where(t)));
+    return kInvisible;
+  } else {
+    warn("material " + type,
+         fmt::format("{}: Material \"{}\" is not supported; rendered as diffuse grey 0.5", where(t),
+                     type));
+    m.albedo = Rgb(0.5f);
+    p.find("reflectance");
+    m_unsupported_materials.insert(type);
+  }
+  m_scene.materials.push_back(m);
+  return int(m_scene.materials.size() - 1);
+}
+
+}  // namespace rll::pbrt
