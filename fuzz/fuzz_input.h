@@ -18,7 +18,8 @@ enum class Format { Ply, Gltf, Pbrt, Json, Obj };
 inline constexpr std::string_view kMtlSeparator = "\n#--- fuzz.mtl ---\n";
 
 // Parses `bytes` with file access turned off and the geometry capped, so that a small input
-// can neither read files nor allocate without bound.
+// can neither read files nor allocate without bound. A PLY input that begins with gzip's magic
+// bytes goes through gunzip first (at most 16 MB out).
 inline void parse_untrusted(Format format, std::string_view bytes) {
   ReadPolicy policy;
   policy.read_files = false;
@@ -26,6 +27,11 @@ inline void parse_untrusted(Format format, std::string_view bytes) {
   Scene scene;
   switch (format) {
     case Format::Ply:
+      // A gzip-compressed PLY (.ply.gz) is inflated as read_ply_file does, its output capped.
+      if (is_gzip(bytes)) {
+        parse_ply(gunzip(bytes, "fuzz.ply.gz", size_t(1) << 24), "fuzz.ply.gz");
+        break;
+      }
       parse_ply(bytes, "fuzz.ply");
       break;
     case Format::Gltf:

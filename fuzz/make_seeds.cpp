@@ -7,8 +7,10 @@
 #include <filesystem>
 #include <fstream>
 
+
 #include "rll/core/error.h"
 #include "rll/scene/builder.h"
+#include "rll/io/load.h"
 #include "rll/io/save.h"
 #include "rll/io/text_scan.h"
 #include "../fuzz/fuzz_input.h"
@@ -107,6 +109,57 @@ MakeNamedMedium "fog" "string type" "homogeneous"
 Attribute "shape" "float radius" 2
 Option "bool disablepixeljitter" true
 )",
+    // loopsubdiv: a closed tetrahedron at 2 levels, an open (boundary) fan at the default level,
+    // and one at level 0; textures built from each other; named spectra.
+    R"(LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective" "float fov" 40 "float lensradius" 0.05 "float focaldistance" 4
+  "float screenwindow" [ -1 1 -0.75 0.75 ] "float shutteropen" 0 "float shutterclose" 0.5
+Film "rgb" "integer xresolution" 32 "integer yresolution" 24 "float iso" 400
+  "float exposuretime" 1
+Option "bool disablepixeljitter" true
+Option "string rendercoordsys" "world"
+ColorSpace "srgb"
+WorldBegin
+Texture "c" "spectrum" "constant" "rgb value" [ 0.2 0.5 0.8 ]
+Texture "f" "float" "constant" "float value" 0.25
+Texture "s" "spectrum" "scale" "texture tex" "c" "float scale" 2
+Texture "fs" "float" "scale" "texture tex" "f" "texture scale" "f"
+Texture "m" "spectrum" "mix" "texture tex1" "s" "rgb tex2" [ 1 0 0 ] "texture amount" "fs"
+Texture "mf" "float" "mix" "float tex1" 0.1 "float tex2" 0.9 "float amount" 0.3
+Material "diffuse" "texture reflectance" "m"
+Shape "loopsubdiv" "integer levels" 2
+  "point3 P" [ 1 1 1  1 -1 -1  -1 1 -1  -1 -1 1 ] "integer indices" [ 0 1 2  0 3 1  0 2 3  1 3 2 ]
+Material "conductor" "spectrum eta" "metal-Cu-eta" "spectrum k" "metal-Cu-k"
+  "texture roughness" "mf"
+Shape "loopsubdiv" "point3 P" [ 0 0 0  1 0 0  1 1 0  0 1 0  -1 0.5 0 ]
+  "integer indices" [ 0 1 2  0 2 3  0 3 4 ]
+Material "dielectric" "spectrum eta" "glass-BK7"
+Shape "loopsubdiv" "integer levels" 0 "point3 P" [ 0 0 1  1 0 1  0 1 1 ] "integer indices" [ 0 1 2 ]
+LightSource "distant" "spectrum L" "stdillum-D65" "point3 to" [ 0 -1 0 ]
+AttributeBegin
+  AreaLightSource "diffuse" "spectrum L" "stdillum-F4"
+  Shape "sphere" "float radius" 0.1
+AttributeEnd
+)",
+    // An image texture (refused: the fuzz targets read no files) after named-spectrum materials.
+    R"(Camera "perspective" "float lensradius" 0 "float focaldistance" 1e6
+Film "rgb" "float iso" 100
+WorldBegin
+MakeNamedMaterial "gold" "string type" "conductor" "spectrum eta" "metal-Au-eta"
+  "spectrum k" "metal-Au-k"
+MakeNamedMaterial "silver" "string type" "conductor" "spectrum eta" "metal-Ag-eta"
+  "spectrum k" "metal-Ag-k" "float uroughness" 0.1 "float vroughness" 0.2
+Texture "img" "spectrum" "imagemap" "string filename" "wood.png" "string encoding" "linear"
+  "float scale" 0.5
+Texture "s" "spectrum" "scale" "texture tex" "img" "float scale" 0.5
+Texture "m" "spectrum" "mix" "texture tex1" "img" "texture tex2" "s" "float amount" 0.5
+)",
+    // A plymesh that is refused (no file access) and a non-manifold loopsubdiv.
+    R"(WorldBegin
+Shape "loopsubdiv" "integer levels" 1
+  "point3 P" [ 0 0 0  1 0 0  0 1 0  0 -1 0  0 0 1 ] "integer indices" [ 0 1 2  1 0 3  0 1 4 ]
+Shape "plymesh" "string filename" "mesh.ply.gz"
+)",
 };
 
 const char* kJsonSeeds[] = {
@@ -203,6 +256,12 @@ int main(int argc, char** argv) {
     plain.positions = s.mesh.positions;
     plain.triangles = s.mesh.triangles;
     write(dir / "ply/scene.ply", ply_bytes(plain, PlyEncoding::Ascii));
+    // gzip-compressed PLY (the fuzz target inflates input that begins with gzip's magic bytes):
+    // one member, and a file cut in two members (concatenated members are one file).
+    write(dir / "ply/little.ply.gz", gzip(ply_bytes(tri, PlyEncoding::BinaryLittleEndian)));
+    const std::string ascii = ply_bytes(tri, PlyEncoding::Ascii);
+    write(dir / "ply/ascii-two-members.ply.gz",
+          gzip(ascii.substr(0, ascii.size() / 2)) + gzip(ascii.substr(ascii.size() / 2)));
     const fs::path gltf = dir / "gltf/scene.gltf";
     save_gltf_scene(s, gltf);
     write(dir / "gltf/scene.glb", glb_of(read_text_file(gltf)));

@@ -57,6 +57,9 @@ Mesh read_ply_file(const std::filesystem::path& path);
 bool is_gzip(std::string_view bytes);
 std::string gunzip(std::string_view bytes, const std::string& name,
                    size_t max_bytes = size_t(1) << 33);
+// `bytes` as one gzip member at zlib's `level` (0-9, -1 its default): what a .ply.gz holds (tests,
+// benchmarks and fuzz seeds write them).
+std::string gzip(std::string_view bytes, int level = -1);
 void parse_gltf(std::string_view bytes, const std::string& name,
                 const std::filesystem::path& base_dir, Scene& scene,
                 const ReadPolicy& policy = {});

@@ -552,6 +552,23 @@ Mesh parse_ply(std::string_view bytes, const std::string& name) {
   return PlyReader(bytes, name).read();
 }
 
+std::string gzip(std::string_view bytes, int level) {
+  z_stream z{};
+  // 16 + MAX_WBITS: a gzip header and trailer around the deflate stream.
+  if (deflateInit2(&z, level, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+    fail("gzip: cannot start zlib");
+  std::string out(deflateBound(&z, uLong(bytes.size())) + 64, '\0');
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
+  z.avail_in = uInt(bytes.size());
+  z.next_out = reinterpret_cast<Bytef*>(out.data());
+  z.avail_out = uInt(out.size());
+  const int rc = deflate(&z, Z_FINISH);
+  out.resize(z.total_out);
+  deflateEnd(&z);
+  if (rc != Z_STREAM_END) fail("gzip: compression failed");
+  return out;
+}
+
 bool is_gzip(std::string_view bytes) {
   return bytes.size() >= 2 && uint8_t(bytes[0]) == 0x1f && uint8_t(bytes[1]) == 0x8b;
 }

@@ -134,6 +134,12 @@ void PbrtReader::loop_subdivision(const Token& t, const Params& p, Mesh& mesh) {
   const int levels = p.get_int("levels", 3);
   if (levels < 0)
     syntax(t, fmt::format("Shape \"loopsubdiv\": levels must not be negative (got {})", levels));
+  // Each level quadruples the triangles: 10 turn one triangle into a million, beyond any scene's
+  // need, and the cap refuses a huge value before the triangle budget below is even consulted.
+  constexpr int kMaxLevels = 10;
+  if (levels > kMaxLevels)
+    syntax(t, fmt::format("Shape \"loopsubdiv\": levels must be at most {} (got {})", kMaxLevels,
+                          levels));
   const size_t nv = P->size() / 3;
   SubdivisionMesh sub;
   sub.positions.resize(nv);

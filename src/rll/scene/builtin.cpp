@@ -278,6 +278,86 @@ Scene many_lights_1m_scene() {
   return s;
 }
 
+// A room lit only by a sky dome, through glazed windows: thin panes (pbrt-v4's thindielectric)
+// in the left and back walls and two smooth glass slabs in the back wall, and one open skylight
+// in the ceiling. Through the Dirac glass no light sample gets through (a shadow ray stops at the
+// pane) and the sky is found by the BSDF ray alone; through the skylight every light sampler
+// takes part, as it does for the ground outside. There is no sun: a path tracer cannot carry a
+// delta light through Dirac glass.
+Scene glazed_room_scene() {
+  Scene s;
+  s.width = 400;
+  s.height = 300;
+  SceneBuilder b(s);
+  const float W = 8, H = 3, D = 6;
+  uint32_t wall = b.diffuse(Rgb(0.75f, 0.73f, 0.7f), "plaster");
+  uint32_t floor = b.diffuse(Rgb(0.45f, 0.36f, 0.28f), "oak");
+  uint32_t grey = b.diffuse(Rgb(0.5f, 0.5f, 0.48f), "grey");
+  Material pane;
+  pane.name = "pane";
+  pane.type = MaterialType::ThinDielectric;
+  pane.ior = 1.5f;
+  Material glass = pane;
+  glass.name = "glass";
+  glass.type = MaterialType::Dielectric;
+  glass.roughness = 0;
+  Material coated;
+  coated.name = "coated-green";
+  coated.type = MaterialType::CoatedDiffuse;
+  coated.albedo = Rgb(0.15f, 0.45f, 0.25f);
+  coated.roughness = 0.1f;
+  Material coated_red = coated;
+  coated_red.name = "coated-red";
+  coated_red.albedo = Rgb(0.6f, 0.12f, 0.08f);
+  coated_red.roughness = 0;
+  uint32_t m_pane = b.material(pane), m_glass = b.material(glass);
+  uint32_t m_coated = b.material(coated), m_coated_red = b.material(coated_red);
+
+  b.quad(Vec3(0, 0, 0), Vec3(0, 0, D), Vec3(W, 0, 0), floor);  // floor, faces +y
+  b.quad(Vec3(W, 0, 0), Vec3(0, 0, D), Vec3(0, H, 0), wall);   // right wall (x=W), faces -x
+  b.quad(Vec3(0, 0, D), Vec3(0, H, 0), Vec3(W, 0, 0), wall);   // front wall, faces -z
+  // Ground outside, just below the floor.
+  b.quad(Vec3(-100, -0.01f, -100), Vec3(0, 0, 200), Vec3(200, 0, 0), b.diffuse(Rgb(0.3f, 0.32f, 0.25f), "ground"));
+  // Ceiling (y = H, faces -y) with one open skylight: (u = z, v = x).
+  b.wall_with_holes(1, H, 0, 0, D, W, {{2.2f, 4.6f, 3.0f, 5.4f}}, false, wall);
+  // Left wall (x = 0): three tall windows, each glazed with a thin pane; (u = y, v = z).
+  std::vector<SceneBuilder::Hole> left;
+  for (int i = 0; i < 3; ++i) left.push_back({0.3f, 0.6f + i * 1.7f, 2.6f, 1.9f + i * 1.7f});
+  b.wall_with_holes(0, 0, 0, 0, H, D, left, true, wall);
+  for (const auto& h : left)  // the pane's front faces the room (+x)
+    b.quad(Vec3(0, h.u0, h.v0), Vec3(0, h.u1 - h.u0, 0), Vec3(0, 0, h.v1 - h.v0), m_pane);
+  // Back wall (z = 0): four windows, (u = x, v = y); the outer two thin panes, the inner two
+  // 4 cm slabs of glass.
+  std::vector<SceneBuilder::Hole> back;
+  for (int i = 0; i < 4; ++i) back.push_back({0.6f + i * 1.8f, 0.4f, 1.9f + i * 1.8f, 2.6f});
+  b.wall_with_holes(2, 0, 0, 0, W, H, back, true, wall);
+  for (int i = 0; i < 4; ++i) {
+    const auto& h = back[size_t(i)];
+    if (i == 1 || i == 2)
+      b.box(Vec3(h.u0, h.v0, -0.02f), Vec3(h.u1, h.v1, 0.02f), m_glass);
+    else  // faces the room (+z)
+      b.quad(Vec3(h.u0, h.v0, 0), Vec3(h.u1 - h.u0, 0, 0), Vec3(0, h.v1 - h.v0, 0), m_pane);
+  }
+  // Furniture: a table, a coated cabinet, a coated ball and a plain one.
+  b.box(Vec3(2.0f, 0.7f, 2.2f), Vec3(3.8f, 0.78f, 3.4f), grey);
+  for (float x : {2.05f, 3.65f})
+    for (float z : {2.25f, 3.25f}) b.box(Vec3(x, 0, z), Vec3(x + 0.1f, 0.7f, z + 0.1f), grey);
+  b.box(Vec3(7.1f, 0, 2.4f), Vec3(7.9f, 1.3f, 3.9f), m_coated);
+  b.sphere(Vec3(2.9f, 1.08f, 2.8f), 0.3f, 3, m_coated_red);
+  b.sphere(Vec3(5.2f, 0.45f, 3.6f), 0.45f, 3, grey);
+
+  SkyDome sky;
+  sky.triangles = 1024;
+  sky.radiance = Rgb(0.5f, 0.65f, 1.0f) * 4.0f;
+  sky.radius_scale = 4;  // the ground already reaches far
+  s.sky = sky;
+  s.camera.position = Vec3(W - 0.5f, 2.1f, D - 0.3f);
+  s.camera.target = Vec3(2.5f, 0.6f, 1.0f);
+  s.camera.fov = 65;
+  s.has_camera = true;
+  return s;
+}
+
 Scene furnace_scene() {
   Scene s;
   s.width = s.height = 32;
@@ -320,6 +400,10 @@ const std::vector<Entry>& entries() {
        many_lights_open_scene},
       {{"many-lights-1m", "stress test: 1,000,000 tiny emissive triangles over a floor with a few blocks"},
        many_lights_1m_scene},
+      {{"glazed-room",
+        "a room lit only by a 1024-triangle sky dome through 7 glazed windows (thin panes and glass "
+        "slabs) and an open skylight, with coated-diffuse furniture"},
+       glazed_room_scene},
       {{"furnace", "inside an emissive diffuse sphere (Le = 1, albedo 0.5): radiance sum of 0.5^k"},
        furnace_scene},
   };

@@ -1,0 +1,341 @@
+// pbrt reader, bad input to the directives added for the pbrt-v4 scenes (loopsubdiv, plymesh with
+// .ply.gz, imagemap/scale/mix textures, named spectra, lens parameters, Film iso, ColorSpace):
+// each gives an rll::Error naming the file and the line of the offending directive or
+// parameter, or, where rll skips what it cannot use, a warning that names them.
+#include <gtest/gtest.h>
+
+
+#include <chrono>
+#include <string>
+
+#include "rll/io/load.h"
+#include "rll/io/save.h"
+#include "support/test_support.h"
+
+using namespace rll;
+using rll::test::error_of;
+using rll::test::expect_mentions;
+using rll::test::TempDir;
+
+namespace {
+
+// "WorldBegin" on line 1, so that the snippet's first line is line 2 of bad.pbrt.
+std::string error_in_world(const TempDir& dir, const std::string& snippet) {
+  return error_of([&] {
+    Scene s;
+    load_pbrt(dir.write("bad.pbrt", "WorldBegin\n" + snippet), s);
+  });
+}
+
+Scene load_world(const TempDir& dir, const std::string& snippet) {
+  Scene s;
+  load_pbrt(dir.write("s.pbrt", "WorldBegin\n" + snippet), s);
+  return s;
+}
+
+// The first warning that contains every one of `parts` ("" when none does).
+std::string warning_with(const Scene& s, std::initializer_list<std::string> parts) {
+  for (const auto& w : s.warnings) {
+    bool all = true;
+    for (const auto& p : parts) all = all && w.find(p) != std::string::npos;
+    if (all) return w;
+  }
+  return "";
+}
+
+// A PLY of a 20 x 20 grid (800 triangles), big enough that its gzip has a real deflate body.
+std::string grid_ply() {
+  Mesh m;
+  const int n = 20;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.positions.push_back(Vec3(float(i), 0, float(j)));
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const uint32_t a = uint32_t(j * (n + 1) + i), b = a + 1, c = a + uint32_t(n + 1), d = c + 1;
+      m.triangles.push_back({a, c, b});
+      m.triangles.push_back({b, c, d});
+    }
+  return ply_bytes(m, PlyEncoding::Ascii);
+}
+
+const char* kTetraP = "\"point3 P\" [ 1 1 1  1 -1 -1  -1 1 -1  -1 -1 1 ]";
+const char* kTetraI = "\"integer indices\" [ 0 1 2  0 3 1  0 2 3  1 3 2 ]";
+
+std::string tetra(const std::string& levels) {
+  return "Shape \"loopsubdiv\" " + levels + "\n  " + kTetraP + "\n  " + kTetraI + "\n";
+}
+
+}  // namespace
+
+// --- Shape "loopsubdiv" ---
+
+TEST(PbrtErrors, LoopsubdivGoodLevelsLoad) {
+  // The baseline the bad cases differ from: 4 triangles at 2 levels are 64.
+  TempDir dir;
+  EXPECT_EQ(load_world(dir, tetra("\"integer levels\" 2")).mesh.triangle_count(), 64u);
+  EXPECT_EQ(load_world(dir, tetra("\"integer levels\" 0")).mesh.triangle_count(), 4u);
+}
+
+TEST(PbrtErrors, LoopsubdivNegativeLevels) {
+  TempDir dir;
+  expect_mentions(error_in_world(dir, tetra("\"integer levels\" -1")),
+                  {"bad.pbrt:2:", "loopsubdiv", "levels", "negative", "-1"});
+}
+
+TEST(PbrtErrors, LoopsubdivNonIntegerLevels) {
+  TempDir dir;
+  // The parameter is on line 3: the message points at it.
+  expect_mentions(error_in_world(dir, "Shape \"loopsubdiv\"\n  \"integer levels\" 2.5\n  " +
+                                          std::string(kTetraP) + " " + kTetraI + "\n"),
+                  {"bad.pbrt:3:", "loopsubdiv", "levels", "must be an integer"});
+  expect_mentions(error_in_world(dir, tetra("\"float levels\" 2")),
+                  {"bad.pbrt:2:", "levels", "integer"});
+  expect_mentions(error_in_world(dir, tetra("\"integer levels\" [ 1 2 ]")),
+                  {"bad.pbrt:2:", "levels", "1 value"});
+  expect_mentions(error_in_world(dir, tetra("\"integer levels\" 1e12")),
+                  {"bad.pbrt:2:", "levels", "must be an integer"});
+}
+
+TEST(PbrtErrors, LoopsubdivHugeLevelsAreRefusedBeforeAllocating) {
+  TempDir dir;
+  // 14 levels of 4 triangles would be 2^30 triangles (tens of GB), still under the default
+  // triangle budget (2^31): the level cap (10) refuses it, at once.
+  for (const char* levels : {"11", "14", "1000", "1000000"}) {
+    const auto t0 = std::chrono::steady_clock::now();
+    expect_mentions(error_in_world(dir, tetra(std::string("\"integer levels\" ") + levels)),
+                    {"bad.pbrt:2:", "loopsubdiv", "levels must be at most 10", levels});
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0);
+  }
+  // Beyond what the number parser keeps exact: refused as a parameter value.
+  expect_mentions(error_in_world(dir, tetra("\"integer levels\" 2147483647")),
+                  {"bad.pbrt:2:", "loopsubdiv", "levels"});
+  // Under the cap, the triangle budget of the read policy is checked before subdividing.
+  ReadPolicy policy;
+  policy.max_triangles = 1000;
+  Scene s;
+  const std::string e = error_of([&] {
+    parse_pbrt("WorldBegin\n" + tetra("\"integer levels\" 5"), "budget.pbrt", "", s, policy);
+  });
+  expect_mentions(e, {"budget.pbrt:2:", "loopsubdiv", "5 levels", "more than 1000 triangles"});
+  EXPECT_EQ(s.mesh.triangle_count(), 0u);
+}
+
+TEST(PbrtErrors, LoopsubdivIndexCountNotAMultipleOf3) {
+  TempDir dir;
+  expect_mentions(error_in_world(dir, std::string("Shape \"loopsubdiv\" ") + kTetraP +
+                                          "\n  \"integer indices\" [ 0 1 2  0 3 ]\n"),
+                  {"bad.pbrt:3:", "loopsubdiv", "indices", "multiple of 3", "got 5"});
+  expect_mentions(error_in_world(dir, "Shape \"loopsubdiv\" \"point3 P\" [ 0 0 0 1 0 0 0 1 ]\n  " +
+                                          std::string(kTetraI) + "\n"),
+                  {"bad.pbrt:2:", "loopsubdiv", "P", "multiple of 3"});
+  expect_mentions(error_in_world(dir, std::string("Shape \"loopsubdiv\" ") + kTetraP + "\n"),
+                  {"bad.pbrt:2:", "loopsubdiv", "needs \"integer indices\""});
+}
+
+TEST(PbrtErrors, LoopsubdivIndexOutOfRange) {
+  TempDir dir;
+  expect_mentions(error_in_world(dir, std::string("Shape \"loopsubdiv\" ") + kTetraP +
+                                          " \"integer indices\" [ 0 1 2  0 3 4 ]\n"),
+                  {"bad.pbrt:2:", "loopsubdiv", "index 4 is out of range", "4 vertices"});
+  expect_mentions(error_in_world(dir, std::string("Shape \"loopsubdiv\" ") + kTetraP +
+                                          " \"integer indices\" [ 0 1 -1 ]\n"),
+                  {"bad.pbrt:2:", "loopsubdiv", "index -1 is out of range"});
+}
+
+TEST(PbrtErrors, LoopsubdivNonManifoldControlMesh) {
+  TempDir dir;
+  // Three triangles on one edge.
+  expect_mentions(error_in_world(dir,
+                                 "\n\nShape \"loopsubdiv\" \"integer levels\" 1\n"
+                                 "  \"point3 P\" [ 0 0 0  1 0 0  0 1 0  0 -1 0  0 0 1 ]\n"
+                                 "  \"integer indices\" [ 0 1 2  1 0 3  0 1 4 ]\n"),
+                  {"bad.pbrt:4:", "loopsubdiv", "not a manifold"});
+  // Two triangles that traverse their shared edge in the same direction (inconsistent winding).
+  expect_mentions(error_in_world(dir,
+                                 "Shape \"loopsubdiv\" \"integer levels\" 1\n"
+                                 "  \"point3 P\" [ 0 0 0  1 0 0  0 1 0  0 -1 0 ]\n"
+                                 "  \"integer indices\" [ 0 1 2  0 1 3 ]\n"),
+                  {"bad.pbrt:2:", "loopsubdiv", "not consistently oriented"});
+  // Two fans meeting at one vertex (a bow tie).
+  expect_mentions(error_in_world(dir,
+                                 "Shape \"loopsubdiv\" \"integer levels\" 1\n"
+                                 "  \"point3 P\" [ 0 0 0  1 0 0  1 1 0  -1 0 0  -1 -1 0 ]\n"
+                                 "  \"integer indices\" [ 0 1 2  0 3 4 ]\n"),
+                  {"bad.pbrt:2:", "loopsubdiv", "not a manifold"});
+  // A degenerate triangle (a vertex used twice).
+  expect_mentions(error_in_world(dir, std::string("Shape \"loopsubdiv\" ") + kTetraP +
+                                          " \"integer indices\" [ 0 1 1 ]\n"),
+                  {"bad.pbrt:2:", "loopsubdiv", "twice"});
+}
+
+// --- Shape "plymesh" ---
+
+TEST(PbrtErrors, PlymeshMissingFile) {
+  TempDir dir;
+  expect_mentions(error_in_world(dir, "Shape \"plymesh\" \"string filename\" \"nothere.ply.gz\"\n"),
+                  {"bad.pbrt:2:", "plymesh", "nothere.ply.gz"});
+  expect_mentions(error_in_world(dir, "Shape \"plymesh\"\n"),
+                  {"bad.pbrt:2:", "plymesh", "filename"});
+}
+
+TEST(PbrtErrors, PlymeshGzipGoodThenTruncatedAndCorrupt) {
+  TempDir dir;
+  const std::string gz = gzip(grid_ply());
+  ASSERT_GT(gz.size(), 200u);
+  dir.write("good.ply.gz", gz);
+  EXPECT_EQ(load_world(dir, "Shape \"plymesh\" \"string filename\" \"good.ply.gz\"\n")
+                .mesh.triangle_count(),
+            800u);
+  // Cut inside the deflate stream, and cut to the gzip header alone.
+  dir.write("cut.ply.gz", gz.substr(0, gz.size() / 2));
+  expect_mentions(error_in_world(dir, "Shape \"plymesh\" \"string filename\" \"cut.ply.gz\"\n"),
+                  {"bad.pbrt:2:", "plymesh", "cut.ply.gz", "truncated"});
+  dir.write("head.ply.gz", gz.substr(0, 10));
+  expect_mentions(error_in_world(dir, "Shape \"plymesh\" \"string filename\" \"head.ply.gz\"\n"),
+                  {"bad.pbrt:2:", "plymesh", "head.ply.gz", "truncated"});
+  // Damaged deflate data, and a damaged CRC in the trailer.
+  std::string bad = gz;
+  for (size_t i = 20; i < 60; ++i) bad[i] = char(~uint8_t(bad[i]));
+  dir.write("corrupt.ply.gz", bad);
+  expect_mentions(error_in_world(dir, "Shape \"plymesh\" \"string filename\" \"corrupt.ply.gz\"\n"),
+                  {"bad.pbrt:2:", "plymesh", "corrupt.ply.gz", "corrupt gzip data"});
+  std::string crc = gz;
+  crc[crc.size() - 6] = char(~uint8_t(crc[crc.size() - 6]));
+  dir.write("crc.ply.gz", crc);
+  expect_mentions(error_in_world(dir, "Shape \"plymesh\" \"string filename\" \"crc.ply.gz\"\n"),
+                  {"bad.pbrt:2:", "plymesh", "crc.ply.gz", "corrupt gzip data"});
+  // Good gzip around bytes that are not a PLY, and junk after the gzip stream.
+  dir.write("notply.ply.gz", gzip("this is not a PLY file\n"));
+  expect_mentions(error_in_world(dir, "Shape \"plymesh\" \"string filename\" \"notply.ply.gz\"\n"),
+                  {"bad.pbrt:2:", "plymesh", "notply.ply.gz"});
+  dir.write("tail.ply.gz", gz + "junk");
+  expect_mentions(error_in_world(dir, "Shape \"plymesh\" \"string filename\" \"tail.ply.gz\"\n"),
+                  {"bad.pbrt:2:", "plymesh", "tail.ply.gz", "after the end of the gzip stream"});
+}
+
+// --- textures ---
+
+TEST(PbrtErrors, ImagemapMissingFile) {
+  TempDir dir;
+  expect_mentions(error_in_world(dir,
+                                 "Texture \"wood\" \"spectrum\" \"imagemap\"\n"
+                                 "  \"string filename\" \"wood.png\"\n"),
+                  {"bad.pbrt:2:", "Texture", "wood.png"});
+  expect_mentions(error_in_world(dir, "Texture \"wood\" \"spectrum\" \"imagemap\"\n"),
+                  {"bad.pbrt:2:", "Texture \"wood\"", "filename"});
+  // A file that exists but is not an image.
+  dir.write("junk.png", "not a png");
+  expect_mentions(error_in_world(dir,
+                                 "Texture \"j\" \"float\" \"imagemap\" \"string filename\" "
+                                 "\"junk.png\"\n"),
+                  {"bad.pbrt:2:", "Texture \"j\"", "junk.png"});
+}
+
+TEST(PbrtErrors, TextureReferencingAnUnknownTextureIsWarnedWithItsLine) {
+  // rll skips textures it cannot use (with a warning), so a reference to a name it does not
+  // hold is a warning too; it names the file, the line, the texture and the parameter.
+  TempDir dir;
+  Scene s = load_world(dir,
+                       "\nTexture \"s\" \"spectrum\" \"scale\" \"texture tex\" \"nosuch\"\n"
+                       "Texture \"m\" \"float\" \"mix\" \"float tex1\" 0 \"float tex2\" 1\n"
+                       "  \"texture amount\" \"missing\"\n");
+  expect_mentions(warning_with(s, {"nosuch"}), {"s.pbrt:3:", "\"nosuch\"", "'tex'"});
+  expect_mentions(warning_with(s, {"missing"}), {"s.pbrt:4:", "\"missing\"", "'amount'"});
+}
+
+TEST(PbrtErrors, UnsupportedTextureKindsAndClassesAreWarnedWithTheirLine) {
+  TempDir dir;
+  Scene s = load_world(
+      dir,
+      "Texture \"a\" \"normal\" \"scale\" \"float scale\" 2\n"
+      "Texture \"b\" \"spectrum\" \"checkerboard\"\n"
+      "Texture \"c\" \"spectrum\" \"mix\" \"texture tex1\" \"a\" \"texture tex2\" \"b\"\n");
+  expect_mentions(warning_with(s, {"Texture of type"}),
+                  {"s.pbrt:2:", "\"normal\"", "not supported"});
+  expect_mentions(warning_with(s, {"Texture class"}),
+                  {"s.pbrt:3:", "\"checkerboard\"", "not supported"});
+  // ... and the mix that refers to both says so, on its own line.
+  expect_mentions(warning_with(s, {"\"a\" is not a texture"}), {"s.pbrt:4:", "tex1"});
+  // A malformed operand is an error, naming the parameter's line.
+  expect_mentions(error_in_world(dir,
+                                 "Texture \"m\" \"spectrum\" \"mix\"\n"
+                                 "  \"rgb tex1\" [ 1 0 ]\n"),
+                  {"bad.pbrt:3:", "Texture \"m\"", "tex1", "3 values"});
+  expect_mentions(error_in_world(dir, "Texture \"s\" \"float\" \"scale\" \"string scale\" \"x\"\n"),
+                  {"bad.pbrt:2:", "Texture \"s\"", "scale", "type float"});
+  expect_mentions(error_in_world(dir,
+                                 "Texture \"s\" \"float\" \"scale\" \"texture tex\" "
+                                 "[ \"a\" \"b\" ]\n"),
+                  {"bad.pbrt:2:", "Texture \"s\"", "tex", "1 value"});
+}
+
+// --- spectra, camera, film, ColorSpace ---
+
+TEST(PbrtErrors, UnknownNamedSpectrumIsWarnedWithItsLine) {
+  TempDir dir;
+  Scene s =
+      load_world(dir, "Material \"conductor\"\n  \"spectrum eta\" \"metal-Unobtainium-eta\"\n");
+  expect_mentions(warning_with(s, {"metal-Unobtainium-eta"}),
+                  {"s.pbrt:3:", "spectrum \"metal-Unobtainium-eta\"", "'eta'"});
+  // Wavelength-value pairs that are not pairs are an error.
+  expect_mentions(error_in_world(dir, "Material \"conductor\"\n  \"spectrum k\" [ 400 1 700 ]\n"),
+                  {"bad.pbrt:3:", "spectrum k", "pairs"});
+}
+
+TEST(PbrtErrors, BadLensParameters) {
+  TempDir dir;
+  auto camera_error = [&](const std::string& params) {
+    return error_of([&] {
+      Scene s;
+      load_pbrt(dir.write("bad.pbrt", "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" " +
+                                          params + "\nWorldBegin\n"),
+                s);
+    });
+  };
+  expect_mentions(camera_error("\"float lensradius\" -0.1"),
+                  {"bad.pbrt:2:", "lensradius must not be negative"});
+  expect_mentions(camera_error("\"float lensradius\" 0.1 \"float focaldistance\" 0"),
+                  {"bad.pbrt:2:", "focaldistance must be positive"});
+  expect_mentions(camera_error("\"float lensradius\" [ 0.1 0.2 ]"),
+                  {"bad.pbrt:2:", "lensradius", "1 value"});
+  expect_mentions(camera_error("\"float screenwindow\" [ -1 1 1 ]"),
+                  {"bad.pbrt:2:", "screenwindow", "multiple of 4"});
+  expect_mentions(camera_error("\"float screenwindow\" [ -1 1 -1 1  -1 1 -1 1 ]"),
+                  {"bad.pbrt:2:", "screenwindow needs 4 values"});
+  expect_mentions(camera_error("\"float screenwindow\" [ 1 -1 -1 1 ]"),
+                  {"bad.pbrt:2:", "screenwindow needs xmin < xmax"});
+  expect_mentions(camera_error("\"float shutteropen\" 1 \"float shutterclose\" 0.5"),
+                  {"bad.pbrt:2:", "shutterclose must be after shutteropen"});
+}
+
+TEST(PbrtErrors, BadFilmIso) {
+  TempDir dir;
+  for (const char* iso : {"0", "-100"})
+    expect_mentions(error_of([&] {
+                      Scene s;
+                      load_pbrt(dir.write("bad.pbrt", std::string("Camera \"perspective\"\n"
+                                                                  "Film \"rgb\" \"float iso\" ") +
+                                                          iso + "\nWorldBegin\n"),
+                                s);
+                    }),
+                    {"bad.pbrt:2:", "Film", "iso must be positive"});
+}
+
+TEST(PbrtErrors, ColorSpaceOtherThanSrgbAndBadOption) {
+  TempDir dir;
+  expect_mentions(error_of([&] {
+                    Scene s;
+                    load_pbrt(dir.write("bad.pbrt", "\nColorSpace \"rec2020\"\nWorldBegin\n"), s);
+                  }),
+                  {"bad.pbrt:2:", "ColorSpace \"rec2020\"", "srgb"});
+  expect_mentions(error_of([&] {
+                    Scene s;
+                    load_pbrt(dir.write("bad.pbrt", "ColorSpace\nWorldBegin\n"), s);
+                  }),
+                  {"bad.pbrt:2:", "expected a quoted string"});
+  expect_mentions(error_of([&] {
+                    Scene s;
+                    load_pbrt(dir.write("bad.pbrt", "\nOption \"bool wavefront\" \"maybe\"\n"), s);
+                  }),
+                  {"bad.pbrt:2:", "wavefront", "true or false"});
+}
