@@ -109,7 +109,7 @@ bool names_files(const std::string& ext) {
 bool is_file_reference(const std::string& token) {
   static const std::set<std::string> kExtensions = {
       ".json", ".obj",  ".mtl", ".gltf", ".glb", ".bin", ".ply", ".pbrt", ".exr", ".png",
-      ".jpg",  ".jpeg", ".hdr", ".tga",  ".bmp", ".pfm", ".ppm", ".pgm",  ".tif", ".tiff"};
+      ".jpg",  ".jpeg", ".hdr", ".tga",  ".bmp", ".pfm", ".ppm", ".pgm",  ".tif", ".tiff", ".gz"};
   return kExtensions.count(lower(fs::path(token).extension().string())) > 0;
 }
 

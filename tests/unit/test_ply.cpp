@@ -216,6 +216,19 @@ TEST(PlyReader, GzipCompressedPlyReadsLikeThePlainFile) {
   EXPECT_EQ(s.mesh.triangle_count(), quad_mesh().triangle_count());
 }
 
+TEST(PlyReader, ScenesReadFromPlyGzAsFromPly) {
+  // `rll render x.ply.gz` goes through the same reader as x.ply: a lit quad's scene loads alike
+  // from both (a PLY carries no lights: the unlit one is refused alike).
+  TempDir dir;
+  const std::string plain = ply_bytes(quad_mesh(), PlyEncoding::Ascii);
+  dir.write("quad.ply", plain);
+  dir.write("quad.ply.gz", gzip(plain));
+  const std::string a = error_of([&] { load_scene((dir / "quad.ply").string(), {}); });
+  const std::string b = error_of([&] { load_scene((dir / "quad.ply.gz").string(), {}); });
+  EXPECT_NE(b.find("no lights"), std::string::npos) << b;
+  EXPECT_EQ(a.substr(a.find(": ")), b.substr(b.find(": ")));
+}
+
 TEST(PlyReader, TruncatedOrCorruptGzipIsAClearError) {
   TempDir dir;
   const std::string gz = gzip(ply_bytes(quad_mesh(), PlyEncoding::BinaryLittleEndian));

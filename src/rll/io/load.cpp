@@ -62,12 +62,13 @@ Scene read_scene(const std::string& spec) {
   try {
     if (ext == ".json") load_json_scene(path, scene);
     else if (ext == ".obj") load_obj(path, scene);
-    else if (ext == ".ply") load_ply(path, scene);
+    else if (ext == ".ply" || (ext == ".gz" && lower_extension(path.stem()) == ".ply"))
+      load_ply(path, scene);  // a .ply.gz is inflated by the PLY reader
     else if (ext == ".gltf" || ext == ".glb") load_gltf(path, scene);
     else if (ext == ".pbrt") load_pbrt(path, scene);
     else
-      fail("{}: unknown scene format '{}' (rll reads .json, .obj, .gltf, .glb, .ply, .pbrt and "
-           "builtin:NAME)",
+      fail("{}: unknown scene format '{}' (rll reads .json, .obj, .gltf, .glb, .ply, .ply.gz, "
+           ".pbrt and builtin:NAME)",
            spec, printable(ext));
   } catch (const Error& e) {
     // The readers quote what they echo from a file with printable(); this catches what they
