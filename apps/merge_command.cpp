@@ -26,14 +26,8 @@ struct MergeOptions {
 void merge(const MergeOptions& o) {
   const fs::path output = o.output;
   prepare_output(output, "merge", {".exr"});
-  std::vector<fs::path> inputs;
-  std::error_code ec;
-  for (const std::string& in : o.inputs) {
-    if (fs::exists(output, ec) && fs::equivalent(output, in, ec))
-      fail("merge {}: the output is also an input; write the merged image to another file",
-           output.string());
-    inputs.emplace_back(in);
-  }
+  const std::vector<fs::path> inputs(o.inputs.begin(), o.inputs.end());
+  refuse_input(output, "merge", inputs);
   MergeResult m = merge_shares(inputs);
   if (!m.missing.empty() && !o.allow_missing)
     fail("merge: shares {} of {} are missing (a job failed?); render them, or merge what there "

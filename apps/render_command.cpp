@@ -41,13 +41,14 @@ struct RenderOptions {
   std::string state_mode = "update";
 };
 
-// What every share of one render has in common (ShareInfo::settings).
-nlohmann::json share_settings(const RenderOptions& o, const RenderSession& session, int frame) {
+// What every share of one render has in common (ShareInfo::settings), but the frame.
+nlohmann::json share_settings(const RenderOptions& o, const RenderSession& session,
+                              uint64_t fingerprint) {
   const Scene& scene = session.scene();
   const IntegratorSettings& is = session.integrator();
   std::vector<std::string> set = o.session.set;
   std::sort(set.begin(), set.end());
-  return {{"scene_fingerprint", fmt::format("{:016x}", scene.fingerprint())},
+  return {{"scene_fingerprint", fmt::format("{:016x}", fingerprint)},
           {"resolution", fmt::format("{}x{}", scene.width, scene.height)},
           {"integrator", integrator_name(is.type)},
           {"max_depth", is.max_depth},
@@ -56,7 +57,6 @@ nlohmann::json share_settings(const RenderOptions& o, const RenderSession& sessi
           {"set", set},
           {"points", point_set_name(session.points())},
           {"seed", std::to_string(o.seed)},
-          {"frame", frame},
           {"pass_spp", o.pass_spp},
           {"max_pass_spp", o.max_pass_spp},
           {"rll_state", o.state.empty() ? "none" : o.state_mode}};
@@ -125,9 +125,14 @@ void run(const RenderOptions& o) {
   auto sampler = session.make_sampler(o.sampler);
   session.check_params_used();
   if (!o.state.empty()) check_sampler_has_state(*sampler, "--rll-state");
+  // Shares and states belong to the scene as loaded, before an animation moves its lights.
+  const bool exr_output = lower(output.extension().string()) == ".exr";
+  const uint64_t fingerprint = exr_output || !o.state.empty() ? scene.fingerprint() : 0;
+  nlohmann::json settings;
+  if (exr_output) settings = share_settings(o, session, fingerprint);
   bool state_loaded = false;
   if (load_state && fs::exists(o.state)) {
-    load_sampler_state(o.state, *sampler, scene);
+    load_sampler_state(o.state, *sampler, fingerprint);
     state_loaded = true;
     if (!o.quiet) fmt::print(stderr, "rll: {} starts from the state learnt in {}\n", sampler->name(), o.state);
   }
@@ -151,9 +156,10 @@ void run(const RenderOptions& o) {
         frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
     RenderProgress p = session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag());
     fs::path out = frame_path(output, f, frames);
-    if (lower(out.extension().string()) == ".exr") {
+    if (exr_output) {
       ShareInfo share;
-      share.settings = share_settings(o, session, f);
+      share.settings = settings;
+      share.settings["frame"] = f;
       share.tasks = task.count;
       share.task_spp = o.task.empty() ? p.spp_done : o.spp;
       share.held = {task.index};
@@ -179,7 +185,7 @@ void run(const RenderOptions& o) {
   }
 
   if (save_state) {
-    save_sampler_state(o.state, *sampler, scene);
+    save_sampler_state(o.state, *sampler, fingerprint);
     if (!o.quiet) fmt::print(stderr, "rll: saved {}'s learnt state to {}\n", sampler->name(), o.state);
   }
 

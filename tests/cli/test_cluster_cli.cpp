@@ -117,7 +117,7 @@ TEST(ClusterCli, MergeRefusesSharesOfOtherRenders) {
   expect_ok(run_rll(render_args({"--spp", "2", "-o", (dir / "plain.png").string()})));
   expect_refused(run_rll({"merge", out, shares[0], (dir / "plain.png").string()}), {"plain.png", ".exr"});
   EXPECT_FALSE(fs::exists(out));
-  expect_refused(run_rll({"merge", shares[0], shares[0], shares[1]}), {"also an input"});
+  expect_refused(run_rll({"merge", shares[0], shares[0], shares[1]}), {"is the input file", "refusing to write over it"});
 }
 
 TEST(ClusterCli, TaskFlagsAreChecked) {
@@ -201,4 +201,18 @@ TEST(ClusterCli, ErrorMeasuresAnyImageAgainstAReference) {
   expect_ok(run_rll({"render", "builtin:cornell-box", "--res", "20x30", "--quiet", "--spp", "1", "-o",
                      (dir / "small.exr").string()}));
   expect_refused(run_rll({"error", (dir / "small.exr").string(), ref}), {"20x30", "40x30"});
+}
+
+TEST(ClusterCli, AnAnimationsStateLoadsAtItsNextRender) {
+  // The state saved after the last frame belongs to the scene as loaded (frame 0), not to the
+  // lights where the last frame left them.
+  TempDir dir;
+  const std::string state = (dir / "dynamic.rllstate").string();
+  const std::vector<std::string> args = {"render", "builtin:cornell-boxes-dynamic", "--res", "32x24", "--integrator",
+                                         "direct", "--spp", "4", "--frames", "2", "--rll-state", state,
+                                         "-o", (dir / "d.exr").string()};
+  expect_ok(run_rll(args));
+  const CommandResult again = run_rll(args);
+  expect_ok(again);
+  expect_mentions(again.output, {"starts from the state learnt in", "dynamic.rllstate"});
 }

@@ -4,8 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
-#include <fstream>
-#include <sstream>
 
 #include "rll/accel/accel.h"
 #include "rll/core/hash.h"
@@ -20,18 +18,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string read_bytes(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-void write_bytes(const fs::path& p, const std::string& bytes) {
-  std::ofstream f(p, std::ios::binary);
-  f.write(bytes.data(), std::streamsize(bytes.size()));
-}
-
 struct Trained {
   Scene scene = small_builtin_scene("cornell-boxes-room", 32, 24);
   Accel accel{scene.mesh};
@@ -42,7 +28,7 @@ struct Trained {
   fs::path train_and_save(LightSampler& sampler, const TempDir& dir) const {
     train_sampler(scene, accel, sampler, 4);
     const fs::path file = dir / "state.bin";
-    save_sampler_state(file, sampler, scene);
+    save_sampler_state(file, sampler, scene.fingerprint());
     return file;
   }
 };
@@ -71,13 +57,13 @@ TEST(SamplerState, LoadedSamplerHasTheSavedPmfsAndSamples) {
     train_sampler(t.scene, t.accel, *trained, 24);
     TempDir dir;
     const fs::path file = dir / "state.bin";
-    save_sampler_state(file, *trained, t.scene);
+    save_sampler_state(file, *trained, t.scene.fingerprint());
     auto loaded = t.make(name);
-    load_sampler_state(file, *loaded, t.scene);
+    load_sampler_state(file, *loaded, t.scene.fingerprint());
     // Saving the loaded sampler gives the same bytes: nothing was lost or reinterpreted.
     const fs::path again = dir / "again.bin";
-    save_sampler_state(again, *loaded, t.scene);
-    EXPECT_TRUE(read_bytes(file) == read_bytes(again)) << name;
+    save_sampler_state(again, *loaded, t.scene.fingerprint());
+    EXPECT_TRUE(read_text(file) == read_text(again)) << name;
     const std::vector<LightContext> contexts = make_contexts(t.scene, t.accel, 300, 7);
     const size_t lights = t.scene.lights.size();
     EXPECT_EQ(largest_pmf_difference(*trained, *loaded, contexts, lights), 0.0f) << name;
@@ -105,14 +91,14 @@ TEST(SamplerState, RefusesOtherScenesSamplersAndParameters) {
 
   const Scene other = small_builtin_scene("cornell-boxes-room", 32, 16);
   auto on_other = make_light_sampler("rll", other, Params::parse({}), nullptr);
-  expect_mentions(error_of([&] { load_sampler_state(file, *on_other, other); }), {"state.bin", "another scene"});
+  expect_mentions(error_of([&] { load_sampler_state(file, *on_other, other.fingerprint()); }), {"state.bin", "another scene"});
   auto fermat = t.make("fermat");
-  expect_mentions(error_of([&] { load_sampler_state(file, *fermat, t.scene); }), {"sampler 'rll'", "'fermat'"});
+  expect_mentions(error_of([&] { load_sampler_state(file, *fermat, t.scene.fingerprint()); }), {"sampler 'rll'", "'fermat'"});
   auto epsilon = t.make("rll", {"rll.epsilon=0.3"});
-  expect_mentions(error_of([&] { load_sampler_state(file, *epsilon, t.scene); }), {"epsilon 0.1", "this render: 0.3"});
+  expect_mentions(error_of([&] { load_sampler_state(file, *epsilon, t.scene.fingerprint()); }), {"epsilon 0.1", "this render: 0.3"});
   auto tree = t.make("tree");
-  expect_mentions(error_of([&] { save_sampler_state(dir / "tree.bin", *tree, t.scene); }), {"'tree'", "nothing"});
-  expect_mentions(error_of([&] { load_sampler_state(dir / "missing.bin", *rll, t.scene); }), {"missing.bin"});
+  expect_mentions(error_of([&] { save_sampler_state(dir / "tree.bin", *tree, t.scene.fingerprint()); }), {"'tree'", "nothing"});
+  expect_mentions(error_of([&] { load_sampler_state(dir / "missing.bin", *rll, t.scene.fingerprint()); }), {"missing.bin"});
 }
 
 TEST(SamplerState, TruncatedDamagedAndForeignFilesAreErrors) {
@@ -120,33 +106,34 @@ TEST(SamplerState, TruncatedDamagedAndForeignFilesAreErrors) {
   auto rll = t.make("rll");
   TempDir dir;
   const fs::path file = t.train_and_save(*rll, dir);
-  const std::string bytes = read_bytes(file);
+  const std::string bytes = read_text(file);
   ASSERT_GT(bytes.size(), 1000u);
   const fs::path bad = dir / "bad.bin";
+  auto write_bad = [&](const std::string& content) { dir.write("bad.bin", content); };
   auto load = [&] {
     auto s = t.make("rll");
-    load_sampler_state(bad, *s, t.scene);
+    load_sampler_state(bad, *s, t.scene.fingerprint());
   };
   // Cut anywhere: never a crash, always a message.
   for (size_t n : {size_t(0), size_t(5), size_t(18), size_t(25), size_t(40), bytes.size() / 3, bytes.size() - 9,
                    bytes.size() - 1}) {
-    write_bytes(bad, bytes.substr(0, n));
+    write_bad(bytes.substr(0, n));
     expect_mentions(error_of(load), {"bad.bin"});
   }
-  write_bytes(bad, bytes.substr(0, bytes.size() / 2));
+  write_bad(bytes.substr(0, bytes.size() / 2));
   expect_mentions(error_of(load), {"truncated"});
   // One byte changed in the learnt values: the checksum says so.
   std::string flipped = bytes;
   flipped[bytes.size() / 2] ^= 0x10;
-  write_bytes(bad, flipped);
+  write_bad(flipped);
   expect_mentions(error_of(load), {"damaged", "checksum"});
   // Not a state at all.
-  write_bytes(bad, "P6\n1 1\n255\n...");
+  write_bad("P6\n1 1\n255\n...");
   expect_mentions(error_of(load), {"not an rll sampler state"});
   // Another format version (the 4 bytes after the 18-byte magic).
   std::string version = bytes;
   version[18] = char(kSamplerStateVersion + 1);
-  write_bytes(bad, version);
+  write_bad(version);
   expect_mentions(error_of(load), {"version"});
   // A damaged cell with a consistent checksum: the cut no longer fits the light tree. The first
   // cell's first node id sits after its id (4 bytes), key (8), last use (4) and cut size (4),
@@ -165,6 +152,6 @@ TEST(SamplerState, TruncatedDamagedAndForeignFilesAreErrors) {
   h.bytes(cut.data(), cut.size() - 8);
   const uint64_t sum = h.value();
   std::memcpy(cut.data() + cut.size() - 8, &sum, 8);
-  write_bytes(bad, cut);
+  write_bad(cut);
   expect_mentions(error_of(load), {"damaged", "light tree"});
 }

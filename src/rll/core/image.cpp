@@ -80,7 +80,8 @@ uint64_t min_hdr_bytes(int64_t w, int64_t h) {
   return line * uint64_t(h);
 }
 
-ExrFile read_exr(const fs::path& path, bool extras) {
+// `extras`: also the string attributes and the "count" channel.
+ExrFile read_exr_unchecked(const fs::path& path, bool extras) {
   const std::string name = path.string();
   Imf::InputFile file(path.c_str());
   const Imf::Header& header = file.header();
@@ -136,6 +137,17 @@ ExrFile read_exr(const fs::path& path, bool extras) {
   }
   out.image = Image(int(w), int(h), std::move(px));
   return out;
+}
+
+// read_exr_unchecked with OpenEXR's exceptions as rll::Errors naming the file.
+ExrFile read_exr(const fs::path& path, bool extras) {
+  try {
+    return read_exr_unchecked(path, extras);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail("cannot read '{}': {}", path.string(), e.what());
+  }
 }
 
 // A folder, a missing file or a device gets a clear message before any reader sees it.
@@ -205,13 +217,7 @@ void write_exr(const fs::path& path, const ExrFile& file) {
 ExrFile read_exr_file(const fs::path& path) {
   if (lower_ext(path) != ".exr") fail("'{}' is not an OpenEXR file (.exr)", path.string());
   read_image_checks(path);
-  try {
-    return read_exr(path, true);
-  } catch (const Error&) {
-    throw;
-  } catch (const std::exception& e) {
-    fail("cannot read '{}': {}", path.string(), e.what());
-  }
+  return read_exr(path, true);
 }
 
 uint8_t to_srgb8(float v, float scale) {
@@ -269,15 +275,7 @@ Image read_image(const fs::path& path, bool srgb) {
   read_image_checks(path);
   std::error_code ec;
   std::string ext = lower_ext(path);
-  if (ext == ".exr") {
-    try {
-      return read_exr(path, false).image;
-    } catch (const Error&) {
-      throw;
-    } catch (const std::exception& e) {
-      fail("cannot read '{}': {}", path.string(), e.what());
-    }
-  }
+  if (ext == ".exr") return read_exr(path, false).image;
   int w = 0, h = 0, n = 0;
   if (!stbi_info(path.c_str(), &w, &h, &n))
     fail("cannot read '{}': {}", path.string(), stbi_failure_reason());

@@ -2,15 +2,12 @@
 
 #include <fmt/format.h>
 
-#include <fstream>
-#include <sstream>
-
 #include "rll/core/binary_io.h"
 #include "rll/core/error.h"
 #include "rll/core/hash.h"
 #include "rll/core/image.h"
+#include "rll/io/text_scan.h"
 #include "rll/lights/light_sampler.h"
-#include "rll/scene/scene.h"
 
 namespace rll {
 namespace fs = std::filesystem;
@@ -62,12 +59,12 @@ void check_sampler_has_state(const LightSampler& sampler, const char* flag) {
     fail("{}: sampler '{}' learns nothing that can be saved (rll and fermat do)", flag, sampler.name());
 }
 
-void save_sampler_state(const fs::path& path, const LightSampler& sampler, const Scene& scene) {
+void save_sampler_state(const fs::path& path, const LightSampler& sampler, uint64_t scene_fingerprint) {
   check_sampler_has_state(sampler, "--rll-state");
   BinaryWriter w;
   w.put_array(kMagic, kMagicSize);
   w.put(kSamplerStateVersion);
-  w.put(scene.fingerprint());
+  w.put(scene_fingerprint);
   w.put_string(sampler.name());
   w.put_string(parameters_of(sampler));
   const size_t size_at = w.bytes().size();
@@ -80,16 +77,12 @@ void save_sampler_state(const fs::path& path, const LightSampler& sampler, const
   write_file_atomic(path, w.bytes());
 }
 
-void load_sampler_state(const fs::path& path, LightSampler& sampler, const Scene& scene) {
+void load_sampler_state(const fs::path& path, LightSampler& sampler, uint64_t scene_fingerprint) {
   check_sampler_has_state(sampler, "--rll-state");
   const std::string name = path.string();
   std::error_code ec;
   if (fs::is_directory(path, ec)) fail("cannot read '{}': it is a folder, not a sampler state", name);
-  std::ifstream f(path, std::ios::binary);
-  if (!f) fail("cannot read '{}': cannot open it", name);
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  const std::string bytes = ss.str();
+  const std::string bytes = read_text_file(path);
   if (bytes.size() < kMagicSize || bytes.compare(0, kMagicSize, kMagic) != 0)
     fail("cannot read '{}': it is not an rll sampler state (written by --rll-state)", name);
   BinaryReader r(bytes, name, kMagicSize);
@@ -108,10 +101,10 @@ void load_sampler_state(const fs::path& path, LightSampler& sampler, const Scene
   std::memcpy(&stored, bytes.data() + end, sizeof stored);
   if (end + sizeof stored != bytes.size() || stored != checksum(bytes, 0, end))
     fail("cannot read '{}': the file is damaged (its checksum does not match its content)", name);
-  if (fingerprint != scene.fingerprint())
+  if (fingerprint != scene_fingerprint)
     fail("cannot use '{}': it was learnt on another scene or resolution (scene fingerprint "
          "{:016x}; this render's is {:016x})",
-         name, fingerprint, scene.fingerprint());
+         name, fingerprint, scene_fingerprint);
   if (sampler_name != sampler.name())
     fail("cannot use '{}': it holds the state of sampler '{}', and this render's sampler is '{}'",
          name, sampler_name, sampler.name());

@@ -13,13 +13,17 @@
 namespace rll {
 
 class LightSampler;
-struct Scene;
 
 inline constexpr uint32_t kSamplerStateVersion = 1;
 
 // Throws rll::Error if the sampler learns nothing that can be saved.
 void check_sampler_has_state(const LightSampler& sampler, const char* flag);
-void save_sampler_state(const std::filesystem::path& path, const LightSampler& sampler, const Scene& scene);
-void load_sampler_state(const std::filesystem::path& path, LightSampler& sampler, const Scene& scene);
+// `scene_fingerprint` is Scene::fingerprint() of the scene as loaded, before any animation
+// frame moved its lights: the state of an animation's last frame loads at the start of the
+// next render of it.
+void save_sampler_state(const std::filesystem::path& path, const LightSampler& sampler,
+                        uint64_t scene_fingerprint);
+void load_sampler_state(const std::filesystem::path& path, LightSampler& sampler,
+                        uint64_t scene_fingerprint);
 
 }  // namespace rll
