@@ -336,6 +336,96 @@ TEST(GltfReader, WriterRoundTripKeepsMaterialsLightsAndCamera) {
   EXPECT_EQ(r.width * 3, r.height * 4);
 }
 
+TEST(GltfReader, ClearcoatOverADielectricBaseIsACoatedDiffuse) {
+  TempDir dir;
+  Doc d;
+  d.j["extensionsUsed"] = {"KHR_materials_clearcoat", "KHR_materials_ior"};
+  d.j["materials"] = json::parse(R"([
+    {"pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.3, 0.2, 1], "metallicFactor": 0,
+                              "roughnessFactor": 0.9},
+     "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1,
+                                                "clearcoatRoughnessFactor": 0.4},
+                    "KHR_materials_ior": {"ior": 1.33}}},
+    {"pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.3, 0.2, 1], "metallicFactor": 0,
+                              "roughnessFactor": 0.9}},
+    {"pbrMetallicRoughness": {"metallicFactor": 0},
+     "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 0.5,
+                                                "clearcoatTexture": {"index": 0}}}},
+    {"pbrMetallicRoughness": {"metallicFactor": 1},
+     "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1}}},
+    {"pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 0.5},
+     "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 0,
+                                                "clearcoatRoughnessFactor": 0.7}}}
+  ])");
+  const int p = d.positions(kTriangle);
+  std::vector<int> roots;
+  for (int k = 0; k < 5; ++k) roots.push_back(d.node({{"mesh", d.mesh(p, -1, k)}}));
+  d.scene(roots);
+  Scene s = read(d.write_gltf(dir));
+  ASSERT_EQ(s.mesh.triangle_count(), 5u);
+  const auto mat = [&](size_t t) { return s.materials[s.mesh.material[t]]; };
+  // Base colour as reflectance, the coat's roughness as GGX alpha (0.4^2), IOR 1.5 (the
+  // clearcoat's, whatever KHR_materials_ior says of the base), pbrt-v4's default thickness.
+  EXPECT_EQ(mat(0).type, MaterialType::CoatedDiffuse);
+  EXPECT_TRUE(near(mat(0).albedo, Rgb(0.6f, 0.3f, 0.2f)));
+  EXPECT_FLOAT_EQ(mat(0).roughness, 0.16f);
+  EXPECT_FLOAT_EQ(mat(0).ior, 1.5f);
+  EXPECT_FLOAT_EQ(mat(0).thickness, Material().thickness);
+  // Without the extension: as before, rll's plastic with the base's roughness.
+  EXPECT_EQ(mat(1).type, MaterialType::Plastic);
+  EXPECT_FLOAT_EQ(mat(1).roughness, 0.81f);
+  // A partial coat is a full one (a warning); its textures are ignored (a warning).
+  EXPECT_EQ(mat(2).type, MaterialType::CoatedDiffuse);
+  EXPECT_FLOAT_EQ(mat(2).roughness, 0);  // clearcoatRoughnessFactor's default
+  EXPECT_TRUE(has_warning(s, "material 2: clearcoatFactor 0.5 is rendered as a full clearcoat"));
+  EXPECT_TRUE(has_warning(s,
+                          "material 2: the KHR_materials_clearcoat clearcoatTexture is not "
+                          "supported"));
+  // Over a metal the coat is dropped (a warning); a zero factor is no coat.
+  EXPECT_EQ(mat(3).type, MaterialType::Conductor);
+  EXPECT_TRUE(has_warning(s, "material 3: a clearcoat over a metal is not supported"));
+  EXPECT_EQ(mat(4).type, MaterialType::Plastic);
+  EXPECT_FLOAT_EQ(mat(4).roughness, 0.25f);
+  // The extension is one rll reads, and material 0 warns of nothing.
+  EXPECT_FALSE(has_warning(s, "KHR_materials_clearcoat is not supported"));
+  EXPECT_FALSE(has_warning(s, "material 0"));
+  // Factors outside [0, 1] are errors naming the material.
+  Doc bad;
+  bad.j["materials"] = json::parse(R"([{"extensions": {"KHR_materials_clearcoat":
+                                                         {"clearcoatFactor": 1.5}}}])");
+  bad.scene({bad.node({{"mesh", bad.mesh(bad.positions(kTriangle), -1, 0)}})});
+  expect_mentions(gltf_error(dir, bad), {"bad.gltf", "material 0", "clearcoatFactor"});
+}
+
+TEST(GltfWriter, ThinLensAndScreenWindowAreDroppedWithOneWarning) {
+  TempDir dir;
+  Scene a;
+  a.source = "test";
+  SceneBuilder b(a);
+  b.quad(Vec3(0), Vec3(1, 0, 0), Vec3(0, 1, 0), b.diffuse(Rgb(0.5f)));
+  a.camera.position = Vec3(0.5f, 0.5f, 3);
+  a.camera.target = Vec3(0.5f, 0.5f, 0);
+  a.has_camera = true;
+  // A pinhole: nothing is lost (the baseline).
+  EXPECT_TRUE(save_gltf_scene(a, dir / "pin.gltf").empty());
+  auto lens = a;
+  lens.camera.lens_radius = 0.05f;
+  lens.camera.focal_distance = 3;
+  auto window = a;
+  window.camera.screen_window = {-1, 0, -1, 0};
+  auto both = lens;
+  both.camera.screen_window = window.camera.screen_window;
+  for (const Scene* s : {&lens, &window, &both}) {
+    const auto lost = save_gltf_scene(*s, dir / "out.gltf");
+    ASSERT_EQ(lost.size(), 1u);
+    expect_mentions(lost[0], {"thin lens", "screen window", "pinhole"});
+    // What is written is the pinhole of the whole image.
+    Scene r = read(dir / "out.gltf");
+    EXPECT_FALSE(r.camera.has_lens());
+    EXPECT_EQ(r.camera.screen_window, Camera().screen_window);
+  }
+}
+
 TEST(GltfReader, MalformedFilesAreErrors) {
   TempDir dir;
   {

@@ -313,6 +313,33 @@ TEST(JsonLoader, ReadsCameraFilmPrimitivesLightsAndSky) {
   EXPECT_EQ(s.lights.size(), 2u + 2u + 64u);  // delta lights, the lamp quad, the sky
 }
 
+TEST(JsonLoader, ReadsTheThinLensAndScreenWindow) {
+  TempDir dir;
+  Scene s = read_json(dir, R"({"camera": {"position": [0, 0, 5], "target": [0, 0, 0],
+    "lens_radius": 0.125, "focal_distance": 4.5, "screen_window": [-0.5, 1, -0.25, 0.75]}})");
+  EXPECT_EQ(s.camera.lens_radius, 0.125f);
+  EXPECT_EQ(s.camera.focal_distance, 4.5f);
+  EXPECT_EQ(s.camera.screen_window, (std::array<float, 4>{-0.5f, 1, -0.25f, 0.75f}));
+  // Without them: a pinhole seeing the whole image plane.
+  Scene pin = read_json(dir, R"({"camera": {"position": [0, 0, 5], "target": [0, 0, 0]}})");
+  EXPECT_FALSE(pin.camera.has_lens());
+  EXPECT_EQ(pin.camera.focal_distance, Camera().focal_distance);
+  EXPECT_EQ(pin.camera.screen_window, Camera().screen_window);
+  const std::string cam = R"({"camera": {"position": [0, 0, 5], "target": [0, 0, 0], )";
+  expect_mentions(json_error(dir, cam + R"("lens_radius": -1}})"),
+                  {"scene.json: /camera/lens_radius must not be negative"});
+  expect_mentions(json_error(dir, cam + R"("focal_distance": 0}})"),
+                  {"/camera/focal_distance must be positive"});
+  expect_mentions(json_error(dir, cam + R"("screen_window": [0, 1, 0]}})"),
+                  {"/camera/screen_window must be an array of 4 numbers", "3 values"});
+  expect_mentions(json_error(dir, cam + R"("screen_window": [0, 1, "a", 1]}})"),
+                  {"/camera/screen_window/2 must be a number"});
+  expect_mentions(json_error(dir, cam + R"("screen_window": [1, 0, -1, 1]}})"),
+                  {"/camera/screen_window needs xmin < xmax and ymin < ymax"});
+  expect_mentions(json_error(dir, cam + R"("screen_window": [0, 0, 0, 0]}})"),
+                  {"/camera/screen_window needs xmin < xmax"});
+}
+
 TEST(JsonLoader, ObjShapesTakeMaterialOverridesAndMaps) {
   TempDir dir;
   dir.write("mesh/m.mtl", "newmtl a\nKd 0.1 0.1 0.1\nnewmtl b\nKd 0.2 0.2 0.2\n");

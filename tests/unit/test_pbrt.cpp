@@ -3,6 +3,7 @@
 // are skipped with one warning naming them and the line; syntax errors name file and line.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
 #include <zlib.h>
 
 #include <cmath>
@@ -449,6 +450,63 @@ TEST(PbrtWriter, RoundTripKeepsMaterialsLightsCameraAndSky) {
   EXPECT_TRUE(near(r.sky->map->lookup(Vec3(0.3f, -1, 0.2f)), Rgb(0)));
 }
 
+TEST(PbrtWriter, ThinLensAndScreenWindowRoundTripFromJson) {
+  // rll JSON -> pbrt-v4 -> rll keeps the lens radius, the focal distance and the screen window:
+  // exactly on a landscape film (rll's and pbrt's screen units agree), to float precision on a
+  // portrait one (pbrt's units span the shorter side).
+  for (const auto& [w, h] : {std::pair{64, 32}, std::pair{30, 60}}) {
+    SCOPED_TRACE(w);
+    TempDir dir;
+    Scene a;
+    load_json_scene(
+        dir.write("lens.json",
+                  fmt::format(R"({{"camera": {{"position": [0, 1, 5], "target": [0, 1, 0],
+      "fov": 40, "lens_radius": 0.0371, "focal_distance": 4.25,
+      "screen_window": [-0.3, 0.7, -0.45, 0.15]}},
+      "film": {{"width": {}, "height": {}}},
+      "shapes": [{{"type": "triangle", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]}}]}})",
+                              w, h)),
+        a);
+    a.source = "test";
+    save_pbrt_scene(a, dir / "lens.pbrt");
+    const std::string text = rll::test::read_text(dir / "lens.pbrt");
+    EXPECT_NE(text.find("\"float lensradius\" [ 0.0371 ]"), std::string::npos) << text;
+    EXPECT_NE(text.find("\"float focaldistance\" [ 4.25 ]"), std::string::npos) << text;
+    Scene r;
+    load_pbrt(dir / "lens.pbrt", r);
+    EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+    EXPECT_EQ(r.camera.lens_radius, a.camera.lens_radius);
+    EXPECT_EQ(r.camera.focal_distance, a.camera.focal_distance);
+    EXPECT_NEAR(r.camera.fov, 40, 1e-4);
+    for (size_t i = 0; i < 4; ++i) {
+      if (w > h)
+        EXPECT_EQ(r.camera.screen_window[i], a.camera.screen_window[i]) << i;
+      else
+        EXPECT_FLOAT_EQ(r.camera.screen_window[i], a.camera.screen_window[i]) << i;
+    }
+    // The same rays: the pbrt file sees what the JSON scene sees.
+    a.camera.setup(w, h);
+    r.camera.setup(w, h);
+    for (const Vec2 px : {Vec2{0, 0}, Vec2{float(w), float(h)}, Vec2{3.5f, 7.25f}})
+      EXPECT_TRUE(near(r.camera.generate_ray(px.x, px.y, {0.2f, 0.7f}).d,
+                       a.camera.generate_ray(px.x, px.y, {0.2f, 0.7f}).d, 1e-5f));
+  }
+  // A pinhole camera writes none of them, and reads back as one.
+  TempDir dir;
+  Scene pin;
+  load_json_scene(dir.write("pin.json", R"({"camera": {"position": [0, 1, 5], "target": [0, 1, 0]},
+      "shapes": [{"type": "triangle", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]}]})"),
+                  pin);
+  save_pbrt_scene(pin, dir / "pin.pbrt");
+  const std::string text = rll::test::read_text(dir / "pin.pbrt");
+  for (const char* name : {"lensradius", "focaldistance", "screenwindow"})
+    EXPECT_EQ(text.find(name), std::string::npos) << name;
+  Scene r;
+  load_pbrt(dir / "pin.pbrt", r);
+  EXPECT_FALSE(r.camera.has_lens());
+  EXPECT_EQ(r.camera.screen_window, Camera().screen_window);
+}
+
 // --- the reader's later additions (issue 14) ---
 
 TEST(PbrtReader, SummaryWarningListsEverythingLeftOut) {
@@ -557,11 +615,11 @@ TEST(PbrtReader, ImageFloatScaleAndMixTextures) {
           "Material \"conductor\" \"texture roughness\" \"rough\" "
           "\"bool remaproughness\" false\n" +
           kTriangle + "Material \"diffuse\" \"texture reflectance\" \"flat\"\n" + kTriangle +
-          "Material \"diffuse\" \"texture reflectance\" \"nosuch\"\n" + kTriangle +
           "Material \"dielectric\" \"texture roughness\" \"rough\"\n" + kTriangle);
-  ASSERT_EQ(s.mesh.triangle_count(), 6u);
+  ASSERT_EQ(s.mesh.triangle_count(), 5u);
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();
   // The same remapped roughness texture is baked once.
-  EXPECT_EQ(s.materials[s.mesh.material[5]].roughness_texture,
+  EXPECT_EQ(s.materials[s.mesh.material[4]].roughness_texture,
             s.materials[s.mesh.material[1]].roughness_texture);
   const Material& dim = s.materials[s.mesh.material[0]];
   // An image times a constant keeps the image and scales it.
@@ -587,9 +645,13 @@ TEST(PbrtReader, ImageFloatScaleAndMixTextures) {
   const Material& flat = s.materials[s.mesh.material[3]];
   EXPECT_EQ(flat.albedo_texture, -1);
   EXPECT_TRUE(near(flat.albedo, Rgb(0.5f, 0.5f, 0)));
-  // An unknown texture is a warning, and the material keeps its default.
-  EXPECT_TRUE(near(s.materials[s.mesh.material[4]].albedo, Rgb(0.5f)));
-  EXPECT_TRUE(has_warning(s, {"texture \"nosuch\""}));
+  // A texture that was never defined is an error (as in pbrt-v4), naming it, the file and the
+  // parameter's line.
+  expect_mentions(
+      pbrt_error(dir, std::string(kCamera) +
+                          "Material \"diffuse\"\n  \"texture reflectance\" \"nosuch\"\n" +
+                          kTriangle),
+      {"bad.pbrt:7:", "Material \"diffuse\"", "reflectance", "texture \"nosuch\"", "not defined"});
 }
 
 TEST(PbrtReader, ConductorsFromNamedSpectraRgbFloatAndReflectance) {

@@ -92,7 +92,10 @@ TEST(PbrtErrors, LoopsubdivNonIntegerLevels) {
                   {"bad.pbrt:2:", "levels", "integer"});
   expect_mentions(error_in_world(dir, tetra("\"integer levels\" [ 1 2 ]")),
                   {"bad.pbrt:2:", "levels", "1 value"});
+  // A whole number in float notation is read exactly, then checked against the range.
   expect_mentions(error_in_world(dir, tetra("\"integer levels\" 1e12")),
+                  {"bad.pbrt:2:", "levels", "out of range", "1000000000000"});
+  expect_mentions(error_in_world(dir, tetra("\"integer levels\" 1.25e1")),
                   {"bad.pbrt:2:", "levels", "must be an integer"});
 }
 
@@ -106,9 +109,11 @@ TEST(PbrtErrors, LoopsubdivHugeLevelsAreRefusedBeforeAllocating) {
                     {"bad.pbrt:2:", "loopsubdiv", "levels must be at most 10", levels});
     EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0);
   }
-  // Beyond what the number parser keeps exact: refused as a parameter value.
-  expect_mentions(error_in_world(dir, tetra("\"integer levels\" 2147483647")),
-                  {"bad.pbrt:2:", "loopsubdiv", "levels"});
+  // Integers are read exactly, not through a float: the message repeats the very number.
+  for (const char* levels : {"2147483647", "16777217"})
+    expect_mentions(error_in_world(dir, tetra(std::string("\"integer levels\" ") + levels)),
+                    {"bad.pbrt:2:", "loopsubdiv", "levels must be at most 10",
+                     std::string("got ") + levels + ")"});
   // Under the cap, the triangle budget of the read policy is checked before subdividing.
   ReadPolicy policy;
   policy.max_triangles = 1000;
@@ -140,6 +145,51 @@ TEST(PbrtErrors, LoopsubdivIndexOutOfRange) {
   expect_mentions(error_in_world(dir, std::string("Shape \"loopsubdiv\" ") + kTetraP +
                                           " \"integer indices\" [ 0 1 -1 ]\n"),
                   {"bad.pbrt:2:", "loopsubdiv", "index -1 is out of range"});
+}
+
+TEST(PbrtErrors, IntegerParametersAreExact) {
+  // 16777217 = 2^24 + 1 is the first integer a float cannot hold (it would read as 16777216):
+  // the index is read exactly, and so reported.
+  TempDir dir;
+  const std::string tri = "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0  1 0 0  0 1 0 ]\n";
+  expect_mentions(error_in_world(dir, tri + "  \"integer indices\" [ 0 1 16777217 ]\n"),
+                  {"bad.pbrt:2:", "trianglemesh", "index 16777217 is out of range", "3 vertices"});
+  expect_mentions(error_in_world(dir, tri + "  \"integer indices\" [ 0 1 9223372036854775807 ]\n"),
+                  {"bad.pbrt:2:", "index 9223372036854775807 is out of range"});
+  expect_mentions(error_in_world(dir, std::string("Shape \"bilinearmesh\" ") +
+                                          "\"point3 P\" [ 0 0 0  1 0 0  0 1 0  1 1 0 ]\n"
+                                          "  \"integer indices\" [ 0 1 2 16777219 ]\n"),
+                  {"bad.pbrt:2:", "bilinearmesh", "index 16777219 is out of range"});
+  // The largest 64-bit integers are exact; beyond them, an error naming the value's line.
+  expect_mentions(
+      error_in_world(dir, tri + "  \"integer indices\" [ 0 1\n  -9223372036854775809 ]\n"),
+      {"bad.pbrt:4:", "Shape \"trianglemesh\"", "\"integer indices\"", "-9223372036854775809",
+       "out of range"});
+  // A value of a 32-bit parameter beyond 32 bits is out of range, not wrapped.
+  expect_mentions(error_of([&] {
+                    Scene s;
+                    load_pbrt(dir.write("bad.pbrt",
+                                        "Film \"rgb\" \"integer xresolution\" "
+                                        "4294967360\nWorldBegin\n"),
+                              s);
+                  }),
+                  {"bad.pbrt:1:", "Film \"rgb\"", "xresolution", "out of range", "4294967360"});
+  // Not a whole number: an error naming the directive, the parameter, the value and its line,
+  // in brackets or not.
+  expect_mentions(
+      error_in_world(dir, tetra("\"integer levels\" [ 1.5 ]")),
+      {"bad.pbrt:2:", "Shape \"loopsubdiv\"", "\"integer levels\"", "must be an integer", "'1.5'"});
+  expect_mentions(error_in_world(dir, tri + "  \"integer indices\" [ 0 1 2.5 ]\n"),
+                  {"bad.pbrt:3:", "\"integer indices\"", "must be an integer", "'2.5'"});
+  // A whole number in float notation is read exactly up to 2^53, refused beyond.
+  expect_mentions(error_in_world(dir, tri + "  \"integer indices\" [ 0 1 16777217.0 ]\n"),
+                  {"bad.pbrt:2:", "index 16777217 is out of range"});
+  expect_mentions(error_in_world(dir, tri + "  \"integer indices\" [ 0 1 1e30 ]\n"),
+                  {"bad.pbrt:3:", "\"integer indices\"", "1e30 is out of range"});
+  expect_mentions(error_in_world(dir, tri + "  \"integer indices\" [ 0 1 2x ]\n"),
+                  {"bad.pbrt:3:", "expected a number", "'2x'"});
+  // Signs as pbrt writes them.
+  EXPECT_EQ(load_world(dir, tri + "  \"integer indices\" [ +0 1 2 ]\n").mesh.triangle_count(), 1u);
 }
 
 TEST(PbrtErrors, LoopsubdivNonManifoldControlMesh) {
@@ -231,16 +281,41 @@ TEST(PbrtErrors, ImagemapMissingFile) {
                   {"bad.pbrt:2:", "Texture \"j\"", "junk.png"});
 }
 
-TEST(PbrtErrors, TextureReferencingAnUnknownTextureIsWarnedWithItsLine) {
-  // rll skips textures it cannot use (with a warning), so a reference to a name it does not
-  // hold is a warning too; it names the file, the line, the texture and the parameter.
+TEST(PbrtErrors, ReferenceToAnUndefinedTextureIsAnErrorWithItsLine) {
+  // As in pbrt-v4, a texture must be defined (by a Texture directive before it) to be used: the
+  // error names the texture, the directive, the parameter and the parameter's line.
   TempDir dir;
+  expect_mentions(
+      error_in_world(dir,
+                     "\nTexture \"s\" \"spectrum\" \"scale\" \"texture tex\" "
+                     "\"nosuch\"\n"),
+      {"bad.pbrt:3:", "Texture \"s\"", "\"texture tex\"", "texture \"nosuch\"", "not defined"});
+  expect_mentions(
+      error_in_world(dir,
+                     "Texture \"m\" \"float\" \"mix\" \"float tex1\" 0 \"float tex2\" 1\n"
+                     "  \"texture amount\" \"missing\"\n"),
+      {"bad.pbrt:3:", "Texture \"m\"", "amount", "texture \"missing\""});
+  expect_mentions(
+      error_in_world(dir, "Material \"diffuse\"\n  \"texture reflectance\" \"nosuch\"\n"),
+      {"bad.pbrt:3:", "Material \"diffuse\"", "reflectance", "texture \"nosuch\""});
+  expect_mentions(error_in_world(dir,
+                                 "MakeNamedMaterial \"m\" \"string type\" \"conductor\"\n"
+                                 "  \"texture roughness\" \"r\"\n"),
+                  {"bad.pbrt:3:", "MakeNamedMaterial \"m\"", "roughness", "texture \"r\""});
+  // Defined after its use is not defined.
+  expect_mentions(
+      error_in_world(dir,
+                     "Material \"coateddiffuse\" \"texture reflectance\" \"late\"\n"
+                     "Texture \"late\" \"spectrum\" \"constant\" \"rgb value\" [ 1 0 0 ]\n"),
+      {"bad.pbrt:2:", "texture \"late\"", "not defined"});
+  // Defined before: read (the baseline of the errors above).
   Scene s = load_world(dir,
-                       "\nTexture \"s\" \"spectrum\" \"scale\" \"texture tex\" \"nosuch\"\n"
-                       "Texture \"m\" \"float\" \"mix\" \"float tex1\" 0 \"float tex2\" 1\n"
-                       "  \"texture amount\" \"missing\"\n");
-  expect_mentions(warning_with(s, {"nosuch"}), {"s.pbrt:3:", "\"nosuch\"", "'tex'"});
-  expect_mentions(warning_with(s, {"missing"}), {"s.pbrt:4:", "\"missing\"", "'amount'"});
+                       "Texture \"early\" \"spectrum\" \"constant\" \"rgb value\" [ 1 0 0 ]\n"
+                       "Material \"diffuse\" \"texture reflectance\" \"early\"\n"
+                       "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0  1 0 0  0 1 0 ]\n");
+  ASSERT_EQ(s.mesh.triangle_count(), 1u);
+  EXPECT_EQ(s.materials[s.mesh.material[0]].albedo, Rgb(1, 0, 0));
+  EXPECT_TRUE(s.warnings.empty());
 }
 
 TEST(PbrtErrors, UnsupportedTextureKindsAndClassesAreWarnedWithTheirLine) {
@@ -254,8 +329,13 @@ TEST(PbrtErrors, UnsupportedTextureKindsAndClassesAreWarnedWithTheirLine) {
                   {"s.pbrt:2:", "\"normal\"", "not supported"});
   expect_mentions(warning_with(s, {"Texture class"}),
                   {"s.pbrt:3:", "\"checkerboard\"", "not supported"});
-  // ... and the mix that refers to both says so, on its own line.
+  // ... and the mix that refers to both says so, on its own line (they were defined, and rll
+  // skipped them: a warning, not the error of an undefined texture) ...
   expect_mentions(warning_with(s, {"\"a\" is not a texture"}), {"s.pbrt:4:", "tex1"});
+  expect_mentions(warning_with(s, {"\"b\" is not a texture"}), {"s.pbrt:4:", "tex2"});
+  // ... and the summary at the end counts them.
+  expect_mentions(warning_with(s, {"summary"}),
+                  {"s.pbrt: summary:", "2 textures skipped (checkerboard x1, normal x1)"});
   // A malformed operand is an error, naming the parameter's line.
   expect_mentions(error_in_world(dir,
                                  "Texture \"m\" \"spectrum\" \"mix\"\n"
@@ -271,12 +351,30 @@ TEST(PbrtErrors, UnsupportedTextureKindsAndClassesAreWarnedWithTheirLine) {
 
 // --- spectra, camera, film, ColorSpace ---
 
-TEST(PbrtErrors, UnknownNamedSpectrumIsWarnedWithItsLine) {
+TEST(PbrtErrors, UnknownNamedSpectrumIsAnErrorWithItsLine) {
+  // As in pbrt-v4: a name that is neither a named spectrum nor a file is an error naming it, the
+  // parameter and its line, and listing the names rll knows.
   TempDir dir;
-  Scene s =
-      load_world(dir, "Material \"conductor\"\n  \"spectrum eta\" \"metal-Unobtainium-eta\"\n");
-  expect_mentions(warning_with(s, {"metal-Unobtainium-eta"}),
-                  {"s.pbrt:3:", "spectrum \"metal-Unobtainium-eta\"", "'eta'"});
+  expect_mentions(
+      error_in_world(dir, "Material \"conductor\"\n  \"spectrum eta\" \"metal-Xx-eta\"\n"),
+      {"bad.pbrt:3:", "Material \"conductor\"", "\"spectrum eta\"", "spectrum \"metal-Xx-eta\"",
+       "metal-{Cu,Au,Ag,Al,CuZn,MgO,TiO2}-{eta,k}", "glass-*"});
+  expect_mentions(error_in_world(dir, "LightSource \"point\" \"spectrum I\" \"stdilum-D65\"\n"),
+                  {"bad.pbrt:2:", "LightSource \"point\"", "spectrum \"stdilum-D65\""});
+  expect_mentions(error_in_world(dir, "Material \"dielectric\" \"spectrum eta\" \"BK7\"\n"),
+                  {"bad.pbrt:2:", "spectrum \"BK7\""});
+  // The names rll knows load without a warning.
+  Scene known = load_world(dir,
+                           "Material \"conductor\" \"spectrum eta\" \"metal-Ag-eta\" "
+                           "\"spectrum k\" \"metal-Ag-k\"\n"
+                           "Material \"dielectric\" \"spectrum eta\" \"glass-F11\"\n"
+                           "LightSource \"point\" \"spectrum I\" \"stdillum-D65\"\n");
+  EXPECT_TRUE(known.warnings.empty()) << known.warnings.front();
+  // A spectrum file (pbrt-v4 reads one; rll does not) keeps the default, with a warning.
+  dir.write("eta.spd", "400 1.5 700 1.4\n");
+  Scene s = load_world(dir, "Material \"conductor\"\n  \"spectrum eta\" \"eta.spd\"\n");
+  expect_mentions(warning_with(s, {"eta.spd"}),
+                  {"s.pbrt:3:", "spectrum file \"eta.spd\"", "'eta'", "default"});
   // Wavelength-value pairs that are not pairs are an error.
   expect_mentions(error_in_world(dir, "Material \"conductor\"\n  \"spectrum k\" [ 400 1 700 ]\n"),
                   {"bad.pbrt:3:", "spectrum k", "pairs"});

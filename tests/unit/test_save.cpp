@@ -146,6 +146,27 @@ TEST(SaveJson, TexturesUvsAndPointLightsRoundTrip) {
   EXPECT_TRUE(std::filesystem::exists(out / "copy.mtl"));
 }
 
+TEST(SaveJson, ThinLensAndScreenWindowRoundTripExactly) {
+  TempDir dir;
+  Scene a = finalized_builtin("cornell-box");
+  a.camera.lens_radius = 0.0123f;
+  a.camera.focal_distance = 3.71f;
+  a.camera.screen_window = {-0.7f, 0.9f, -0.3f, 1.1f};
+  save_json_scene(a, dir / "lens.json");
+  Scene b = load_scene((dir / "lens.json").string());
+  expect_same_scene(a, b);
+  EXPECT_EQ(b.camera.lens_radius, a.camera.lens_radius);
+  EXPECT_EQ(b.camera.focal_distance, a.camera.focal_distance);
+  EXPECT_EQ(b.camera.screen_window, a.camera.screen_window);
+  // A pinhole seeing the whole image writes none of them.
+  Scene pin = finalized_builtin("cornell-box");
+  save_json_scene(pin, dir / "pin.json");
+  const std::string text = rll::test::read_text(dir / "pin.json");
+  for (const char* field : {"lens_radius", "focal_distance", "screen_window"})
+    EXPECT_EQ(text.find(field), std::string::npos) << field;
+  EXPECT_FALSE(load_scene((dir / "pin.json").string()).camera.has_lens());
+}
+
 TEST(SaveJson, RejectsANameThatIsNotJson) {
   TempDir dir;
   Scene a = finalized_builtin("cornell-box");

@@ -1,8 +1,8 @@
 // glTF 2.0 scenes (.gltf, .glb) through tinygltf: meshes under their node transforms,
 // metallic-roughness materials mapped to rll's (docs/scene-format.md), base-colour and emissive
-// textures, KHR_materials_emissive_strength, KHR_lights_punctual point and directional lights,
-// and the first camera. tinygltf parses the JSON and the buffers; every index, count and
-// byte range it leaves unchecked is checked here before it is read.
+// textures, KHR_materials_emissive_strength, KHR_materials_clearcoat, KHR_lights_punctual point
+// and directional lights, and the first camera. tinygltf parses the JSON and the buffers; every
+// index, count and byte range it leaves unchecked is checked here before it is read.
 #include <tiny_gltf.h>
 
 #include <cstring>
@@ -23,9 +23,10 @@ namespace {
 
 // Extensions whose meaning rll renders (or, for KHR_mesh_quantization, reads).
 const std::set<std::string> kSupportedExtensions = {
-    "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
-    "KHR_materials_ior", "KHR_materials_transmission", "KHR_materials_volume",
-    "KHR_mesh_quantization"};
+    "KHR_lights_punctual",        "KHR_materials_emissive_strength",
+    "KHR_materials_specular",     "KHR_materials_ior",
+    "KHR_materials_transmission", "KHR_materials_volume",
+    "KHR_materials_clearcoat",    "KHR_mesh_quantization"};
 
 // tinygltf decodes images with stb_image into 8-bit RGBA, without the sRGB decoding rll needs;
 // this keeps the encoded bytes of images given by URI, which rll decodes when a material uses
@@ -565,6 +566,19 @@ class GltfReader {
         fail("{}: KHR_materials_ior ior must be finite and >= 0", mw);
       ior = std::max(1.0f, ior);
     }
+    // A clearcoat (glTF gives it IOR 1.5) over a dielectric base is pbrt-v4's coated diffuse.
+    const tinygltf::Value* clearcoat = extension(gm, "KHR_materials_clearcoat");
+    const float coat = clearcoat ? to_float(number_or(*clearcoat, "clearcoatFactor", 0)) : 0.0f;
+    const float coat_rough =
+        clearcoat ? to_float(number_or(*clearcoat, "clearcoatRoughnessFactor", 0)) : 0.0f;
+    if (!(coat >= 0 && coat <= 1) || !(coat_rough >= 0 && coat_rough <= 1))
+      fail(
+          "{}: KHR_materials_clearcoat clearcoatFactor and clearcoatRoughnessFactor must be in "
+          "[0, 1]",
+          mw);
+    if (coat > 0 && (metallic >= 0.5f || transmit >= 0.5f))
+      warn(fmt::format("{}: a clearcoat over a {} is not supported; the clearcoat is ignored", mw,
+                       metallic >= 0.5f ? "metal" : "transmissive material"));
     if (metallic < 0.5f && transmit > 0 && transmit < 0.5f)
       warn(
           fmt::format("{}: a transmissionFactor below 0.5 ({}) is ignored: the material is "
@@ -605,6 +619,26 @@ class GltfReader {
         warn(fmt::format("{}: KHR_materials_volume attenuation is not supported; the glass is "
                          "rendered without absorption",
                          mw));
+    } else if (coat > 0) {
+      // The coating's roughness replaces the base's, whose own lobe the coated diffuse does not
+      // have (its base is Lambertian).
+      m.type = MaterialType::CoatedDiffuse;
+      m.albedo = base;
+      m.albedo_texture = base_texture;
+      m.roughness = coat_rough * coat_rough;  // perceptual roughness to GGX alpha
+      m.ior = 1.5f;
+      m.specular = Rgb(1);
+      if (coat < 1)
+        warn(fmt::format("{}: clearcoatFactor {} is rendered as a full clearcoat", mw, coat));
+      for (const char* t :
+           {"clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"})
+        if (clearcoat->Has(t))
+          warn(fmt::format("{}: the KHR_materials_clearcoat {} is not supported; ignored", mw, t));
+      if (extension(gm, "KHR_materials_specular"))
+        warn(
+            fmt::format("{}: KHR_materials_specular is ignored under a clearcoat (the coated "
+                        "base is Lambertian)",
+                        mw));
     } else {
       m.albedo = base;
       m.albedo_texture = base_texture;
@@ -646,7 +680,8 @@ class GltfReader {
     if (gm.alphaMode != "OPAQUE" && !gm.alphaMode.empty())
       warn(fmt::format("{}: alphaMode {} is not supported; rendered opaque", mw, gm.alphaMode));
     if (pbr.metallicRoughnessTexture.index >= 0) {
-      if (m.type == MaterialType::ThinDielectric || m.type == MaterialType::Diffuse) {
+      if (m.type == MaterialType::ThinDielectric || m.type == MaterialType::Diffuse ||
+          m.type == MaterialType::CoatedDiffuse) {
         warn(
             fmt::format("{}: the metallic-roughness texture has no use on a {} material; "
                         "ignored",

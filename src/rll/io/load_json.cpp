@@ -339,7 +339,9 @@ class JsonSceneReader {
   }
 
   void read_camera(const json& v, const std::string& ptr) {
-    check_object(v, ptr, {"position", "target", "up", "fov"});
+    check_object(
+        v, ptr,
+        {"position", "target", "up", "fov", "lens_radius", "focal_distance", "screen_window"});
     Camera& c = m_scene.camera;
     c.position = required_field(v, ptr, "position", to_vec3);
     c.target = required_field(v, ptr, "target", to_vec3);
@@ -348,6 +350,23 @@ class JsonSceneReader {
     if (!(c.fov > 0 && c.fov < 180))
       fail("{} must be in (0, 180) degrees (got {})", child(ptr, "fov"), c.fov);
     if (!(length_sq(c.target - c.position) > 0)) fail("{}: position and target must differ", ptr);
+    c.lens_radius = optional_field(v, ptr, "lens_radius", to_number).value_or(0.0f);
+    if (!(c.lens_radius >= 0))
+      fail("{} must not be negative (got {})", child(ptr, "lens_radius"), c.lens_radius);
+    c.focal_distance = positive(
+        optional_field(v, ptr, "focal_distance", to_number).value_or(Camera().focal_distance),
+        child(ptr, "focal_distance"));
+    if (auto it = v.find("screen_window"); it != v.end()) {
+      const std::string sp = child(ptr, "screen_window");
+      if (!it->is_array() || it->size() != 4)
+        fail("{} must be an array of 4 numbers [xmin, xmax, ymin, ymax] (got {})", sp,
+             it->is_array() ? fmt::format("{} values", it->size()) : it->type_name());
+      for (size_t i = 0; i < 4; ++i) c.screen_window[i] = to_number((*it)[i], child(sp, i));
+      const auto& w = c.screen_window;
+      if (!(w[0] < w[1]) || !(w[2] < w[3]))
+        fail("{} needs xmin < xmax and ymin < ymax (got [{}, {}, {}, {}])", sp, w[0], w[1], w[2],
+             w[3]);
+    }
     m_scene.has_camera = true;
   }
 

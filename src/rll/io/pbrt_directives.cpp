@@ -200,12 +200,12 @@ void PbrtReader::directive(const Token& t) {
     film(t);
   } else if (d == "Material") {
     std::string type = expect_string(t);
-    Params p(*this, t, fmt::format("Material \"{}\"", type), param_list());
+    Params p(*this, t, fmt::format("Material \"{}\"", type));
     g.material = make_material(t, type, p);
     p.warn_unused();
   } else if (d == "MakeNamedMaterial") {
     std::string name = expect_string(t);
-    Params p(*this, t, fmt::format("MakeNamedMaterial \"{}\"", name), param_list());
+    Params p(*this, t, fmt::format("MakeNamedMaterial \"{}\"", name));
     auto type = p.get_string("type");
     if (!type) fail("{}: MakeNamedMaterial \"{}\" needs a \"string type\"", where(t), name);
     if (m_named_materials.count(name))
@@ -256,7 +256,7 @@ void PbrtReader::directive(const Token& t) {
     // rll averages the samples of each pixel (a box of radius 0.5): pbrt's box filter of that
     // radius is the same; any other filter is rendered as that box.
     const std::string type = expect_string(t);
-    Params p(*this, t, fmt::format("PixelFilter \"{}\"", type), param_list());
+    Params p(*this, t, fmt::format("PixelFilter \"{}\"", type));
     const float xr = p.get_float("xradius", 0.5f), yr = p.get_float("yradius", 0.5f);
     if (type != "box" || xr != 0.5f || yr != 0.5f) {
       for (const auto& name : p.names()) p.find(name.c_str());
@@ -268,7 +268,7 @@ void PbrtReader::directive(const Token& t) {
   } else if (d == "Option") {
     // Renderer options (pbrt-v4's command-line settings, such as "bool disablepixeljitter"):
     // none changes the scene rll renders.
-    Params p(*this, t, "Option", param_list());
+    Params p(*this, t, "Option");
     for (const auto& name : p.names()) p.find(name.c_str());
     warn("Option", fmt::format("{}: Option is ignored (renderer settings)", where(t)));
   } else {
@@ -343,7 +343,7 @@ void PbrtReader::include(const Token& t) {
 
 void PbrtReader::camera(const Token& t) {
   std::string type = expect_string(t);
-  Params p(*this, t, fmt::format("Camera \"{}\"", type), param_list());
+  Params p(*this, t, fmt::format("Camera \"{}\"", type));
   m_named_frames["camera"] = inverse(m_state.ctm).value_or(Mat4());
   if (type != "perspective") {
     unsupported(t, fmt::format("Camera \"{}\"", type));
@@ -383,7 +383,7 @@ void PbrtReader::camera(const Token& t) {
 
 void PbrtReader::film(const Token& t) {
   std::string type = expect_string(t);
-  Params p(*this, t, fmt::format("Film \"{}\"", type), param_list());
+  Params p(*this, t, fmt::format("Film \"{}\"", type));
   const int w = p.get_int("xresolution", 1280), h = p.get_int("yresolution", 720);
   if (w <= 0 || h <= 0 || w > 65536 || h > 65536)
     syntax(t, fmt::format("Film: resolution {}x{} is out of range", w, h));
@@ -402,7 +402,7 @@ void PbrtReader::film(const Token& t) {
 
 void PbrtReader::area_light(const Token& t) {
   std::string type = expect_string(t);
-  Params p(*this, t, fmt::format("AreaLightSource \"{}\"", type), param_list());
+  Params p(*this, t, fmt::format("AreaLightSource \"{}\"", type));
   if (type != "diffuse") {
     unsupported(t, fmt::format("AreaLightSource \"{}\"", type));
     ++m_skipped_lights["area " + type];
@@ -421,7 +421,7 @@ void PbrtReader::area_light(const Token& t) {
 
 void PbrtReader::light(const Token& t) {
   std::string type = expect_string(t);
-  Params p(*this, t, fmt::format("LightSource \"{}\"", type), param_list());
+  Params p(*this, t, fmt::format("LightSource \"{}\"", type));
   const float s = p.get_float("scale", 1);
   if (!(s >= 0)) syntax(t, "LightSource: scale must not be negative");
   if (p.find("power") || p.find("illuminance"))
@@ -608,6 +608,10 @@ void PbrtReader::summarize_skipped() {
   if (!m_skipped_lights.empty()) {
     auto [n, s] = list(m_skipped_lights);
     parts.push_back(fmt::format("{} light{} skipped ({})", n, n == 1 ? "" : "s", s));
+  }
+  if (!m_skipped_textures.empty()) {
+    auto [n, s] = list(m_skipped_textures);
+    parts.push_back(fmt::format("{} texture{} skipped ({})", n, n == 1 ? "" : "s", s));
   }
   if (!m_unsupported_materials.empty()) {
     std::string s;

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <deque>
 #include <filesystem>
 #include <functional>
@@ -88,7 +89,8 @@ std::string unescape(std::string_view s);
 
 struct Param {
   std::string type, name;
-  std::vector<double> numbers;
+  std::vector<double> numbers;       // the values of every numeric type but "integer"
+  std::vector<int64_t> integers;     // "integer" values, read exactly from their text
   std::vector<std::string> strings;  // string, texture, bool and named-spectrum values
   size_t line = 0;
   mutable bool used = false;
@@ -151,6 +153,9 @@ class PbrtReader {
   bool is_directive(const Token& t) const;
 
   double number(const Token& t) const;
+  // The value of an integer parameter, read exactly from the token's text (not through a float):
+  // anything but a whole number that fits in 64 bits is an error naming the parameter.
+  int64_t integer(const Token& t, const std::string& what, const std::string& param) const;
 
   Token expect_token(const Token& after, const char* what);
 
@@ -161,14 +166,16 @@ class PbrtReader {
   // Numbers in [ ... ] (or, where `bare` is set, the same count without brackets).
   std::vector<double> number_list(const Token& after, size_t count, bool bare);
 
-  std::vector<Param> param_list();
+  // The parameter list after a directive; `what` names the directive in errors.
+  std::vector<Param> param_list(const std::string& what);
 
   // --- typed parameter access ---
 
   class Params {
    public:
-    Params(PbrtReader& r, const Token& directive, std::string what, std::vector<Param> params)
-        : m_r(r), m_at(directive), m_what(std::move(what)), m_params(std::move(params)) {}
+    // Reads the parameter list that follows the directive.
+    Params(PbrtReader& r, const Token& directive, std::string what)
+        : m_r(r), m_at(directive), m_what(std::move(what)), m_params(r.param_list(m_what)) {}
     ~Params() = default;
 
     const Param* find(const char* name) const {
@@ -203,9 +210,19 @@ class PbrtReader {
     int get_int(const char* name, int def) const {
       const Param* p = typed(name, {"integer"});
       if (!p) return def;
-      const double v = one_number(*p);
-      if (v != std::floor(v) || std::abs(v) > 2147483647.0) bad(*p, "must be an integer");
+      if (p->integers.size() != 1)
+        bad(*p, fmt::format("needs 1 value (got {})", p->integers.size()));
+      const int64_t v = p->integers[0];
+      if (v < INT32_MIN || v > INT32_MAX) bad(*p, fmt::format("is out of range (got {})", v));
       return int(v);
+    }
+    // All values of an "integer" array parameter, in groups of `group`.
+    const std::vector<int64_t>* get_integers(const char* name, size_t group) const {
+      const Param* p = typed(name, {"integer"});
+      if (!p) return nullptr;
+      if (p->integers.size() % group != 0)
+        bad(*p, fmt::format("needs a multiple of {} values (got {})", group, p->integers.size()));
+      return &p->integers;
     }
     bool get_bool(const char* name, bool def) const {
       const Param* p = typed(name, {"bool"});
@@ -232,7 +249,8 @@ class PbrtReader {
         bad(*p, fmt::format("needs 3 values (got {})", p->numbers.size()));
       return Vec3(float(p->numbers[0]), float(p->numbers[1]), float(p->numbers[2]));
     }
-    // All values of a numeric array parameter, in groups of `group`.
+    // All values of a numeric array parameter (not "integer": get_integers), in groups of
+    // `group`.
     const std::vector<double>* get_array(const char* name, std::initializer_list<const char*> types,
                                          size_t group) const {
       const Param* p = typed(name, types);
@@ -330,7 +348,7 @@ class PbrtReader {
 
   void triangle_mesh(const Token& t, const Params& p, Mesh& mesh);
 
-  uint32_t index(const Token& t, const char* shape, double v, size_t count) const;
+  uint32_t index(const Token& t, const char* shape, int64_t v, size_t count) const;
 
   // P, and N and uv when given, which must have one entry per vertex.
   void fill_vertices(const Token& t, const Params& p, Mesh& mesh, const std::vector<double>& P,
@@ -382,6 +400,7 @@ class PbrtReader {
   std::map<std::string, Mat4> m_named_frames;
   std::map<std::string, int> m_named_materials;
   std::map<std::string, ImageTexture> m_textures;
+  std::set<std::string> m_unread_textures;  // names of the Texture directives rll skipped
   std::map<std::string, int> m_image_cache;
   std::map<std::tuple<int, int, float, float, bool>, ImageTexture> m_alpha_cache;
   std::map<std::tuple<int, float, float, float, bool>, uint32_t> m_emissive;
@@ -404,9 +423,9 @@ class PbrtReader {
   bool m_mirrored = false;
   Vec3 m_mirror_normal;
 
-  // What was left out, for the summary warning at the end: shape types (with counts), light
-  // types (with counts), and material types rendered as diffuse grey.
-  std::map<std::string, int> m_skipped_shapes, m_skipped_lights;
+  // What was left out, for the summary warning at the end: shape types, light types and texture
+  // classes (with counts), and material types rendered as diffuse grey.
+  std::map<std::string, int> m_skipped_shapes, m_skipped_lights, m_skipped_textures;
   std::set<std::string> m_unsupported_materials;
 
   std::vector<std::pair<std::string, size_t>> m_warnings;

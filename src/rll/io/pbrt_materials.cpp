@@ -12,12 +12,17 @@ namespace rll::pbrt {
 
 // A texture parameter of a material or texture: a texture reference (`"texture NAME" "tex"`),
 // or a value (float, rgb, spectrum...). nullopt when absent or when the reference is to a
-// texture rll could not read (warned).
+// texture rll skipped (warned); a name no Texture directive defined before is an error, as in
+// pbrt-v4.
 std::optional<ImageTexture> PbrtReader::texture_operand(const Token& t, const Params& p,
                                                         const char* name, bool is_float) {
   if (auto tex = p.get_texture(name)) {
     auto it = m_textures.find(*tex);
     if (it == m_textures.end()) {
+      if (!m_unread_textures.count(*tex))
+        p.bad(*p.find(name), fmt::format("names texture \"{}\", which is not defined (a Texture "
+                                         "directive must define it before its use)",
+                                         printable(*tex)));
       warn("texture " + *tex, fmt::format("{}: texture \"{}\" is not a texture rll read; the "
                                           "parameter '{}' keeps its default",
                                           where(t), *tex, name));
@@ -75,10 +80,17 @@ std::optional<ImageTexture> PbrtReader::bake(const Token& t, const std::string& 
 
 void PbrtReader::texture(const Token& t) {
   const std::string name = expect_string(t), kind = expect_string(t), cls = expect_string(t);
-  Params p(*this, t, fmt::format("Texture \"{}\"", name), param_list());
+  Params p(*this, t, fmt::format("Texture \"{}\"", name));
+  // A texture rll skips (warned, and counted in the summary): references to it are warnings.
+  auto skip = [&](const std::string& what) {
+    m_unread_textures.insert(name);
+    m_textures.erase(name);
+    ++m_skipped_textures[what];
+  };
   const bool is_float = kind == "float";
   if (!is_float && kind != "spectrum" && kind != "color" && kind != "rgb") {
     unsupported(t, fmt::format("Texture of type \"{}\"", kind));
+    skip(kind);
     return;
   }
   std::optional<ImageTexture> result;
@@ -113,10 +125,15 @@ void PbrtReader::texture(const Token& t) {
                   [](const Rgb* v) { return v[0] * (1 - v[2].x) + v[1] * v[2].x; });
   } else {
     unsupported(t, fmt::format("Texture class \"{}\"", cls));
+    skip(cls);
     return;
   }
-  if (!result) return;
+  if (!result) {
+    skip(cls);
+    return;
+  }
   m_textures[name] = *result;
+  m_unread_textures.erase(name);
   p.warn_unused();
 }
 

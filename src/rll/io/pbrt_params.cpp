@@ -56,7 +56,7 @@ const std::set<std::string_view>& pbrt_directives() {
   return names;
 }
 
-std::vector<Param> PbrtReader::param_list() {
+std::vector<Param> PbrtReader::param_list(const std::string& what) {
   std::vector<Param> params;
   while (const Token* p = peek()) {
     if (!p->quoted) break;
@@ -84,6 +84,8 @@ std::vector<Param> PbrtReader::param_list() {
       } else if (is_directive(t) || t.text == "[" || t.text == "]") {
         syntax(t, fmt::format("parameter '{}' has a bad value '{}'", printable(par.name),
                               printable(t.text)));
+      } else if (par.type == "integer") {
+        par.integers.push_back(integer(t, what, par.name));
       } else {
         par.numbers.push_back(number(t));
       }
@@ -100,7 +102,7 @@ std::vector<Param> PbrtReader::param_list() {
     const bool numeric = is_numeric_type(par.type);
     if (par.type == "spectrum" && par.numbers.empty() && par.strings.size() == 1) {
       // a named spectrum or a file
-    } else if (numeric ? !par.strings.empty() : !par.numbers.empty()) {
+    } else if (numeric ? !par.strings.empty() : (!par.numbers.empty() || !par.integers.empty())) {
       syntax(decl,
              fmt::format("parameter \"{} {}\" has values of the wrong kind", par.type, par.name));
     }
@@ -109,7 +111,7 @@ std::vector<Param> PbrtReader::param_list() {
         if (s != "true" && s != "false")
           syntax(decl, fmt::format("bool parameter '{}' must be true or false (got \"{}\")",
                                    par.name, s));
-    if (par.numbers.empty() && par.strings.empty())
+    if (par.numbers.empty() && par.integers.empty() && par.strings.empty())
       syntax(decl, fmt::format("parameter '{}' has no value", par.name));
     params.push_back(std::move(par));
   }
@@ -143,10 +145,17 @@ std::optional<Rgb> PbrtReader::Params::get_spectrum(const char* name) const {
     if (s.rfind("stdillum-", 0) == 0 || s.rfind("illum-", 0) == 0) return Rgb(1);
     if (s == "glass-BK7") return Rgb(1.5168f);
     if (s.rfind("glass-", 0) == 0) return Rgb(1.5f);
+    // pbrt-v4 reads any other name as a spectrum file, which rll does not read: an existing
+    // file keeps the parameter's default (a warning); a name that is neither is an error, as in
+    // pbrt-v4.
+    if (!m_r.m_policy.read_files || !unreadable_reason(m_r.resolve(s)).empty())
+      bad(*p, fmt::format("names spectrum \"{}\", which is neither a named spectrum rll knows "
+                          "({}, glass-*, stdillum-*, illum-*) nor a file",
+                          printable(s), named_spectrum_names()));
     m_r.warn("spectrum " + s,
-             fmt::format("{}: {}: spectrum \"{}\" is not one rll knows; parameter '{}' keeps its "
-                         "default",
-                         m_r.where(m_at.file, p->line), m_what, s, p->name));
+             fmt::format("{}: {}: spectrum file \"{}\" is not read by rll; parameter '{}' keeps "
+                         "its default",
+                         m_r.where(m_at.file, p->line), m_what, printable(s), p->name));
     return std::nullopt;
   }
   if (p->numbers.size() < 2 || p->numbers.size() % 2 != 0) bad(*p, "needs wavelength-value pairs");

@@ -35,7 +35,7 @@ uint32_t PbrtReader::shape_material() {
 
 void PbrtReader::shape(const Token& t) {
   std::string type = expect_string(t);
-  Params p(*this, t, fmt::format("Shape \"{}\"", type), param_list());
+  Params p(*this, t, fmt::format("Shape \"{}\"", type));
   Mesh mesh;
   bool quadric = false;  // pbrt orients quadrics by their parametrization, meshes by N
   if (type == "trianglemesh") {
@@ -108,7 +108,7 @@ void PbrtReader::triangle_mesh(const Token& t, const Params& p, Mesh& mesh) {
   if (!P || P->empty()) syntax(t, "Shape \"trianglemesh\" needs \"point3 P\"");
   const size_t nv = P->size() / 3;
   fill_vertices(t, p, mesh, *P, "trianglemesh");
-  const auto* I = p.get_array("indices", {"integer"}, 3);
+  const auto* I = p.get_integers("indices", 3);
   if (!I) {
     if (nv != 3)
       syntax(t, fmt::format("Shape \"trianglemesh\": \"integer indices\" are needed unless there "
@@ -129,7 +129,7 @@ void PbrtReader::triangle_mesh(const Token& t, const Params& p, Mesh& mesh) {
 void PbrtReader::loop_subdivision(const Token& t, const Params& p, Mesh& mesh) {
   const auto* P = p.get_array("P", {"point3", "point"}, 3);
   if (!P || P->empty()) syntax(t, "Shape \"loopsubdiv\" needs \"point3 P\"");
-  const auto* I = p.get_array("indices", {"integer"}, 3);
+  const auto* I = p.get_integers("indices", 3);
   if (!I || I->empty()) syntax(t, "Shape \"loopsubdiv\" needs \"integer indices\"");
   const int levels = p.get_int("levels", 3);
   if (levels < 0)
@@ -170,8 +170,8 @@ void PbrtReader::loop_subdivision(const Token& t, const Params& p, Mesh& mesh) {
   for (const char* ignored : {"scheme"}) p.find(ignored);
 }
 
-uint32_t PbrtReader::index(const Token& t, const char* shape, double v, size_t count) const {
-  if (v != std::floor(v) || v < 0 || v >= double(count))
+uint32_t PbrtReader::index(const Token& t, const char* shape, int64_t v, size_t count) const {
+  if (v < 0 || uint64_t(v) >= count)
     syntax(t, fmt::format("Shape \"{}\": index {} is out of range (there are {} vertices)", shape,
                           v, count));
   return uint32_t(v);
@@ -208,8 +208,8 @@ void PbrtReader::bilinear_mesh(const Token& t, const Params& p, Mesh& mesh) {
   const size_t nv = P->size() / 3;
   Mesh corners;
   fill_vertices(t, p, corners, *P, "bilinearmesh");
-  std::vector<double> default_indices = {0, 1, 2, 3};
-  const auto* I = p.get_array("indices", {"integer"}, 4);
+  std::vector<int64_t> default_indices = {0, 1, 2, 3};
+  const auto* I = p.get_integers("indices", 4);
   if (!I) {
     if (nv != 4)
       syntax(t, fmt::format("Shape \"bilinearmesh\": \"integer indices\" are needed unless there "

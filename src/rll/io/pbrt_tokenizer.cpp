@@ -1,6 +1,8 @@
 // The pbrt reader's tokens and token stream (see pbrt_internal.h).
 #include <array>
 #include <cctype>
+#include <charconv>
+#include <cmath>
 
 #include "rll/io/pbrt_internal.h"
 
@@ -141,6 +143,34 @@ double PbrtReader::number(const Token& t) const {
       break;
   }
   syntax(t, fmt::format("expected a number, got '{}'", printable(t.text)));
+}
+
+int64_t PbrtReader::integer(const Token& t, const std::string& what,
+                            const std::string& param) const {
+  std::string_view s = t.text;
+  if (s.size() > 1 && s[0] == '+' && s[1] != '-' && s[1] != '+') s.remove_prefix(1);
+  int64_t v = 0;
+  const char* end = s.data() + s.size();
+  const auto r = std::from_chars(s.data(), end, v);
+  if (r.ec == std::errc() && r.ptr == end) return v;
+  if (r.ec == std::errc::result_out_of_range && r.ptr == end)
+    syntax(t, fmt::format("{}: parameter \"integer {}\": {} is out of range (beyond 64 bits)", what,
+                          printable(param), printable(t.text)));
+  float f = 0;
+  if (parse_float(t.text, f) == NumberStatus::Malformed)
+    syntax(t, fmt::format("expected a number, got '{}'", printable(t.text)));
+  // A whole number in float notation ("2.0", "2e0", as some exporters write integers) is taken
+  // where a double holds it exactly (up to 2^53); anything else is refused, never rounded.
+  double d = 0;
+  const auto rd = std::from_chars(s.data(), end, d);
+  if (rd.ec == std::errc() && rd.ptr == end && std::isfinite(d) && std::floor(d) == d) {
+    if (std::abs(d) <= 0x1p53) return int64_t(d);
+    syntax(t, fmt::format("{}: parameter \"integer {}\": {} is out of range (a whole number in float "
+                          "notation must be at most 2^53)",
+                          what, printable(param), printable(t.text)));
+  }
+  syntax(t, fmt::format("{}: parameter \"integer {}\" must be an integer (got '{}')", what,
+                        printable(param), printable(t.text)));
 }
 
 Token PbrtReader::expect_token(const Token& after, const char* what) {

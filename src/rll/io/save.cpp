@@ -169,11 +169,21 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
   auto texture_of = [&](int tex) { return tex >= 0 ? texture_files.at(tex) : std::string(); };
 
   json j;
-  if (scene.has_camera)  // otherwise the reader fits one to the scene, as it was here
-    j["camera"] = {{"position", vec(scene.camera.position)},
-                   {"target", vec(scene.camera.target)},
-                   {"up", vec(scene.camera.up)},
-                   {"fov", number(scene.camera.fov)}};
+  if (scene.has_camera) {  // otherwise the reader fits one to the scene, as it was here
+    const Camera& c = scene.camera;
+    j["camera"] = {{"position", vec(c.position)},
+                   {"target", vec(c.target)},
+                   {"up", vec(c.up)},
+                   {"fov", number(c.fov)}};
+    // The thin lens and the screen window where they differ from the reader's defaults.
+    if (c.lens_radius != 0) j["camera"]["lens_radius"] = number(c.lens_radius);
+    if (c.focal_distance != Camera().focal_distance)
+      j["camera"]["focal_distance"] = number(c.focal_distance);
+    if (c.screen_window != Camera().screen_window)
+      j["camera"]["screen_window"] =
+          json::array({number(c.screen_window[0]), number(c.screen_window[1]),
+                       number(c.screen_window[2]), number(c.screen_window[3])});
+  }
   j["film"] = {{"width", scene.width}, {"height", scene.height}};
   json lights = json::array();
   for (const Light& l : scene.lights) {

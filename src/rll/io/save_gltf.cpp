@@ -273,6 +273,11 @@ class GltfWriter {
 
   json camera() {
     const Camera& c = m_scene.camera;
+    if (c.has_lens() || c.screen_window != Camera().screen_window)
+      m_warnings.push_back(
+          "glTF's camera has no thin lens and no screen window: the camera is written as a "
+          "pinhole seeing the whole image (lens radius, focal distance and screen window are "
+          "dropped)");
     const Vec3 f = normalize(c.target - c.position), r = normalize(cross(f, c.up)), u = cross(r, f);
     m_doc["cameras"] =
         json::array({{{"type", "perspective"},

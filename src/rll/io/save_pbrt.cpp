@@ -60,7 +60,20 @@ std::vector<std::string> save_pbrt_scene(const Scene& scene, const fs::path& pat
     float fov = c.fov;  // pbrt's fov spans the shorter side
     if (scene.height > scene.width)
       fov = 2 * std::atan(std::tan(radians(c.fov) / 2) * scene.width / scene.height) * (180 / kPi);
-    out += fmt::format("Camera \"perspective\" \"float fov\" [ {} ]\n", fov);
+    out += fmt::format("Camera \"perspective\" \"float fov\" [ {} ]", fov);
+    // The thin lens and the screen window where they differ from pbrt-v4's defaults (which are
+    // rll's).
+    if (c.lens_radius != 0) out += fmt::format(" \"float lensradius\" [ {} ]", c.lens_radius);
+    if (c.focal_distance != Camera().focal_distance)
+      out += fmt::format(" \"float focaldistance\" [ {} ]", c.focal_distance);
+    if (c.screen_window != Camera().screen_window) {
+      // rll's screen units are tan(fov / 2) of the vertical side; pbrt's of the shorter one.
+      const float k = scene.height > scene.width ? float(scene.width) / float(scene.height) : 1;
+      const auto& w = c.screen_window;
+      out += fmt::format(" \"float screenwindow\" [ {} {} {} {} ]", w[0] / k, w[1] / k, w[2] / k,
+                         w[3] / k);
+    }
+    out += "\n";
   }
   out += fmt::format("Film \"rgb\" \"integer xresolution\" [ {} ] \"integer yresolution\" [ {} ]\n",
                      scene.width, scene.height);

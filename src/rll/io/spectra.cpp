@@ -45,6 +45,12 @@ std::optional<Rgb> named_spectrum_rgb(std::string_view name) {
   return std::nullopt;
 }
 
+std::string named_spectrum_names() {
+  std::string s = "metal-{";
+  for (const auto& m : kMetals) s += std::string(&m == kMetals ? "" : ",") + m.name;
+  return s + "}-{eta,k}";
+}
+
 // The CIE 1931 matching functions are the multi-lobe Gaussian fit of Wyman, Sloan and Shirley
 // (2013).
 Rgb blackbody_rgb(double kelvin) {
