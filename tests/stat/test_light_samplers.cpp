@@ -39,6 +39,10 @@ const std::vector<SamplerCase>& sampler_cases() {
       {"rll_tree_defensive", "rll", {"rll.defensive=tree", "rll.within=power", "rll.initial_cut=32", "rll.splits=2"}},
       {"rll_full_table", "rll", {"rll.capacity=48"}},
       {"rll_uniform", "rll", {"rll.within=uniform"}},
+      // The guided descent: the tree's steps scaled by the cell's learnt factors above the cut;
+      // with a full table, and with lights drawn by power inside a smaller cut's clusters.
+      {"rll_guided", "rll", {"rll.sampling=guided", "rll.capacity=48"}},
+      {"rll_guided_power", "rll", {"rll.sampling=guided", "rll.within=power", "rll.cut_size=24", "rll.epsilon=0.02"}},
       // Fermat's RLL as published, and with uniform choice inside clusters (cold cells uniform).
       {"fermat", "fermat", {}},
       {"fermat_uniform", "fermat", {"fermat.within=uniform", "fermat.reset_every=8"}},

@@ -58,11 +58,13 @@ struct Trained {
   std::unique_ptr<RllLightSampler> sampler;
 };
 
-Trained train(const Scene& scene, int passes, int threads) {
+Trained train(const Scene& scene, int passes, int threads, std::vector<std::string> extra = {}) {
   ThreadLimit limit(threads);
   Trained t;
   t.accel = std::make_unique<Accel>(scene.mesh);
-  Params p = Params::parse({"rll.cut_size=2", "rll.splits=0"});
+  std::vector<std::string> set = {"rll.cut_size=2", "rll.splits=0"};
+  set.insert(set.end(), extra.begin(), extra.end());
+  Params p = Params::parse(set);
   t.sampler = std::make_unique<RllLightSampler>(scene, rll_settings_from(p));
   IntegratorSettings is;
   is.type = IntegratorType::Direct;
@@ -73,6 +75,16 @@ Trained train(const Scene& scene, int passes, int threads) {
   rs.max_pass_spp = 1;  // one pass per sample per pixel
   render(scene, integrator, *t.sampler, film, rs);
   return t;
+}
+
+// Floor point k of 40 in view (an 8 x 5 grid), prepared: in its cell.
+LightContext floor_point(const Scene& scene, const RllLightSampler& sampler, int k) {
+  LightContext c;
+  c.p = Vec3(0.5f + 3.0f * float(k % 8) / 7, 0, 0.5f + 3.0f * float(k / 8) / 4);
+  c.n = c.ns = Vec3(0, 1, 0);
+  c.footprint = 6 * scene.camera.pixel_angle();
+  sampler.prepare(c, 0.5f);
+  return c;
 }
 
 }  // namespace
@@ -95,12 +107,7 @@ TEST(RllLearning, OccludedLampFallsToTheDefensiveFloor) {
     float max_reach = 0, eps_sum = 0, max_ratio = 0;
     std::vector<float> ratios;
     for (int k = 0; k < 40; ++k) {
-      float x = 0.5f + 3.0f * float(k % 8) / 7, z = 0.5f + 3.0f * float(k / 8) / 4;
-      LightContext c;
-      c.p = Vec3(x, 0, z);
-      c.n = c.ns = Vec3(0, 1, 0);
-      c.footprint = 6 * scene.camera.pixel_angle();
-      t.sampler->prepare(c, 0.5f);
+      LightContext c = floor_point(scene, *t.sampler, k);
       if (c.cell == kNoCell || !t.sampler->cuts().active(c.cell) ||
           !t.sampler->cuts().learnt(c.cell))
         continue;
@@ -148,6 +155,47 @@ TEST(RllLearning, OccludedLampFallsToTheDefensiveFloor) {
       previous_eps = mean_eps;
     }
   }
+}
+
+// The guided descent learns the same visibility as a ratio to the tree's importance: at floor
+// points the hidden lamp's probability falls far below the tree's, to about e / (1 + ...) of it,
+// and stays positive.
+TEST(RllLearning, GuidedDescentLearnsTheOccludedLamp) {
+  Scene scene = two_lamps();
+  const LightTree& tree = *scene.light_tree;
+  const uint32_t a = tree.node(LightTree::kRoot).child, b = a + 1;
+  const uint32_t node_b = scene.lights[tree.node(b).begin].centroid().x > 2 ? b : a;
+  // A short trust schedule, so that the defensive weight (which bounds how far a factor falls)
+  // is near epsilon after 16 passes.
+  Trained t = train(scene, 16, 1, {"rll.sampling=guided", "rll.trust=16"});
+  int checked = 0;
+  std::vector<float> ratios;
+  for (int k = 0; k < 40; ++k) {
+    LightContext c = floor_point(scene, *t.sampler, k);
+    if (c.cell == kNoCell || !t.sampler->cuts().learnt(c.cell)) continue;
+    const float reach_b = tree_reach_pmf(tree, node_b, c.p, c.n);
+    if (!(reach_b > 0.05f)) continue;
+    float p_b = 0, total = 0;
+    for (uint32_t l = 0; l < tree.light_count(); ++l) {
+      const float p = t.sampler->pmf(c, l);
+      total += p;
+      if (l >= tree.node(node_b).begin && l < tree.node(node_b).end) p_b += p;
+    }
+    EXPECT_NEAR(total, 1.0f, 1e-5f);
+    // Positive (a factor never falls below the defensive weight), and never above the tree's:
+    // the lamp's rewards are all zero, so its learnt ratio only falls from the cell's mean.
+    EXPECT_GT(p_b, 0.0f);
+    EXPECT_LT(p_b / reach_b, 1.0f) << "cell " << c.cell;
+    ratios.push_back(p_b / reach_b);
+    ++checked;
+  }
+  ASSERT_GT(checked, 15);
+  std::sort(ratios.begin(), ratios.end());
+  std::printf("guided: hidden lamp's probability / the tree's: median %.3f, max %.3f\n", ratios[ratios.size() / 2],
+              ratios.back());
+  // The plain tree (every factor 1) gives exactly 1 here.
+  EXPECT_LT(ratios[ratios.size() / 2], 0.25f);
+  EXPECT_LT(ratios[ratios.size() * 9 / 10], 0.5f);
 }
 
 TEST(RllLearning, SameStateWhateverTheThreadCount) {

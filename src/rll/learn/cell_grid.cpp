@@ -84,8 +84,11 @@ CellCoord CellKeyer::locate_with(const Vec3& p, const Vec3& n, int level, Vec2 d
   // The position jitter lies in the tangent plane of the bin's central normal, so that every
   // point of a cell shares it.
   float size = std::ldexp(m_extent, c.level);
-  Frame f(octahedral_decode({(c.nu + 0.5f - normal.x) / bins, (c.nv + 0.5f - normal.y) / bins}));
-  Vec3 q = p - m_origin + (f.s * disk.x + f.t * disk.y) * size;
+  Vec3 q = p - m_origin;
+  if (disk.x != 0 || disk.y != 0) {  // (no jitter, the default: no frame to build per lookup)
+    Frame f(octahedral_decode({(c.nu + 0.5f - normal.x) / bins, (c.nv + 0.5f - normal.y) / bins}));
+    q = q + (f.s * disk.x + f.t * disk.y) * size;
+  }
   c.x = int64_t(std::floor(q.x / size));
   c.y = int64_t(std::floor(q.y / size));
   c.z = int64_t(std::floor(q.z / size));

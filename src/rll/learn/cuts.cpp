@@ -121,6 +121,11 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   m_n.assign(n, 0.0f);
   m_weight.assign(n, 0.0f);
   m_cdf.assign(n, 0.0f);
+  if (s.guided) {
+    if (s.splits > 0) fail("rll.splits needs rll.sampling=table (the guided descent keeps its cut)");
+    m_gl.assign(n, 1.0f);
+    m_gr.assign(n, 1.0f);
+  }
   m_learnt.assign(cells, 0);
   m_seen.assign(cells, 0.0f);
   m_eps.assign(cells, 1.0f);
@@ -132,13 +137,14 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   for (size_t i = 0; i < n; ++i) m_count[i].store(0, std::memory_order_relaxed);
 }
 
-size_t CutStore::bytes_for(uint32_t cells, int cut_size) {
-  const size_t per_cell = size_t(cut_size) * (2 * sizeof(uint32_t) + 5 * sizeof(float) + 2 * sizeof(ExactSum) + sizeof(uint32_t)) +
+size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided) {
+  const size_t per_cluster_floats = guided ? 7 : 5;
+  const size_t per_cell = size_t(cut_size) * (2 * sizeof(uint32_t) + per_cluster_floats * sizeof(float) + 2 * sizeof(ExactSum) + sizeof(uint32_t)) +
                           sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t) + sizeof(double) + sizeof(CellAnchor);
   return size_t(cells) * per_cell;
 }
 
-size_t CutStore::bytes() const { return bytes_for(uint32_t(m_size.size()), m_m); }
+size_t CutStore::bytes() const { return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided); }
 
 float CutStore::weight_of(uint32_t cell, uint32_t node) const {
   if (m_s.prior == ClusterWeight::Power) return m_tree.node(node).bounds.power;
@@ -171,6 +177,17 @@ void CutStore::values(const Cut& cut, const std::vector<double>& pri, std::vecto
     out[k] = moment ? std::sqrt(std::max(cut.m2[k], 0.0f)) : cut.q[k];
     v_sum += out[k];
     p_sum += pri[k];
+  }
+  if (m_s.guided) {
+    // Ratios to the tree's importance: a cluster never visited gets the visited clusters' mean
+    // ratio, weighted by prior.
+    double wv = 0;
+    for (size_t k = 0; k < K; ++k)
+      if (cut.q[k] >= 0) wv += pri[k] * out[k];
+    const float mean = p_sum > 0 ? float(wv / p_sum) : 0.0f;
+    for (size_t k = 0; k < K; ++k)
+      if (cut.q[k] < 0) out[k] = mean;
+    return;
   }
   const double total = v_sum / std::max(p_sum, 0.25);
   for (size_t k = 0; k < K; ++k)
@@ -231,6 +248,41 @@ void CutStore::store(uint32_t cell, const Cut& cut) {
   }
   for (size_t k = 0; k < K; ++k) m_cdf[base + k] = float(std::min(1.0, double(m_cdf[base + k]) / acc));
   m_cdf[base + K - 1] = 1.0f;
+  if (m_s.guided) bake_guide(cell, cut, pri, val, v_sum > 0 ? m_eps[cell] : 1.0);
+}
+
+void CutStore::bake_guide(uint32_t cell, const Cut& cut, const std::vector<double>& pri,
+                          const std::vector<float>& val, double eps) {
+  const size_t base = size_t(cell) * m_m, K = cut.nodes.size();
+  // g(k) = (1 - e) rho(k) / mean rho + e: the learnt ratios relative to their prior-weighted
+  // mean, mixed with 1 (the tree's own step) by the defensive weight, so that g >= e > 0.
+  thread_local std::vector<double> g;
+  g.resize(K);
+  double wsum = 0, wv = 0;
+  for (size_t k = 0; k < K; ++k) {
+    wsum += pri[k];
+    wv += pri[k] * val[k];
+  }
+  const double mean = wsum > 0 ? wv / wsum : 0.0;
+  for (size_t k = 0; k < K; ++k) g[k] = mean > 0 ? (1 - eps) * double(val[k]) / mean + eps : 1.0;
+  // Every inner node above the cut, by recursion from the root: its children's factors are the
+  // prior-weighted means of their clusters' g (the unweighted mean where no cluster has prior).
+  struct Sums {
+    double w = 0, wg = 0, g = 0, count = 0;
+    double factor() const { return w > 0 ? wg / w : g / count; }
+  };
+  const uint32_t* ends = &m_end[base];
+  auto visit = [&](auto&& self, uint32_t node, size_t k0, size_t k1) -> Sums {
+    if (k1 - k0 == 1) return {pri[k0], pri[k0] * g[k0], g[k0], 1};
+    const LightTreeNode& nd = m_tree.node(node);
+    const uint32_t m = m_tree.node(nd.child).end;
+    const size_t j = size_t(std::lower_bound(ends + k0, ends + k1, m) - ends);  // ends[j] == m
+    Sums a = self(self, nd.child, k0, j + 1), b = self(self, nd.child + 1, j + 1, k1);
+    m_gl[base + j] = float(a.factor());
+    m_gr[base + j] = float(b.factor());
+    return {a.w + b.w, a.wg + b.wg, a.g + b.g, a.count + b.count};
+  };
+  visit(visit, LightTree::kRoot, 0, K);
 }
 
 void CutStore::clear(uint32_t cell) {
@@ -417,6 +469,15 @@ void CutStore::load_cell(uint32_t cell, BinaryReader& r) {
       !std::isfinite(a.p.x + a.p.y + a.p.z + a.n.x + a.n.y + a.n.z))
     damaged("a cell value is out of range");
   m_size[cell] = K;
+  if (m_s.guided && K > 0) {
+    thread_local Cut cut;
+    thread_local std::vector<double> pri;
+    thread_local std::vector<float> val;
+    load(cell, cut);
+    prior(cut, pri);
+    values(cut, pri, val);
+    bake_guide(cell, cut, pri, val, m_learnt[cell] ? m_eps[cell] : 1.0);
+  }
 }
 
 }  // namespace rll

@@ -56,6 +56,11 @@ struct CutSettings {
   // The value of a cluster never visited: < 0, the visited clusters' estimate of the cell's total
   // shared by prior; >= 0, this constant (Fermat's RLL starts every Q at 0.01).
   float q_init = -1;
+  // The guided descent (rll.sampling=guided): the values learnt are each cluster's ratio of its
+  // reward to the light tree's importance of its node at the point, and the cell bakes, for
+  // every inner node above its cut, the factors by which a descent from the root scales its
+  // children's importances (guide_left/right) instead of a table over the clusters.
+  bool guided = false;
 };
 
 // A cut being edited (split-collapse), outside the flat store.
@@ -200,7 +205,7 @@ class CutStore {
  public:
   CutStore(const LightTree& tree, uint32_t cells, const CutSettings& settings, double reward_scale);
   // The memory a store of `cells` cells of cuts of `cut_size` clusters takes (bytes()).
-  static size_t bytes_for(uint32_t cells, int cut_size);
+  static size_t bytes_for(uint32_t cells, int cut_size, bool guided = false);
 
   const CutSettings& settings() const { return m_s; }
   int max_size() const { return m_m; }
@@ -217,6 +222,14 @@ class CutStore {
   const float* cdf(uint32_t cell) const { return &m_cdf[size_t(cell) * m_m]; }
   const float* q(uint32_t cell) const { return &m_q[size_t(cell) * m_m]; }
   const float* m2(uint32_t cell) const { return &m_m2[size_t(cell) * m_m]; }
+  // Guided descent: the inner nodes above a cell's cut are one per boundary between adjacent
+  // clusters j and j + 1 (the node whose children meet there); guide_left(cell)[j] and
+  // guide_right(cell)[j] are the factors of that node's first and second child: the mean of
+  // their clusters' factors g(k) = (1 - e) rho(k) / mean rho + e, weighted by the prior at the
+  // anchor, e the cell's defensive weight and rho the learnt ratio (1 everywhere before the cell
+  // has learnt: the light tree itself).
+  const float* guide_left(uint32_t cell) const { return &m_gl[size_t(cell) * m_m]; }
+  const float* guide_right(uint32_t cell) const { return &m_gr[size_t(cell) * m_m]; }
   // False while the cell has learnt nothing (every value zero): its CDF is then the prior's.
   bool learnt(uint32_t cell) const { return m_learnt[cell] != 0; }
   // The weight of the defensive term for this cell during this pass (1 before it learnt).
@@ -278,6 +291,9 @@ class CutStore {
   // The effective target value of every cluster: sqrt(M2) or Q where visited, else the prior's
   // share of what the visited clusters say the cell's total is.
   void values(const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const;
+  // Guided descent: bakes guide_left/right of a cell from its cut's values and prior.
+  void bake_guide(uint32_t cell, const Cut& cut, const std::vector<double>& pri, const std::vector<float>& val,
+                  double eps);
 
   const LightTree& m_tree;
   CutSettings m_s;
@@ -290,6 +306,7 @@ class CutStore {
   std::vector<uint32_t> m_size;  // K per cell; 0: no cut yet
   std::vector<uint32_t> m_node, m_end;
   std::vector<float> m_q, m_m2, m_n, m_weight, m_cdf;
+  std::vector<float> m_gl, m_gr;  // guided descent only (empty otherwise)
   std::vector<uint8_t> m_learnt;  // per cell: sum of values > 0
   std::vector<float> m_seen;      // per cell: rewards received so far
   std::vector<float> m_eps;       // per cell: defensive weight, frozen during a pass

@@ -37,6 +37,7 @@ struct SampledLight {
   // Filled by samplers that choose a cluster first (rll, oracle), for their own record():
   uint32_t cluster = 0;     // index of the cluster in the cell's cut
   float cluster_pmf = 0;    // probability of that cluster
+  float cluster_importance = 0;  // rll's guided descent: the tree's importance of the cluster at the point
 };
 
 // What the integrator reports of one next-event sample to a learning sampler. Each learner makes

@@ -80,6 +80,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
   auto t0 = std::chrono::steady_clock::now();
   RllSettings fixed = rll;
   fixed.grid.jitter = 0;  // one fixed grid: the oracle's cells never move
+  fixed.cut.guided = false;  // the oracle knows each cluster's contribution: a table per cell
   m_rll = std::make_unique<RllLightSampler>(scene, fixed);
   const LightTree& tree = *scene.light_tree;
 

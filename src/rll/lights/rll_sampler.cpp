@@ -53,6 +53,12 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   s.cold_uniform = choice("cold", s.cold_uniform ? 1 : 0, {"tree", "uniform"}) == 1;
   s.sample_jitter = p.get_float(key("sample_jitter"), s.sample_jitter);
   s.reset_every = uint32_t(p.get_int_in(key("reset_every"), s.reset_every, 0, 1l << 30));
+  s.cut.guided = choice("sampling", s.cut.guided ? 1 : 0, {"table", "guided"}) == 1;
+  if (s.cut.guided) {
+    if (s.defensive != Defensive::Cell) bad("sampling", "guided needs defensive=cell (its factors hold the defensive term)");
+    if (s.reward != RewardKind::Cluster) bad("sampling", "guided needs reward=cluster");
+    if (s.cold_uniform) bad("sampling", "guided needs cold=tree");
+  }
   if (!(s.cut.trust >= 0)) bad("trust", "must not be negative");
   if (!(s.cut.prior_samples > 0)) bad("prior_samples", "must be positive");
   if (!(s.grid.footprint_scale > 0)) bad("footprint_scale", "must be positive");
@@ -95,7 +101,7 @@ namespace {
 void check_memory(const RllSettings& s) {
   // The cell table, the cuts and the point sums, allocated up front: refuse a configuration the
   // machine cannot hold rather than grow towards the out-of-memory killer.
-  const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size)) +
+  const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided)) +
                         double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t));
   const size_t usable = usable_memory_bytes();
   if (usable > 0 && needed > 0.8 * double(usable))
@@ -109,7 +115,8 @@ RllLightSampler::RllLightSampler(const Scene& scene, const RllSettings& s)
     : m_tree(*scene.light_tree), m_s(s), m_keyer(s.grid, scene.bounds) {
   check_memory(s);
   m_table = std::make_unique<CellTable>(s.capacity);
-  m_cuts = std::make_unique<CutStore>(m_tree, s.capacity, s.cut, reward_scale(scene));
+  // Guided: the rewards are ratios to the tree's importance, of the order of a reflectance.
+  m_cuts = std::make_unique<CutStore>(m_tree, s.capacity, s.cut, s.cut.guided ? 1.0 : reward_scale(scene));
   m_last_used = std::make_unique<std::atomic<uint32_t>[]>(s.capacity);
   for (uint32_t c = 0; c < s.capacity; ++c) m_last_used[c].store(0, std::memory_order_relaxed);
   m_points = std::make_unique<std::atomic<int64_t>[]>(size_t(s.capacity) * kPointWords);
@@ -258,8 +265,10 @@ SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
     int at = path.index_of(v.nodes[s.cluster]);
     float within = path.product(at, path.length - 1);
     s.cluster_pmf = within > 0 ? s.pmf / within : s.pmf;
+    if (m_s.cut.guided) s.cluster_importance = m_tree.importance(v.nodes[s.cluster], ctx.p, ctx.n);
     return s;
   }
+  if (m_s.cut.guided) return sample_guided(ctx, v, u);
   const float eps = m_s.defensive == Defensive::Tree ? m_cuts->defensive_weight(ctx.cell) : 0.0f;
   uint32_t k, l;
   float within;
@@ -313,9 +322,69 @@ float RllLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
     if (!m_s.cold_uniform) return tree_descend_pmf(m_tree, LightTree::kRoot, light, ctx.p, ctx.n);
     return pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], light) / float(v.size);
   }
+  if (m_s.cut.guided) return pmf_guided(ctx, v, light);
   float within = pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], light);
   float cluster_pmf;
   return mixture_pmf(ctx, v, k, light, within, nullptr, &cluster_pmf);
+}
+
+SampledLight RllLightSampler::sample_guided(const LightContext& ctx, const View& v, double u) const {
+  const float *gl = m_cuts->guide_left(ctx.cell), *gr = m_cuts->guide_right(ctx.cell);
+  uint32_t index = LightTree::kRoot, k0 = 0, k1 = v.size;
+  float pmf = 1, importance = -1;
+  while (k1 - k0 > 1) {
+    // An inner node above the cut: its children meet at the boundary after cluster j.
+    const LightTreeNode& node = m_tree.node(index);
+    const uint32_t j = uint32_t(std::lower_bound(v.ends + k0, v.ends + k1, m_tree.node(node.child).end) - v.ends);
+    float i0 = -1, i1 = -1;
+    const float p0 = first_child_probability(m_tree, node, ctx.p, ctx.n, gl[j], gr[j], &i0, &i1);
+    if (u < p0) {
+      u = std::min(u / p0, 0x1.fffffffffffffp-1);
+      pmf *= p0;
+      index = node.child;
+      k1 = j + 1;
+      importance = i0;
+    } else {
+      u = std::min((u - p0) / (1 - p0), 0x1.fffffffffffffp-1);
+      pmf *= 1 - p0;
+      index = node.child + 1;
+      k0 = j + 1;
+      importance = i1;
+    }
+  }
+  if (!(pmf > 0)) return {};
+  // The cluster is reached (index == v.nodes[k0]); its importance, where the last step did not
+  // compute it (a group node, or a cut of one cluster).
+  if (importance < 0) importance = m_tree.importance(index, ctx.p, ctx.n);
+  SampledLight w = sample_within(ctx, index, k0 > 0 ? v.ends[k0 - 1] : 0, v.ends[k0], u);
+  if (!(w.pmf > 0)) return {};
+  w.cluster = k0;
+  w.cluster_pmf = pmf;
+  w.cluster_importance = importance;
+  w.pmf = pmf * w.pmf;
+  return w.pmf > 0 ? w : SampledLight{};
+}
+
+float RllLightSampler::pmf_guided(const LightContext& ctx, const View& v, uint32_t light) const {
+  const float *gl = m_cuts->guide_left(ctx.cell), *gr = m_cuts->guide_right(ctx.cell);
+  uint32_t index = LightTree::kRoot, k0 = 0, k1 = v.size;
+  float pmf = 1;
+  while (k1 - k0 > 1) {
+    const LightTreeNode& node = m_tree.node(index);
+    const uint32_t j = uint32_t(std::lower_bound(v.ends + k0, v.ends + k1, m_tree.node(node.child).end) - v.ends);
+    const float p0 = first_child_probability(m_tree, node, ctx.p, ctx.n, gl[j], gr[j], nullptr, nullptr);
+    if (light < v.ends[j]) {
+      pmf *= p0;
+      index = node.child;
+      k1 = j + 1;
+    } else {
+      pmf *= 1 - p0;
+      index = node.child + 1;
+      k0 = j + 1;
+    }
+    if (pmf == 0) return 0;
+  }
+  return pmf * pmf_within(ctx, index, k0 > 0 ? v.ends[k0 - 1] : 0, v.ends[k0], light);
 }
 
 void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) {
@@ -327,7 +396,14 @@ void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, con
   // r = estimate / P(l|s). The original code divided by the full pdf (fixed point P ~ sqrt(I)).
   float reward = 0;
   switch (m_s.reward) {
-    case RewardKind::Cluster: reward = estimate / within; break;
+    case RewardKind::Cluster:
+      reward = estimate / within;
+      if (m_s.cut.guided) {
+        // The ratio of the cluster's contribution to the tree's importance of it at the point.
+        if (!(s.cluster_importance > 0)) return;
+        reward /= s.cluster_importance;
+      }
+      break;
     case RewardKind::FullPdf: reward = estimate / s.pmf; break;
     case RewardKind::Fermat:
       if (!(r.unoccluded > 0)) return;  // the light cannot reach here at all: no reward
@@ -509,7 +585,8 @@ nlohmann::json RllLightSampler::describe() const {
         {"q_init", m_s.cut.q_init},
         {"cold", m_s.cold_uniform ? "uniform" : "tree"},
         {"sample_jitter", m_s.sample_jitter},
-        {"reset_every", m_s.reset_every}}},
+        {"reset_every", m_s.reset_every},
+        {"sampling", m_s.cut.guided ? "guided" : "table"}}},
       {"resets", m_resets},
       {"passes", m_pass},
       {"cells_used", m_table->used()},

@@ -114,6 +114,11 @@ class RllLightSampler final : public LightSampler {
   // `path`: a descent from the root that reached l, if the caller has one (saves the reach).
   float mixture_pmf(const LightContext& ctx, const View& v, uint32_t k, uint32_t l, float within,
                     const DescentPath* path, float* cluster_pmf) const;
+  // The guided descent (rll.sampling=guided) of a cell with a cut: from the root, each step by
+  // the children's importance times the cell's factors, down to a cluster of the cut; then the
+  // light inside it as `within` says.
+  SampledLight sample_guided(const LightContext& ctx, const View& v, double u) const;
+  float pmf_guided(const LightContext& ctx, const View& v, uint32_t light) const;
   void refresh_light_powers(const Scene& scene);
 
   const LightTree& m_tree;

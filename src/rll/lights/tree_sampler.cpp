@@ -13,24 +13,36 @@ constexpr int kMaxDepth = kMaxTreeDepth;
 // pmf 0 although they can contribute.
 constexpr float kMinStep = 0x1p-24f;
 
+}  // namespace
+
 // Probability of the first child of an inner node. A group node splits by the number of groups
 // under each child that can contribute at the point (equal shares, as pbrt-v4 gives its infinite
 // lights and its BVH: shares by importance had 20% more error on cornell-boxes-room, the same on
-// arch-interior); any other node in proportion to importance.
+// arch-interior); any other node in proportion to importance. Each child's share is scaled by its
+// factor (1 for the plain tree; rll's learnt factors for its guided descent), which is positive,
+// so that a child is chosen with positive probability exactly where the plain tree would.
 // Where both children have zero importance (the parent's looser bounds admitted a subtree whose
 // own bounds exclude the point, so none of its lights can contribute) the choice falls back to
 // power, then to light count, so that the pmfs over all lights always sum to one.
-inline float first_child_probability(const LightTree& tree, const LightTreeNode& node,
-                                     const Vec3& p, const Vec3& n) {
+float first_child_probability(const LightTree& tree, const LightTreeNode& node, const Vec3& p, const Vec3& n,
+                              float g0, float g1, float* importance0, float* importance1) {
   if (node.group) {
     int c0 = tree.contributing_groups(node.child, p, n),
         c1 = tree.contributing_groups(node.child + 1, p, n);
-    if (c0 + c1 > 0) return float(c0) / float(c0 + c1);
+    if (c0 + c1 > 0) {
+      if (c0 == 0 || c1 == 0) return c0 > 0 ? 1.0f : 0.0f;
+      const double w0 = double(c0) * g0, w1 = double(c1) * g1;
+      return clamp(float(w0 / (w0 + w1)), kMinStep, 1 - kMinStep);
+    }
   } else {
     float i0 = tree.importance(node.child, p, n);
     float i1 = tree.importance(node.child + 1, p, n);
-    if (i0 > 0 && i1 > 0)
-      return clamp(float(double(i0) / (double(i0) + double(i1))), kMinStep, 1 - kMinStep);
+    if (importance0) *importance0 = i0;
+    if (importance1) *importance1 = i1;
+    if (i0 > 0 && i1 > 0) {
+      const double w0 = double(i0) * g0, w1 = double(i1) * g1;
+      return clamp(float(w0 / (w0 + w1)), kMinStep, 1 - kMinStep);
+    }
     if (i0 > 0 || i1 > 0) return i0 > 0 ? 1.0f : 0.0f;
   }
   const LightTreeNode &a = tree.node(node.child), &b = tree.node(node.child + 1);
@@ -40,6 +52,12 @@ inline float first_child_probability(const LightTree& tree, const LightTreeNode&
     w1 = float(b.light_count());
   }
   return w0 / (w0 + w1);
+}
+
+namespace {
+inline float first_child_probability(const LightTree& tree, const LightTreeNode& node, const Vec3& p,
+                                     const Vec3& n) {
+  return first_child_probability(tree, node, p, n, 1.0f, 1.0f, nullptr, nullptr);
 }
 }  // namespace
 

@@ -41,6 +41,13 @@ SampledLight tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, c
 float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, const Vec3& p,
                        const Vec3& n);
 
+// The probability that a descent at inner node `node` goes to its first child, each child's
+// share (by importance, or by contributing groups at a group node) scaled by a positive factor
+// g0, g1 (1, 1: the light tree's own step, as tree_descend takes it). The children's importances
+// are written to importance0/1 where computed (not at group nodes).
+float first_child_probability(const LightTree& tree, const LightTreeNode& node, const Vec3& p, const Vec3& n,
+                              float g0, float g1, float* importance0, float* importance1);
+
 // The probability that a descent from the root passes through `node` (1 for the root).
 float tree_reach_pmf(const LightTree& tree, uint32_t node, const Vec3& p, const Vec3& n);
 
