@@ -251,8 +251,10 @@ class CutStore {
   void record(uint32_t cell, uint32_t k, float reward) {
     const size_t i = size_t(cell) * m_m + k;
     const double x = double(reward) * m_inv_unit[cell];
-    m_sum[i].add(x);
-    m_sq[i].add(std::min(x, kMaxRootOfSquare) * std::min(x, kMaxRootOfSquare));
+    if (x > 0) {  // (a zero reward, an occluded sample, only counts)
+      m_sum[i].add(x);
+      m_sq[i].add(std::min(x, kMaxRootOfSquare) * std::min(x, kMaxRootOfSquare));
+    }
     m_count[i].fetch_add(1, std::memory_order_relaxed);
   }
 
