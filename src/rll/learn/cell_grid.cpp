@@ -99,8 +99,16 @@ uint64_t CellKeyer::key(const CellCoord& c) const {
   uint64_t h = mix64(uint64_t(c.x) * 0x9e3779b97f4a7c15ull ^ uint64_t(c.level + 64));
   h = mix64(h ^ (uint64_t(c.y) * 0xc2b2ae3d27d4eb4full));
   h = mix64(h ^ (uint64_t(c.z) * 0x165667b19e3779f9ull));
-  h = mix64(h ^ (uint64_t(c.nu) << 16 | uint64_t(c.nv)));
+  // (A cell not binned by direction, dir 0, keeps the key it had before direction bins.)
+  h = mix64(h ^ (uint64_t(c.dir) << 32 | uint64_t(c.nu) << 16 | uint64_t(c.nv)));
   return h | 1;  // 0 means "empty"
+}
+
+uint32_t CellKeyer::direction_bin(const Vec3& wo) const {
+  const int bins = m_s.direction_bins;
+  const Vec2 o = octahedral_encode(normalize(wo));
+  const int u = clamp(int(std::floor(o.x * bins)), 0, bins - 1), v = clamp(int(std::floor(o.y * bins)), 0, bins - 1);
+  return 1 + uint32_t(u * bins + v);
 }
 
 CellAnchor CellKeyer::anchor(const CellCoord& c) const {

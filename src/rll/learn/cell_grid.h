@@ -22,6 +22,10 @@ struct CellGridSettings {
   // boundaries but applies each cell's learnt state to a region it did not learn: on
   // cornell-boxes-room it doubled RLL's error, so it is off by default (bench/RESULTS.md).
   float jitter = 0;
+  // Bins per axis of an octahedral map of the view direction wo, for points on glossy surfaces
+  // (0: none): such a point's cell is also keyed by where it is seen from (Wang et al. 2021 bin
+  // wo 8 x 8), since its BSDF, and so which lights matter, depends on wo.
+  int direction_bins = 0;
 };
 
 // The integer coordinates of a cell in the 5D grid.
@@ -29,6 +33,7 @@ struct CellCoord {
   int64_t x = 0, y = 0, z = 0;
   int level = 0;  // edge = scene diameter * 2^level
   int nu = 0, nv = 0;  // octahedral normal bin
+  uint32_t dir = 0;    // 1 + the view direction's bin on a glossy surface; 0: not binned
 };
 
 // A representative point of a cell: the centre of its box and of its normal bin.
@@ -53,6 +58,8 @@ class CellKeyer {
   CellCoord locate_jittered(const Vec3& p, const Vec3& n, float footprint, float u, Vec2 disk,
                             Vec2 normal) const;
   uint64_t key(const CellCoord& c) const;
+  // 1 + the octahedral bin of the direction wo (any length > 0), direction_bins per axis.
+  uint32_t direction_bin(const Vec3& wo) const;
   uint64_t key(const Vec3& p, const Vec3& n, float footprint, float u) const { return key(locate(p, n, footprint, u)); }
   // The cell's centre under this pass's jitter (a function of the coordinates alone).
   CellAnchor anchor(const CellCoord& c) const;

@@ -47,6 +47,7 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   s.grid.max_cell = p.get_float(key("max_cell"), s.grid.max_cell);
   s.grid.normal_bins = int(p.get_int(key("normal_bins"), s.grid.normal_bins));
   s.grid.jitter = p.get_float(key("jitter"), s.grid.jitter);
+  s.grid.direction_bins = int(p.get_int_in(key("direction_bins"), s.grid.direction_bins, 0, 16));
   s.cut.rule = LearningRule(choice("learning", int(s.cut.rule), {"shrinkage", "exponential"}));
   s.cut.prior_samples = p.get_float(key("prior_samples"), s.cut.prior_samples);
   s.cut.trust = p.get_float(key("trust"), s.cut.trust);
@@ -154,6 +155,7 @@ void RllLightSampler::prepare(LightContext& ctx, float u) const {
   } else {
     coord = m_keyer.locate(ctx.p, ctx.n, ctx.footprint, u);
   }
+  if (m_s.grid.direction_bins > 0 && ctx.glossy && length_sq(ctx.wo) > 0) coord.dir = m_keyer.direction_bin(ctx.wo);
   bool created = false;
   uint32_t cell = m_table->find_or_insert(m_keyer.key(coord), &created);
   if (cell == CellTable::kNone) return;  // table full: no cell until eviction makes room
@@ -586,7 +588,8 @@ nlohmann::json RllLightSampler::describe() const {
         {"cold", m_s.cold_uniform ? "uniform" : "tree"},
         {"sample_jitter", m_s.sample_jitter},
         {"reset_every", m_s.reset_every},
-        {"sampling", m_s.cut.guided ? "guided" : "table"}}},
+        {"sampling", m_s.cut.guided ? "guided" : "table"},
+        {"direction_bins", m_s.grid.direction_bins}}},
       {"resets", m_resets},
       {"passes", m_pass},
       {"cells_used", m_table->used()},

@@ -188,6 +188,7 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     v.ctx.n = bsdf.geometric_normal();
     v.ctx.ns = bsdf.shading_normal();
     v.ctx.wo = wo;
+    v.ctx.glossy = mat.type != MaterialType::Diffuse;
     v.ctx.footprint = footprint;
     if (bsdf.has_transmission()) {
       // Light reaches a transmissive surface from both sides: no normal, so that no sampler
