@@ -20,7 +20,17 @@ def load(name):
         return None
     with open(path) as f:
         j = json.load(f)
-    return j if j.get("samplers") else None  # an interrupted compare leaves no samplers
+    if not j.get("samplers"):
+        return None  # an interrupted compare leaves no samplers
+    # A comparison left in out_dir by an earlier run of other settings (a part this run left out)
+    # is not this run's: its section keeps the previous RESULTS' figures, marked as such.
+    res = re.search(r"res=(\d+)x(\d+)", settings)
+    if res and j.get("resolution") != [int(res.group(1)), int(res.group(2))]:
+        return None
+    secs = re.search(r"seconds=([0-9.]+)", settings)
+    if secs and "time" in j.get("budget", {}) and abs(j["budget"]["time"] - float(secs.group(1))) > 1e-9:
+        return None
+    return j
 
 
 def med(s, key):
@@ -82,8 +92,13 @@ PBRT_SEED_TO_SEED = {"cornell-boxes-room": 0.00087, "arch-interior": 0.00015}
 lines = []
 P = lines.append
 previous = {}  # sections of the RESULTS.md being replaced, by title
+previous_run = ""  # the commit and settings of the run that measured them
 if os.path.exists(results):
-    for part in re.split(r"(?m)^## ", open(results).read())[1:]:
+    text = open(results).read()
+    m = re.search(r"commit `([0-9a-f]+)`.*?Settings: `([^`]*)`", text)
+    if m:
+        previous_run = f" (commit `{m.group(1)}`, `{m.group(2)}`)"
+    for part in re.split(r"(?m)^## ", text)[1:]:
         title, _, body = part.partition("\n")
         previous[title.strip()] = body.strip()
 
@@ -93,7 +108,7 @@ def keep_previous(title):
     body = previous.get(title)
     if body is None:
         return
-    note = "*Not re-measured in this run (`BENCH_PARTS`): the figures below are from the previous run.*"
+    note = f"*Not re-measured in this run (`BENCH_PARTS`): the figures below are from the previous run{previous_run}.*"
     if not body.startswith("*Not re-measured"):
         body = note + "\n\n" + body
     P(body + "\n")
