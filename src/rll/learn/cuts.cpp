@@ -272,17 +272,16 @@ void CutStore::bake_guide(uint32_t cell, const Cut& cut, const std::vector<doubl
     double factor() const { return w > 0 ? wg / w : g / count; }
   };
   const uint32_t* ends = &m_end[base];
-  auto visit = [&](auto&& self, uint32_t node, size_t k0, size_t k1) -> Sums {
+  auto visit = [&](auto&& self, uint32_t node, uint32_t k0, uint32_t k1) -> Sums {
     if (k1 - k0 == 1) return {pri[k0], pri[k0] * g[k0], g[k0], 1};
     const LightTreeNode& nd = m_tree.node(node);
-    const uint32_t m = m_tree.node(nd.child).end;
-    const size_t j = size_t(std::lower_bound(ends + k0, ends + k1, m) - ends);  // ends[j] == m
+    const uint32_t j = children_boundary(m_tree, nd, ends, k0, k1);
     Sums a = self(self, nd.child, k0, j + 1), b = self(self, nd.child + 1, j + 1, k1);
     m_gl[base + j] = float(a.factor());
     m_gr[base + j] = float(b.factor());
     return {a.w + b.w, a.wg + b.wg, a.g + b.g, a.count + b.count};
   };
-  visit(visit, LightTree::kRoot, 0, K);
+  visit(visit, LightTree::kRoot, 0u, uint32_t(K));
 }
 
 void CutStore::clear(uint32_t cell) {

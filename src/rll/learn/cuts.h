@@ -84,6 +84,14 @@ struct Scene;
 // so that every scene gets the same relative range of ExactSum (2^-40 to 2^36 of it).
 double reward_scale(const Scene& scene);
 
+// Guided descent: for an inner node above a cut whose clusters [k0, k1) lie under it (`ends` the
+// cut's range ends), the cluster j after which its two children meet: ends[j] is the first
+// child's end, so clusters [k0, j] lie under the first child and [j + 1, k1) under the second.
+inline uint32_t children_boundary(const LightTree& tree, const LightTreeNode& node, const uint32_t* ends,
+                                  uint32_t k0, uint32_t k1) {
+  return uint32_t(std::lower_bound(ends + k0, ends + k1, tree.node(node.child).end) - ends);
+}
+
 // True if the nodes partition [0, light_count) into contiguous ranges in order.
 bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes);
 

@@ -337,7 +337,7 @@ SampledLight RllLightSampler::sample_guided(const LightContext& ctx, const View&
   while (k1 - k0 > 1) {
     // An inner node above the cut: its children meet at the boundary after cluster j.
     const LightTreeNode& node = m_tree.node(index);
-    const uint32_t j = uint32_t(std::lower_bound(v.ends + k0, v.ends + k1, m_tree.node(node.child).end) - v.ends);
+    const uint32_t j = children_boundary(m_tree, node, v.ends, k0, k1);
     float i0 = -1, i1 = -1;
     const float p0 = first_child_probability(m_tree, node, ctx.p, ctx.n, gl[j], gr[j], &i0, &i1);
     if (u < p0) {
@@ -373,7 +373,7 @@ float RllLightSampler::pmf_guided(const LightContext& ctx, const View& v, uint32
   float pmf = 1;
   while (k1 - k0 > 1) {
     const LightTreeNode& node = m_tree.node(index);
-    const uint32_t j = uint32_t(std::lower_bound(v.ends + k0, v.ends + k1, m_tree.node(node.child).end) - v.ends);
+    const uint32_t j = children_boundary(m_tree, node, v.ends, k0, k1);
     const float p0 = first_child_probability(m_tree, node, ctx.p, ctx.n, gl[j], gr[j], nullptr, nullptr);
     if (light < v.ends[j]) {
       pmf *= p0;
