@@ -13,6 +13,7 @@
 
 #include "commands.h"
 #include "rll/core/error.h"
+#include "rll/core/paths.h"
 #include "rll/core/parallel.h"
 #include "rll/core/sysinfo.h"
 #include "rll/eval/compare.h"
@@ -140,8 +141,7 @@ struct ChosenReference {
 
 // A reference file must be a linear, high-dynamic-range image with finite pixels.
 void check_reference_file(const std::string& path, const Image& image) {
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const std::string ext = lower_extension(path);
   if (ext == ".png")
     fail("--reference {}: a PNG holds 8-bit sRGB values clamped at 1, not a rendering's radiance; "
          "give the reference as .exr (or .hdr)",

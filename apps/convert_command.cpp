@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "rll/core/error.h"
+#include "rll/core/paths.h"
 #include "rll/io/load.h"
 #include "rll/io/save.h"
 
@@ -34,8 +35,7 @@ bool is_side_file(const std::string& name, const std::string& stem, const std::s
 
 void convert(const std::string& in, const std::string& out) {
   const fs::path target(out);
-  std::string ext = target.extension().string();
-  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lower_extension(target);
   if (ext != ".json" && ext != ".gltf" && ext != ".pbrt")
     fail("{}: rll writes .json (with .obj and .mtl beside it), .gltf and .pbrt", out);
   if (target.has_parent_path() && !fs::is_directory(target.parent_path()))

@@ -16,17 +16,13 @@
 #include <fstream>
 
 #include "rll/core/error.h"
+#include "rll/core/paths.h"
 
 namespace rll {
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string lower_ext(const fs::path& p) {
-  std::string e = p.extension().string();
-  for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return e;
-}
 
 fs::path temp_sibling(const fs::path& path) {
   static std::atomic<unsigned> counter{0};
@@ -215,7 +211,7 @@ void write_exr(const fs::path& path, const ExrFile& file) {
 }
 
 ExrFile read_exr_file(const fs::path& path) {
-  if (lower_ext(path) != ".exr") fail("'{}' is not an OpenEXR file (.exr)", path.string());
+  if (lower_extension(path) != ".exr") fail("'{}' is not an OpenEXR file (.exr)", path.string());
   read_image_checks(path);
   return read_exr(path, true);
 }
@@ -246,7 +242,7 @@ void write_file_atomic(const fs::path& path, const std::string& bytes) {
 
 void write_image(const fs::path& path, const Image& image, float exposure_stops) {
   check_writable_image(path, image);
-  std::string ext = lower_ext(path);
+  std::string ext = lower_extension(path);
   fs::path tmp = temp_sibling(path);
   if (ext == ".exr") {
     write_exr_to(tmp, path, image, {}, nullptr);
@@ -274,7 +270,7 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
 Image read_image(const fs::path& path, bool srgb) {
   read_image_checks(path);
   std::error_code ec;
-  std::string ext = lower_ext(path);
+  std::string ext = lower_extension(path);
   if (ext == ".exr") return read_exr(path, false).image;
   int w = 0, h = 0, n = 0;
   if (!stbi_info(path.c_str(), &w, &h, &n))

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "rll/core/error.h"
+#include "rll/core/paths.h"
 #include "rll/scene/builtin.h"
 #include "rll/io/text_scan.h"
 
@@ -10,11 +11,6 @@ namespace rll {
 namespace fs = std::filesystem;
 
 namespace {
-std::string lower_extension(const fs::path& p) {
-  std::string e = p.extension().string();
-  for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return e;
-}
 
 // Drops the materials no triangle uses and the textures no remaining material uses: an OBJ
 // brings its whole MTL, and a JSON scene may replace some of those materials.

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "rll/core/error.h"
+#include "rll/core/paths.h"
 #include "rll/scene/interaction.h"
 #include "rll/io/load.h"
 #include "rll/io/text_scan.h"
@@ -835,8 +836,7 @@ void parse_gltf(std::string_view bytes, const std::string& name, const fs::path&
   std::string err, warn;
   if (bytes.empty()) fail("{}: empty file", name);
   const bool binary = bytes.size() >= 4 && bytes.substr(0, 4) == "glTF";
-  std::string ext = fs::path(name).extension().string();
-  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lower_extension(name);
   if (ext == ".glb" || binary) {
     if (bytes.size() < 12)
       fail("{}: not a GLB: {} bytes are too short for its 12-byte header", name, bytes.size());

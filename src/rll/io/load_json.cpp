@@ -11,6 +11,7 @@
 #include <set>
 
 #include "rll/core/error.h"
+#include "rll/core/paths.h"
 #include "rll/scene/builder.h"
 #include "rll/io/load.h"
 #include "rll/io/text_scan.h"
@@ -460,9 +461,7 @@ class JsonSceneReader {
   void read_mesh_file(const json& v, const std::string& ptr) {
     check_object(v, ptr, {"file", "material", "material_map", "transform"});
     const fs::path file = referenced_file(v["file"], child(ptr, "file"));
-    std::string ext = file.extension().string();
-    for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != ".obj")
+    if (lower_extension(file) != ".obj")
       fail("{}: '{}': rll reads meshes from .obj files", child(ptr, "file"), file.string());
     const size_t t0 = m_scene.mesh.triangle_count(), m0 = m_scene.materials.size();
     try {
