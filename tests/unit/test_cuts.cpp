@@ -223,3 +223,79 @@ TEST(CutStore, HalfHiddenClusterGetsMoreUnderMomentAndHiddenFallsToTheFloor) {
   EXPECT_GT(p_hidden, 0.0f);
   EXPECT_LT(p_hidden, 0.2f);
 }
+
+// Pooling: a cell's clusters it has not visited take their values from its coarse cell's
+// distribution (scaled to what the cell's visited clusters say its total is), not from the
+// visibility-blind prior; a visited cluster is shrunk toward it by pool_weight rewards; the pass's
+// rewards reach the coarse sums in absolute units.
+TEST(CutStore, PoolSharesStandInForClustersACellHasNotVisited) {
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
+  const LightTree& tree = *s.light_tree;
+  CutSettings cs;
+  cs.cut_size = cs.initial_size = 8;
+  cs.pool_levels = 1;
+  cs.pool_weight = 8;
+  const double scale = 4.0;
+  CutStore store(tree, 2, cs, scale);
+  ASSERT_EQ(store.initial_size(), 8u);
+  for (uint32_t c = 0; c < 2; ++c) store.set_anchor(c, {Vec3(0, 5, 0), Vec3(0, -1, 0), -4});
+  // Both cells see clusters 0 and 1 only: 0 lit, 1 hidden.
+  for (uint32_t c = 0; c < 2; ++c)
+    for (int i = 0; i < 40; ++i) {
+      store.record(c, 0, 2.0f);
+      store.record(c, 1, 0.0f);
+    }
+  // The pass's rewards in absolute units (the unit before the first pass is the reward scale).
+  std::vector<double> sum(8, 0.0), sq(8, 0.0);
+  std::vector<uint64_t> count(8, 0);
+  store.add_pass_rewards(0, sum.data(), sq.data(), count.data());
+  EXPECT_EQ(count[0], 40u);
+  EXPECT_EQ(count[1], 40u);
+  EXPECT_EQ(count[2], 0u);
+  EXPECT_NEAR(sum[0], 80.0, 1e-6);
+  EXPECT_NEAR(sq[0], 160.0, 1e-6);
+  EXPECT_EQ(sum[1], 0.0);
+  // Cell 0's coarse cell says: cluster 0 and cluster 2 alike, nothing else. Cell 1 has no pool.
+  std::vector<float> pool(8, 0.0f);
+  pool[0] = pool[2] = 0.5f;
+  store.set_pool(0, pool.data());
+  store.set_pool(1, nullptr);
+  store.end_pass(0);
+  store.end_pass(1);
+  const std::vector<double> pooled = store.learnt_shares(0), alone = store.learnt_shares(1);
+  ASSERT_EQ(pooled.size(), 8u);
+  ASSERT_EQ(alone.size(), 8u);
+  // Unvisited cluster 2 gets what the coarse cell gives it relative to cluster 0: the cell's
+  // total is 2 / 0.5 = 4 (cluster 0 is half the coarse distribution), so 2, cluster 0's own value.
+  EXPECT_NEAR(pooled[2] / pooled[0], 1.0, 1e-4);
+  for (size_t k = 3; k < 8; ++k) EXPECT_EQ(pooled[k], 0.0) << "cluster " << k;
+  // The hidden cluster 1 stays at zero: its rewards and the coarse cell agree.
+  EXPECT_EQ(pooled[1], 0.0);
+  // Without a pool, unvisited clusters get the prior's shares, all positive.
+  for (size_t k = 2; k < 8; ++k) EXPECT_GT(alone[k], 0.0) << "cluster " << k;
+  // A visited cluster the coarse cell rates differently is shrunk toward it. Cell 1's coarse
+  // cell says clusters 0 and 1 are alike: the cell's total is (2 + 0) / (0.5 + 0.5) = 2, a guess
+  // of 1 for each, weighed as pool_weight = 8 rewards against each cluster's own 50 (its 4 + 80
+  // rewards, capped at 1 / alpha).
+  pool.assign(8, 0.0f);
+  pool[0] = pool[1] = 0.5f;
+  store.set_pool(1, pool.data());
+  for (int i = 0; i < 40; ++i) {
+    store.record(1, 0, 2.0f);
+    store.record(1, 1, 0.0f);
+  }
+  store.end_pass(1);
+  const std::vector<double> shrunk = store.learnt_shares(1);
+  const double v0 = (50 * 2.0 + 8 * 1.0) / 58, v1 = (50 * 0.0 + 8 * 1.0) / 58;
+  EXPECT_NEAR(shrunk[1] / shrunk[0], v1 / v0, 1e-4);
+  // Its unvisited clusters get the coarse cell's nothing.
+  for (size_t k = 2; k < 8; ++k) EXPECT_EQ(shrunk[k], 0.0) << "cluster " << k;
+  // The store's checks hold.
+  EXPECT_THROW(
+      [&] {
+        CutSettings bad = cs;
+        bad.splits = 2;
+        CutStore s2(tree, 1, bad, 1.0);
+      }(),
+      Error);
+}

@@ -83,6 +83,11 @@ TEST(SamplerState, LoadedSamplerHasTheSavedPmfsAndSamples) {
         EXPECT_EQ(sa.pmf, sb.pmf);
       }
     }
+    // Both learn on alike: the state holds all that learning reads (rll's pooled coarse cells
+    // included), so the same further passes give the same pmfs.
+    train_sampler(t.scene, t.accel, *trained, 4);
+    train_sampler(t.scene, t.accel, *loaded, 4);
+    EXPECT_EQ(largest_pmf_difference(*trained, *loaded, contexts, lights), 0.0f) << name << ", trained on";
   }
 }
 

@@ -130,6 +130,12 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   m_seen.assign(cells, 0.0f);
   m_eps.assign(cells, 1.0f);
   m_anchor.assign(cells, CellAnchor{});
+  if (s.pool_levels > 0) {
+    if (s.splits > 0) fail("rll.pool needs rll.splits=0 (every cell keeps the shared cut)");
+    if (s.guided) fail("rll.pool needs rll.sampling=table");
+    m_pool.assign(n, 0.0f);
+    m_has_pool.assign(cells, 0);
+  }
   m_inv_unit.assign(cells, 1 / m_scale);
   m_sum = std::make_unique<ExactSum[]>(n);
   m_sq = std::make_unique<ExactSum[]>(n);
@@ -137,14 +143,14 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   for (size_t i = 0; i < n; ++i) m_count[i].store(0, std::memory_order_relaxed);
 }
 
-size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided) {
-  const size_t per_cluster_floats = guided ? 7 : 5;
+size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, bool pool) {
+  const size_t per_cluster_floats = guided ? 7 : pool ? 9 : 5;
   const size_t per_cell = size_t(cut_size) * (2 * sizeof(uint32_t) + per_cluster_floats * sizeof(float) + 2 * sizeof(ExactSum) + sizeof(uint32_t)) +
                           sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t) + sizeof(double) + sizeof(CellAnchor);
   return size_t(cells) * per_cell;
 }
 
-size_t CutStore::bytes() const { return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided); }
+size_t CutStore::bytes() const { return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided, m_s.pool_levels > 0); }
 
 float CutStore::weight_of(uint32_t cell, uint32_t node) const {
   if (m_s.prior == ClusterWeight::Power) return m_tree.node(node).bounds.power;
@@ -194,6 +200,47 @@ void CutStore::values(const Cut& cut, const std::vector<double>& pri, std::vecto
     if (cut.q[k] < 0) out[k] = m_s.q_init >= 0 ? m_s.q_init : float(total * pri[k]);
 }
 
+void CutStore::values(uint32_t cell, const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const {
+  values(cut, pri, out);
+  if (m_has_pool.empty() || !m_has_pool[cell]) return;
+  const size_t K = cut.nodes.size();
+  const float* pool = &m_pool[size_t(cell) * m_m];
+  // The cell's total by the coarse distribution: its visited clusters' values over their coarse
+  // shares (at least a quarter, as for the prior).
+  double v_sum = 0, s_sum = 0;
+  for (size_t k = 0; k < K; ++k)
+    if (cut.q[k] >= 0) {
+      v_sum += out[k];
+      s_sum += pool[k];
+    }
+  if (!(v_sum > 0)) return;
+  const double total = v_sum / std::max(s_sum, 0.25);
+  const double c = m_s.pool_weight;
+  for (size_t k = 0; k < K; ++k) {
+    const double guess = total * pool[k];
+    const double n = cut.q[k] >= 0 ? double(cut.n[k]) : 0.0;
+    out[k] = float((n * out[k] + c * guess) / (n + c));
+  }
+}
+
+void CutStore::add_pass_rewards(uint32_t cell, double* sum, double* sq, uint64_t* count) const {
+  const size_t base = size_t(cell) * m_m;
+  const double unit = 1 / m_inv_unit[cell];
+  for (size_t k = 0; k < m_initial.size(); ++k) {
+    const uint32_t n = m_count[base + k].load(std::memory_order_relaxed);
+    if (n == 0) continue;
+    count[k] += n;
+    sum[k] += m_sum[base + k].value() * unit;
+    sq[k] += m_sq[base + k].value() * unit * unit;
+  }
+}
+
+void CutStore::set_pool(uint32_t cell, const float* shares) {
+  if (m_has_pool.empty()) return;
+  m_has_pool[cell] = shares != nullptr;
+  if (shares) std::copy_n(shares, m_initial.size(), &m_pool[size_t(cell) * m_m]);
+}
+
 std::vector<double> CutStore::learnt_shares(uint32_t cell) const {
   if (!active(cell) || !learnt(cell)) return {};
   Cut cut;
@@ -201,7 +248,7 @@ std::vector<double> CutStore::learnt_shares(uint32_t cell) const {
   std::vector<double> pri;
   std::vector<float> val;
   prior(cut, pri);
-  values(cut, pri, val);
+  values(cell, cut, pri, val);
   double sum = 0;
   for (float v : val) sum += v;
   std::vector<double> out(val.size());
@@ -225,7 +272,7 @@ void CutStore::store(uint32_t cell, const Cut& cut) {
   const size_t base = size_t(cell) * m_m, K = cut.nodes.size();
   m_size[cell] = uint32_t(K);
   prior(cut, pri);
-  values(cut, pri, val);
+  values(cell, cut, pri, val);
   // The baked table: P(s) = (1 - e) V(s) / sum V + e prior(s), e the cell's defensive weight
   // (folded in here when the prior lives in the CDF); without any learnt value, the prior alone.
   double v_sum = 0;
@@ -290,6 +337,7 @@ void CutStore::clear(uint32_t cell) {
   m_learnt[cell] = 0;
   m_seen[cell] = 0;
   m_eps[cell] = 1;
+  if (!m_has_pool.empty()) m_has_pool[cell] = 0;
   m_inv_unit[cell] = 1 / m_scale;
   for (int k = 0; k < m_m; ++k) {
     m_sum[base + k].reset();
@@ -352,7 +400,7 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
     thread_local std::vector<double> pri;
     thread_local std::vector<float> val;
     prior(cut, pri);
-    values(cut, pri, val);
+    values(cell, cut, pri, val);
     const bool moment = m_s.target == LearnTarget::Moment;
     const double unit = 1 / m_inv_unit[cell];
     double largest = 0;
@@ -385,7 +433,7 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
     // Split-collapse on the new values: split by the cluster's share of the cell's variance
     // (the standard deviation of its reward) under target=moment, by value (the paper's Q)
     // under target=mean. (The prior is unchanged: folding touches no node or weight.)
-    values(cut, pri, val);
+    values(cell, cut, pri, val);
     thread_local std::vector<float> score;
     score.resize(K);
     for (size_t k = 0; k < K; ++k)

@@ -52,6 +52,14 @@ struct CutSettings {
   // defensive term does not take: the cell's defensive weight is
   // e + (1 - e) * trust / (trust + rewards seen).
   float trust = 256;
+  // Pooling (rll.pool=L, 0: off): every pass, the rewards of all cells whose anchors fall in
+  // one cell L levels coarser are pooled, and that coarse cell learns Q and M2 of its own; a
+  // cell's values are then shrunk toward the coarse cell's distribution (scaled to the cell's
+  // own total) with the weight of `pool_weight` rewards per cluster, in place of the
+  // visibility-blind prior for clusters the cell has not visited. Needs a cut shared by every
+  // cell (splits = 0).
+  int pool_levels = 0;  // (rll's default is 1: RllSettings)
+  float pool_weight = 8;
   ClusterWeight split = ClusterWeight::Importance;
   // The value of a cluster never visited: < 0, the visited clusters' estimate of the cell's total
   // shared by prior; >= 0, this constant (Fermat's RLL starts every Q at 0.01).
@@ -213,7 +221,8 @@ class CutStore {
  public:
   CutStore(const LightTree& tree, uint32_t cells, const CutSettings& settings, double reward_scale);
   // The memory a store of `cells` cells of cuts of `cut_size` clusters takes (bytes()).
-  static size_t bytes_for(uint32_t cells, int cut_size, bool guided = false);
+  // Pooling adds, per cell, its coarse shares and at most one coarse cell's Q, M2 and weights.
+  static size_t bytes_for(uint32_t cells, int cut_size, bool guided = false, bool pool = false);
 
   const CutSettings& settings() const { return m_s; }
   int max_size() const { return m_m; }
@@ -276,6 +285,12 @@ class CutStore {
   PassStats end_pass(uint32_t cell);
   // Light powers or positions changed: recompute prior weights and the CDF of a cell.
   void refresh(uint32_t cell);
+  // Pooling: adds the pass's rewards of `cell` (under the shared cut's indices) in absolute
+  // units to sum, sq and count (each K = initial_size() long).
+  void add_pass_rewards(uint32_t cell, double* sum, double* sq, uint64_t* count) const;
+  // Pooling: the coarse distribution the cell's values are shrunk toward (K shares; nullptr:
+  // none, the prior as without pooling). Called between passes, before end_pass.
+  void set_pool(uint32_t cell, const float* shares);
   // Forgets a cell (eviction).
   void clear(uint32_t cell);
   // Gives a cell a cut with known values (the oracle; value = mean): prior weights from the
@@ -301,6 +316,7 @@ class CutStore {
   // The effective target value of every cluster: sqrt(M2) or Q where visited, else the prior's
   // share of what the visited clusters say the cell's total is.
   void values(const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const;
+  void values(uint32_t cell, const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const;
   // Guided descent: bakes guide_left/right of a cell from its cut's values and prior.
   void bake_guide(uint32_t cell, const Cut& cut, const std::vector<double>& pri, const std::vector<float>& val,
                   double eps);
@@ -321,6 +337,8 @@ class CutStore {
   std::vector<float> m_seen;      // per cell: rewards received so far
   std::vector<float> m_eps;       // per cell: defensive weight, frozen during a pass
   std::vector<CellAnchor> m_anchor;
+  std::vector<float> m_pool;        // pooling: per cluster, the coarse cell's share
+  std::vector<uint8_t> m_has_pool;  // pooling: per cell, m_pool holds shares
   std::vector<double> m_inv_unit;  // per cell: 1 / the unit of its sums during this pass
   std::unique_ptr<ExactSum[]> m_sum, m_sq;            // per cluster: rewards and their squares
   std::unique_ptr<std::atomic<uint32_t>[]> m_count;  // per cluster: rewards this pass

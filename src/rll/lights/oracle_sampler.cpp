@@ -82,6 +82,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
   fixed.grid.jitter = 0;  // one fixed grid: the oracle's cells never move
   fixed.cut.guided = false;  // the oracle knows each cluster's contribution: a table per cell
   fixed.grid.direction_bins = 0;  // its discovery paths find cells by position and normal only
+  fixed.cut.pool_levels = 0;  // it knows each cell's clusters: nothing to pool
   m_rll = std::make_unique<RllLightSampler>(scene, fixed);
   const LightTree& tree = *scene.light_tree;
 

@@ -51,6 +51,9 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   s.cut.rule = LearningRule(choice("learning", int(s.cut.rule), {"shrinkage", "exponential"}));
   s.cut.prior_samples = p.get_float(key("prior_samples"), s.cut.prior_samples);
   s.cut.trust = p.get_float(key("trust"), s.cut.trust);
+  s.cut.pool_levels = int(p.get_int_in(key("pool"), s.cut.pool_levels, 0, 8));
+  s.cut.pool_weight = p.get_float(key("pool_weight"), s.cut.pool_weight);
+  if (!(s.cut.pool_weight >= 0) || !std::isfinite(s.cut.pool_weight)) bad("pool_weight", "must be >= 0");
   s.cold_uniform = choice("cold", s.cold_uniform ? 1 : 0, {"tree", "uniform"}) == 1;
   s.sample_jitter = p.get_float(key("sample_jitter"), s.sample_jitter);
   s.reset_every = uint32_t(p.get_int_in(key("reset_every"), s.reset_every, 0, 1l << 30));
@@ -61,6 +64,12 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
     if (s.cold_uniform) bad("sampling", "guided needs cold=tree");
   }
   if (!(s.cut.trust >= 0)) bad("trust", "must not be negative");
+  // Pooling needs the cut every cell shares: with growing cuts or the guided descent it is off
+  // unless asked for (then an error).
+  if (s.cut.pool_levels > 0 && (s.cut.splits > 0 || s.cut.guided)) {
+    if (p.has(key("pool"))) bad("pool", "needs splits=0 and sampling=table (a cut every cell shares)");
+    s.cut.pool_levels = 0;
+  }
   if (!(s.cut.prior_samples > 0)) bad("prior_samples", "must be positive");
   if (!(s.grid.footprint_scale > 0)) bad("footprint_scale", "must be positive");
   if (!(s.grid.max_cell > 0 && s.grid.max_cell <= 1)) bad("max_cell", "must be in (0, 1]");
@@ -84,6 +93,7 @@ RllSettings fermat_settings() {
   s.cut.splits = 1;
   s.cut.epsilon = 0.75f;  // P(s) = 0.75 / K + 0.25 Q(s) / sum Q from the first reward on
   s.cut.trust = 0;
+  s.cut.pool_levels = 0;
   s.cut.prior = ClusterWeight::Uniform;
   s.cut.split = ClusterWeight::Uniform;
   s.cut.q_init = 0.01f;
@@ -102,7 +112,7 @@ namespace {
 void check_memory(const RllSettings& s) {
   // The cell table, the cuts and the point sums, allocated up front: refuse a configuration the
   // machine cannot hold rather than grow towards the out-of-memory killer.
-  const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided)) +
+  const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_levels > 0)) +
                         double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t));
   const size_t usable = usable_memory_bytes();
   if (usable > 0 && needed > 0.8 * double(usable))
@@ -424,7 +434,6 @@ void RllLightSampler::end_pass() {
   for (uint32_t c = 0; c < cap; ++c)
     if (m_table->in_use(c)) cells.push_back(c);
   parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
-    uint32_t sp = 0, co = 0, to = 0;
     for (size_t i = b; i < e; ++i) {
       const uint32_t c = cells[i];
       std::atomic<int64_t>* w = &m_points[size_t(c) * kPointWords];
@@ -438,6 +447,13 @@ void RllLightSampler::end_pass() {
         m_cuts->set_anchor(c, a);
       }
       for (int j = 0; j < kPointWords; ++j) w[j].store(0, std::memory_order_relaxed);
+    }
+  });
+  if (m_s.cut.pool_levels > 0) pool_pass(cells);
+  parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
+    uint32_t sp = 0, co = 0, to = 0;
+    for (size_t i = b; i < e; ++i) {
+      const uint32_t c = cells[i];
       CutStore::PassStats st = m_cuts->end_pass(c);
       sp += st.splits;
       co += st.collapses;
@@ -491,8 +507,83 @@ void RllLightSampler::end_pass() {
       if (m_table->in_use(c)) all.push_back(c);
     for (uint32_t c : all) m_cuts->clear(c);
     m_table->remove_and_rebuild(all);
+    m_pool.clear();
     ++m_resets;
   }
+}
+
+uint64_t RllLightSampler::coarse_key(uint32_t cell) const {
+  // The anchor, a mean of the cell's points, lies inside the cell, so the coarse cell holds it.
+  const CellAnchor& a = m_cuts->anchor(cell);
+  return m_keyer.key(m_keyer.locate_at_level(a.p, a.n, a.level + m_s.cut.pool_levels));
+}
+
+void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
+  const size_t K = m_cuts->initial_size();
+  // Sums in the order of the cells' keys, so that they do not depend on which thread created
+  // which cell id.
+  std::vector<std::pair<uint64_t, uint32_t>> order;
+  order.reserve(cells.size());
+  for (uint32_t c : cells) order.emplace_back(m_table->key_of(c), c);
+  std::sort(order.begin(), order.end());
+  struct Pass {
+    std::vector<double> sum, sq;
+    std::vector<uint64_t> count;
+  };
+  std::map<uint64_t, Pass> pass;
+  for (const auto& [key, c] : order) {
+    Pass& p = pass[coarse_key(c)];
+    if (p.sum.empty()) {
+      p.sum.assign(K, 0.0);
+      p.sq.assign(K, 0.0);
+      p.count.assign(K, 0);
+    }
+    m_cuts->add_pass_rewards(c, p.sum.data(), p.sq.data(), p.count.data());
+  }
+  // Fold into the coarse cells by the shrinkage rule without a prior (a cluster's first rewards
+  // are its values); coarse cells no cell uses any more are forgotten.
+  const double cap = 1.0 / m_s.cut.alpha;
+  std::map<uint64_t, PoolCell> kept;
+  for (auto& [key, p] : pass) {
+    PoolCell& pc = kept[key];
+    if (auto it = m_pool.find(key); it != m_pool.end()) pc = std::move(it->second);
+    if (pc.q.empty()) {
+      pc.q.assign(K, -1.0f);
+      pc.m2.assign(K, 0.0f);
+      pc.n.assign(K, 0.0f);
+    }
+    for (size_t k = 0; k < K; ++k) {
+      if (p.count[k] == 0) continue;
+      const double n = double(p.count[k]), mean = p.sum[k] / n, mean2 = std::max(p.sq[k] / n, mean * mean);
+      const double w = pc.q[k] >= 0 ? std::min(double(pc.n[k]), cap) : 0.0;
+      pc.q[k] = float((w * std::max(pc.q[k], 0.0f) + n * mean) / (w + n));
+      pc.m2[k] = float((w * pc.m2[k] + n * mean2) / (w + n));
+      pc.n[k] = float(std::min(w + n, cap));
+    }
+  }
+  m_pool = std::move(kept);
+  give_pool_shares(cells);
+}
+
+void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells) {
+  const size_t K = m_cuts->initial_size();
+  const bool moment = m_s.cut.target == LearnTarget::Moment;
+  parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
+    std::vector<float> shares(K);
+    for (size_t i = b; i < e; ++i) {
+      const auto it = m_pool.find(coarse_key(cells[i]));
+      double total = 0;
+      if (it != m_pool.end()) {
+        const PoolCell& pc = it->second;
+        for (size_t k = 0; k < K; ++k) {
+          shares[k] = pc.q[k] < 0 ? 0.0f : moment ? std::sqrt(std::max(pc.m2[k], 0.0f)) : pc.q[k];
+          total += shares[k];
+        }
+        for (size_t k = 0; k < K; ++k) shares[k] = float(shares[k] / total);
+      }
+      m_cuts->set_pool(cells[i], total > 0 ? shares.data() : nullptr);
+    }
+  });
 }
 
 void RllLightSampler::lights_changed(const Scene& scene) {
@@ -513,6 +604,15 @@ void RllLightSampler::save_state(BinaryWriter& w) const {
     w.put(m_table->key_of(c));
     w.put(m_last_used[c].load(std::memory_order_relaxed));
     m_cuts->save_cell(c, w);
+  }
+  if (m_s.cut.pool_levels > 0) {  // the coarse cells, in key order
+    w.put(uint32_t(m_pool.size()));
+    for (const auto& [key, pc] : m_pool) {
+      w.put(key);
+      w.put_array(pc.q.data(), pc.q.size());
+      w.put_array(pc.m2.data(), pc.m2.size());
+      w.put_array(pc.n.data(), pc.n.size());
+    }
   }
 }
 
@@ -541,12 +641,41 @@ void RllLightSampler::load_state(BinaryReader& r) {
     m_last_used[c].store(last, std::memory_order_relaxed);
     m_cuts->load_cell(c, r);
   }
+  m_pool.clear();
+  if (m_s.cut.pool_levels > 0) {
+    const size_t K = m_cuts->initial_size();
+    const uint32_t count = r.get<uint32_t>();
+    if (count > used) damaged("more coarse cells than cells");
+    uint64_t last = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+      const uint64_t key = r.get<uint64_t>();
+      if (i > 0 && key <= last) damaged("coarse cells out of order");
+      last = key;
+      PoolCell& pc = m_pool[key];
+      pc.q.resize(K);
+      pc.m2.resize(K);
+      pc.n.resize(K);
+      r.get_array(pc.q.data(), K);
+      r.get_array(pc.m2.data(), K);
+      r.get_array(pc.n.data(), K);
+      for (size_t k = 0; k < K; ++k)
+        if (!((pc.q[k] >= 0 || pc.q[k] == -1) && std::isfinite(pc.q[k]) && pc.m2[k] >= 0 && std::isfinite(pc.m2[k]) &&
+              pc.n[k] >= 0 && std::isfinite(pc.n[k])))
+          damaged("a coarse cell's value is negative or not finite");
+    }
+  }
   if (r.remaining() != 0) damaged("bytes after the last cell");
   if (!m_table->restore(key_of)) damaged("a cell key twice");
   for (size_t i = 0; i < size_t(m_s.capacity) * kPointWords; ++i) m_points[i].store(0, std::memory_order_relaxed);
   m_pass = pass;
   m_resets = resets;
   m_keyer.set_pass(m_pass, 0);
+  if (m_s.cut.pool_levels > 0) {
+    std::vector<uint32_t> cells;
+    for (uint32_t c = 0; c < m_s.capacity; ++c)
+      if (m_table->in_use(c)) cells.push_back(c);
+    give_pool_shares(cells);
+  }
 }
 
 nlohmann::json RllLightSampler::describe() const {
@@ -584,6 +713,8 @@ nlohmann::json RllLightSampler::describe() const {
         {"learning", m_s.cut.rule == LearningRule::Shrinkage ? "shrinkage" : "exponential"},
         {"prior_samples", m_s.cut.prior_samples},
         {"trust", m_s.cut.trust},
+        {"pool", m_s.cut.pool_levels},
+        {"pool_weight", m_s.cut.pool_weight},
         {"q_init", m_s.cut.q_init},
         {"cold", m_s.cold_uniform ? "uniform" : "tree"},
         {"sample_jitter", m_s.sample_jitter},
@@ -598,6 +729,7 @@ nlohmann::json RllLightSampler::describe() const {
       {"evictions", m_evictions},
       {"failed_inserts", m_failed_inserts},
       {"mean_cut_size", active ? mean_cut / active : 0.0},
+      {"pool_cells", m_pool.size()},
       {"splits_per_pass", m_splits_per_pass},
       {"collapses_per_pass", m_collapses_per_pass},
       {"cells_touched_per_pass", m_touched_per_pass},

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <atomic>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -32,9 +33,16 @@ enum class RewardKind { Cluster, FullPdf, Fermat };
 // itself (a walk from the root per sample and per pmf).
 enum class Defensive { Cell, Tree };
 
+// rll's cut settings: CutSettings' own, with pooling one level up (docs/rll.md, "Pooling").
+inline CutSettings rll_cut_defaults() {
+  CutSettings c;
+  c.pool_levels = 1;
+  return c;
+}
+
 struct RllSettings {
   std::string name = "rll";  // the sampler's name: rll, or fermat (the paper's settings)
-  CutSettings cut;
+  CutSettings cut = rll_cut_defaults();
   CellGridSettings grid;
   uint32_t capacity = 32768;  // cells
   WithinCluster within = WithinCluster::Tree;
@@ -120,6 +128,18 @@ class RllLightSampler final : public LightSampler {
   SampledLight sample_guided(const LightContext& ctx, const View& v, double u) const;
   float pmf_guided(const LightContext& ctx, const View& v, uint32_t light) const;
   void refresh_light_powers(const Scene& scene);
+  // Pooling (rll.pool): pools this pass's rewards of the cells into their coarse cells, folds
+  // them into the coarse cells' values and gives every cell its coarse cell's shares.
+  void pool_pass(const std::vector<uint32_t>& cells);
+  // Pooling: the coarse cell of a cell (its anchor, pool levels up).
+  uint64_t coarse_key(uint32_t cell) const;
+  // Pooling: gives each cell its coarse cell's shares (none where that has no values).
+  void give_pool_shares(const std::vector<uint32_t>& cells);
+
+  struct PoolCell {  // a coarse cell: Q, M2 and reward weight per cluster of the shared cut
+    std::vector<float> q, m2, n;
+  };
+  std::map<uint64_t, PoolCell> m_pool;  // by coarse key (ordered: deterministic iteration)
 
   const LightTree& m_tree;
   RllSettings m_s;

@@ -14,7 +14,7 @@ namespace rll {
 
 class LightSampler;
 
-inline constexpr uint32_t kSamplerStateVersion = 1;
+inline constexpr uint32_t kSamplerStateVersion = 2;
 
 // Throws rll::Error if the sampler learns nothing that can be saved.
 void check_sampler_has_state(const LightSampler& sampler, const char* flag);
