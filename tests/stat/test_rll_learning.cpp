@@ -198,6 +198,44 @@ TEST(RllLearning, GuidedDescentLearnsTheOccludedLamp) {
   EXPECT_LT(ratios[ratios.size() * 9 / 10], 0.5f);
 }
 
+// Pooling end to end: the floor's cells pool their rewards into coarse cells, each coarse
+// cell holds several cells, and what the coarse cells learnt about the hidden lamp reaches
+// every learnt cell as a share near zero, while a visibility-blind prior rates it highly.
+TEST(RllLearning, PooledCoarseCellsLearnTheOccludedLamp) {
+  Scene scene = two_lamps();
+  const LightTree& tree = *scene.light_tree;
+  const uint32_t a = tree.node(LightTree::kRoot).child, b = a + 1;
+  const uint32_t node_b = scene.lights[tree.node(b).begin].centroid().x > 2 ? b : a;
+  Trained t = train(scene, 8, 1, {"rll.pool=1"});
+  const nlohmann::json d = t.sampler->describe();
+  const uint64_t cells = d["cells_used"].get<uint64_t>(), pooled = d["pool_cells"].get<uint64_t>();
+  std::printf("%llu cells pooled into %llu coarse cells\n", (unsigned long long)cells, (unsigned long long)pooled);
+  EXPECT_GT(pooled, 0u);
+  EXPECT_LT(pooled, cells) << "a coarse cell holds the cells of a region twice as wide";
+  int checked = 0;
+  std::vector<float> shares_b;
+  for (int k = 0; k < 40; ++k) {
+    LightContext c = floor_point(scene, *t.sampler, k);
+    if (c.cell == kNoCell || !t.sampler->cuts().learnt(c.cell)) continue;
+    const float* pool = t.sampler->cuts().pool_shares(c.cell);
+    ASSERT_NE(pool, nullptr) << "a learnt cell without its coarse cell's shares";
+    const uint32_t kb = t.sampler->cuts().nodes(c.cell)[0] == node_b ? 0 : 1;
+    EXPECT_NEAR(pool[0] + pool[1], 1.0f, 1e-5f);
+    if (tree_reach_pmf(tree, node_b, c.p, c.n) > 0.3f) shares_b.push_back(pool[kb]);
+    ++checked;
+  }
+  ASSERT_GT(checked, 20);
+  ASSERT_GT(shares_b.size(), 5u) << "the test needs cells where the tree rates the hidden lamp highly";
+  std::sort(shares_b.begin(), shares_b.end());
+  std::printf("coarse share of the hidden lamp: median %.4f, max %.4f\n", shares_b[shares_b.size() / 2],
+              shares_b.back());
+  // Every reward of lamp B on the floor is zero, so the coarse cells give it nothing.
+  EXPECT_LT(shares_b.back(), 0.01f);
+  // Without pooling there are no coarse cells.
+  Trained alone = train(scene, 2, 1, {"rll.pool=0"});
+  EXPECT_EQ(alone.sampler->describe()["pool_cells"].get<uint64_t>(), 0u);
+}
+
 TEST(RllLearning, SameStateWhateverTheThreadCount) {
   // Rewards are summed in fixed point, so the learnt state, and every image rendered with it,
   // does not depend on the order in which threads delivered the rewards.

@@ -291,6 +291,10 @@ class CutStore {
   // Pooling: the coarse distribution the cell's values are shrunk toward (K shares; nullptr:
   // none, the prior as without pooling). Called between passes, before end_pass.
   void set_pool(uint32_t cell, const float* shares);
+  // Pooling: the shares set_pool gave the cell (initial_size() of them), nullptr if none.
+  const float* pool_shares(uint32_t cell) const {
+    return !m_has_pool.empty() && m_has_pool[cell] ? &m_pool[size_t(cell) * m_m] : nullptr;
+  }
   // Forgets a cell (eviction).
   void clear(uint32_t cell);
   // Gives a cell a cut with known values (the oracle; value = mean): prior weights from the

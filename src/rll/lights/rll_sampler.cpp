@@ -579,7 +579,8 @@ void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells) {
           shares[k] = pc.q[k] < 0 ? 0.0f : moment ? std::sqrt(std::max(pc.m2[k], 0.0f)) : pc.q[k];
           total += shares[k];
         }
-        for (size_t k = 0; k < K; ++k) shares[k] = float(shares[k] / total);
+        if (total > 0)
+          for (size_t k = 0; k < K; ++k) shares[k] = float(shares[k] / total);
       }
       m_cuts->set_pool(cells[i], total > 0 ? shares.data() : nullptr);
     }
