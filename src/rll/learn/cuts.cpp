@@ -407,21 +407,17 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
     for (size_t k = 0; k < K; ++k) {
       uint32_t n = m_count[base + k].load(std::memory_order_relaxed);
       if (n == 0) continue;
-      double mean = m_sum[base + k].value() * unit / n;
-      // E[r^2] >= E[r]^2 also where squares fell below the resolution.
-      double mean2 = std::max(m_sq[base + k].value() * unit * unit / n, mean * mean);
+      const RewardMoments r(n, m_sum[base + k].value() * unit, m_sq[base + k].value() * unit * unit);
       // The prior estimate of a cluster never visited: its effective value, without variance.
       double old_q = cut.q[k] >= 0 ? cut.q[k] : val[k];
       double old_m2 = cut.q[k] >= 0 ? cut.m2[k] : double(val[k]) * val[k];
       if (m_s.rule == LearningRule::Exponential) {
         double bk = std::exp(double(n) * m_log_keep);
-        cut.q[k] = float(bk * old_q + (1 - bk) * mean);
-        cut.m2[k] = float(bk * old_m2 + (1 - bk) * mean2);
+        cut.q[k] = float(bk * old_q + (1 - bk) * r.mean);
+        cut.m2[k] = float(bk * old_m2 + (1 - bk) * r.mean2);
       } else {
         double w = cut.q[k] >= 0 ? std::min(double(cut.n[k]), 1.0 / m_s.alpha) : double(m_s.prior_samples);
-        cut.q[k] = float((w * old_q + n * mean) / (w + n));
-        cut.m2[k] = float((w * old_m2 + n * mean2) / (w + n));
-        cut.n[k] = float(std::min(w + n, 1.0 / m_s.alpha));
+        shrinkage_fold(cut.q[k], cut.m2[k], cut.n[k], w, old_q, old_m2, n, r, 1.0 / m_s.alpha);
       }
       largest = std::max(largest, std::sqrt(double(cut.m2[k])));
       m_sum[base + k].reset();

@@ -87,6 +87,23 @@ std::vector<uint32_t> refine_cut(const LightTree& tree, int size, double (*prior
 // The shared initial cut: refine_cut by light count.
 std::vector<uint32_t> initial_cut(const LightTree& tree, int size);
 
+// A pass's rewards of a cluster, n of them with absolute sum `sum` and sum of squares `sq`: their
+// mean and second moment (E[r^2] >= E[r]^2 also where squares fell below the sums' resolution).
+struct RewardMoments {
+  double mean, mean2;
+  RewardMoments(double n, double sum, double sq) : mean(sum / n), mean2(std::max(sq / n, mean * mean)) {}
+};
+
+// The shrinkage rule (LearningRule::Shrinkage) for one cluster: values old_q and old_m2, held
+// with the weight of w rewards, and n new rewards of moments r give the weighted means; the
+// weight becomes w + n, at most cap (1 / alpha).
+inline void shrinkage_fold(float& q, float& m2, float& weight, double w, double old_q, double old_m2, double n,
+                           const RewardMoments& r, double cap) {
+  q = float((w * old_q + n * r.mean) / (w + n));
+  m2 = float((w * old_m2 + n * r.mean2) / (w + n));
+  weight = float(std::min(w + n, cap));
+}
+
 struct Scene;
 // The unit of the learning samplers' exact reward sums: the brightest light's largest irradiance,
 // so that every scene gets the same relative range of ExactSum (2^-40 to 2^36 of it).

@@ -512,33 +512,40 @@ void RllLightSampler::end_pass() {
   }
 }
 
-uint64_t RllLightSampler::coarse_key(uint32_t cell) const {
-  // The anchor, a mean of the cell's points, lies inside the cell, so the coarse cell holds it.
-  const CellAnchor& a = m_cuts->anchor(cell);
-  return m_keyer.key(m_keyer.locate_at_level(a.p, a.n, a.level + m_s.cut.pool_levels));
+std::vector<uint64_t> RllLightSampler::coarse_keys(const std::vector<uint32_t>& cells) const {
+  std::vector<uint64_t> keys(cells.size());
+  parallel_for(cells.size(), 256, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      // The anchor, a mean of the cell's points, lies inside the cell, so the coarse cell holds it.
+      const CellAnchor& a = m_cuts->anchor(cells[i]);
+      keys[i] = m_keyer.key(m_keyer.locate_at_level(a.p, a.n, a.level + m_s.cut.pool_levels));
+    }
+  });
+  return keys;
 }
 
 void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
   const size_t K = m_cuts->initial_size();
   // Sums in the order of the cells' keys, so that they do not depend on which thread created
   // which cell id.
-  std::vector<std::pair<uint64_t, uint32_t>> order;
+  const std::vector<uint64_t> coarse = coarse_keys(cells);
+  std::vector<std::pair<uint64_t, size_t>> order;  // (cell key, index in cells)
   order.reserve(cells.size());
-  for (uint32_t c : cells) order.emplace_back(m_table->key_of(c), c);
+  for (size_t i = 0; i < cells.size(); ++i) order.emplace_back(m_table->key_of(cells[i]), i);
   std::sort(order.begin(), order.end());
   struct Pass {
     std::vector<double> sum, sq;
     std::vector<uint64_t> count;
   };
   std::map<uint64_t, Pass> pass;
-  for (const auto& [key, c] : order) {
-    Pass& p = pass[coarse_key(c)];
+  for (const auto& [key, i] : order) {
+    Pass& p = pass[coarse[i]];
     if (p.sum.empty()) {
       p.sum.assign(K, 0.0);
       p.sq.assign(K, 0.0);
       p.count.assign(K, 0);
     }
-    m_cuts->add_pass_rewards(c, p.sum.data(), p.sq.data(), p.count.data());
+    m_cuts->add_pass_rewards(cells[i], p.sum.data(), p.sq.data(), p.count.data());
   }
   // Fold into the coarse cells by the shrinkage rule without a prior (a cluster's first rewards
   // are its values); coarse cells no cell uses any more are forgotten.
@@ -554,24 +561,22 @@ void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
     }
     for (size_t k = 0; k < K; ++k) {
       if (p.count[k] == 0) continue;
-      const double n = double(p.count[k]), mean = p.sum[k] / n, mean2 = std::max(p.sq[k] / n, mean * mean);
-      const double w = pc.q[k] >= 0 ? std::min(double(pc.n[k]), cap) : 0.0;
-      pc.q[k] = float((w * std::max(pc.q[k], 0.0f) + n * mean) / (w + n));
-      pc.m2[k] = float((w * pc.m2[k] + n * mean2) / (w + n));
-      pc.n[k] = float(std::min(w + n, cap));
+      const double n = double(p.count[k]), w = pc.q[k] >= 0 ? std::min(double(pc.n[k]), cap) : 0.0;
+      shrinkage_fold(pc.q[k], pc.m2[k], pc.n[k], w, std::max(pc.q[k], 0.0f), pc.m2[k], n,
+                     RewardMoments(n, p.sum[k], p.sq[k]), cap);
     }
   }
   m_pool = std::move(kept);
-  give_pool_shares(cells);
+  give_pool_shares(cells, coarse);
 }
 
-void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells) {
+void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells, const std::vector<uint64_t>& coarse) {
   const size_t K = m_cuts->initial_size();
   const bool moment = m_s.cut.target == LearnTarget::Moment;
   parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
     std::vector<float> shares(K);
     for (size_t i = b; i < e; ++i) {
-      const auto it = m_pool.find(coarse_key(cells[i]));
+      const auto it = m_pool.find(coarse[i]);
       double total = 0;
       if (it != m_pool.end()) {
         const PoolCell& pc = it->second;
@@ -675,7 +680,7 @@ void RllLightSampler::load_state(BinaryReader& r) {
     std::vector<uint32_t> cells;
     for (uint32_t c = 0; c < m_s.capacity; ++c)
       if (m_table->in_use(c)) cells.push_back(c);
-    give_pool_shares(cells);
+    give_pool_shares(cells, coarse_keys(cells));
   }
 }
 

@@ -131,10 +131,11 @@ class RllLightSampler final : public LightSampler {
   // Pooling (rll.pool): pools this pass's rewards of the cells into their coarse cells, folds
   // them into the coarse cells' values and gives every cell its coarse cell's shares.
   void pool_pass(const std::vector<uint32_t>& cells);
-  // Pooling: the coarse cell of a cell (its anchor, pool levels up).
-  uint64_t coarse_key(uint32_t cell) const;
-  // Pooling: gives each cell its coarse cell's shares (none where that has no values).
-  void give_pool_shares(const std::vector<uint32_t>& cells);
+  // Pooling: the coarse cell of each cell (its anchor, pool levels up).
+  std::vector<uint64_t> coarse_keys(const std::vector<uint32_t>& cells) const;
+  // Pooling: gives each cell its coarse cell's shares (none where that has no values);
+  // `coarse[i]` is the coarse key of cells[i].
+  void give_pool_shares(const std::vector<uint32_t>& cells, const std::vector<uint64_t>& coarse);
 
   struct PoolCell {  // a coarse cell: Q, M2 and reward weight per cluster of the shared cut
     std::vector<float> q, m2, n;
