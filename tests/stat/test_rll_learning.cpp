@@ -198,15 +198,12 @@ TEST(RllLearning, GuidedDescentLearnsTheOccludedLamp) {
   EXPECT_LT(ratios[ratios.size() * 9 / 10], 0.5f);
 }
 
-// Pooling end to end: the floor's cells pool their rewards into coarse cells, each coarse
-// cell holds several cells, and what the coarse cells learnt about the hidden lamp reaches
-// every learnt cell as a share near zero, while a visibility-blind prior rates it highly.
-TEST(RllLearning, PooledCoarseCellsLearnTheOccludedLamp) {
-  Scene scene = two_lamps();
+namespace {
+// Trains rll with `settings` on two_lamps() and checks that every learnt floor cell has its coarse
+// cell's shares, and that they give the hidden lamp (node_b) nothing where the tree rates it highly.
+void check_pooled_hidden_lamp(const Scene& scene, uint32_t node_b, const std::vector<std::string>& settings) {
   const LightTree& tree = *scene.light_tree;
-  const uint32_t a = tree.node(LightTree::kRoot).child, b = a + 1;
-  const uint32_t node_b = scene.lights[tree.node(b).begin].centroid().x > 2 ? b : a;
-  Trained t = train(scene, 8, 1, {"rll.pool=1"});
+  Trained t = train(scene, 8, 1, settings);
   const nlohmann::json d = t.sampler->describe();
   const uint64_t cells = d["cells_used"].get<uint64_t>(), pooled = d["pool_cells"].get<uint64_t>();
   std::printf("%llu cells pooled into %llu coarse cells\n", (unsigned long long)cells, (unsigned long long)pooled);
@@ -231,6 +228,24 @@ TEST(RllLearning, PooledCoarseCellsLearnTheOccludedLamp) {
               shares_b.back());
   // Every reward of lamp B on the floor is zero, so the coarse cells give it nothing.
   EXPECT_LT(shares_b.back(), 0.01f);
+}
+}  // namespace
+
+// Pooling end to end: the floor's cells pool their rewards into coarse cells, each coarse
+// cell holds several cells, and what the coarse cells learnt about the hidden lamp reaches
+// every learnt cell as a share near zero, while a visibility-blind prior rates it highly.
+TEST(RllLearning, PooledCoarseCellsLearnTheOccludedLamp) {
+  Scene scene = two_lamps();
+  const LightTree& tree = *scene.light_tree;
+  const uint32_t a = tree.node(LightTree::kRoot).child, b = a + 1;
+  const uint32_t node_b = scene.lights[tree.node(b).begin].centroid().x > 2 ? b : a;
+  // Both guesses (the coarse cell's share of the rewards, its factor on each cell's prior), and
+  // two tiers of coarse cells.
+  for (const char* guess : {"share", "ratio"}) {
+    SCOPED_TRACE(guess);
+    check_pooled_hidden_lamp(scene, node_b, {"rll.pool=1", std::string("rll.pool_guess=") + guess});
+    check_pooled_hidden_lamp(scene, node_b, {"rll.pool=1", "rll.pool_up=1", std::string("rll.pool_guess=") + guess});
+  }
   // Without pooling there are no coarse cells.
   Trained alone = train(scene, 2, 1, {"rll.pool=0"});
   EXPECT_EQ(alone.sampler->describe()["pool_cells"].get<uint64_t>(), 0u);
@@ -297,9 +312,12 @@ TEST(RllLearning, RewardsOfANewCellReachTheClustersOfTheirLights) {
   // inherited that cell's refined cut, while its own first rewards, recorded under the initial
   // cut's cluster indices, were folded in under the inherited cut's indices: onto the wrong
   // clusters. Inheritance is gone (bench/RESULTS.md: it almost never fired); a new cell's
-  // rewards must land on the clusters of the lights that earned them.
+  // rewards must land on the clusters of the lights that earned them. Without pooling: the two
+  // cells disagree by construction, and pooling (tested on its own below) would rightly pull
+  // each toward what the other saw (with two tiers the fine cell's upper coarse cell is the
+  // coarse cell's first).
   Scene scene = small_builtin_scene("many-lights-open", 32, 24);
-  RllLightSampler rll(scene, rll_settings_from(Params()));
+  RllLightSampler rll(scene, rll_settings_from(Params::parse({"rll.pool=0"})));
   const uint32_t L = uint32_t(scene.lights.size()), half = L / 2;
   LightContext coarse;
   coarse.p = scene.bounds.center();

@@ -299,3 +299,75 @@ TEST(CutStore, PoolSharesStandInForClustersACellHasNotVisited) {
       }(),
       Error);
 }
+
+// pool_guess=ratio: the pass's rewards reach the coarse sums divided by the cell's own prior
+// share of their cluster (that of the initial cut at the anchor while the cell has no cut yet),
+// so that cells far from and near to a light pool the same visibility factor.
+TEST(CutStore, PoolRatioDividesRewardsByTheCellsOwnPrior) {
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
+  const LightTree& tree = *s.light_tree;
+  CutSettings cs;
+  cs.cut_size = cs.initial_size = 8;
+  cs.pool_levels = 1;
+  cs.pool_ratio = true;
+  CutStore store(tree, 2, cs, 1.0);
+  // Two anchors over different parts of the field: different priors.
+  const Bounds3 box = tree.node(LightTree::kRoot).bounds.box;
+  store.set_anchor(0, {box.lo + Vec3(0, 1, 0), Vec3(0, -1, 0), -4});
+  store.set_anchor(1, {box.hi + Vec3(0, 1, 0), Vec3(0, -1, 0), -4});
+  std::vector<double> p0, p1;
+  store.cell_prior(0, p0);  // no cut yet: the initial cut's prior at the anchor
+  store.cell_prior(1, p1);
+  ASSERT_EQ(p0.size(), 8u);
+  ASSERT_EQ(p1.size(), 8u);
+  double sum0 = 0, differ = 0;
+  for (size_t k = 0; k < 8; ++k) {
+    EXPECT_GT(p0[k], 0.0) << "cluster " << k;
+    sum0 += p0[k];
+    differ = std::max(differ, std::abs(p0[k] - p1[k]));
+  }
+  EXPECT_NEAR(sum0, 1.0, 1e-9);
+  EXPECT_GT(differ, 0.05) << "the test needs anchors the prior tells apart";
+  for (int i = 0; i < 10; ++i) {
+    store.record(0, 0, 2.0f);
+    store.record(0, 3, 1.0f);
+  }
+  std::vector<double> sum(8, 0.0), sq(8, 0.0);
+  std::vector<uint64_t> count(8, 0);
+  store.add_pass_rewards(0, sum.data(), sq.data(), count.data());
+  EXPECT_EQ(count[0], 10u);
+  EXPECT_EQ(count[3], 10u);
+  EXPECT_NEAR(sum[0], 20.0 / p0[0], 1e-6 * sum[0]);
+  EXPECT_NEAR(sq[0], 40.0 / (p0[0] * p0[0]), 1e-6 * sq[0]);
+  EXPECT_NEAR(sum[3], 10.0 / p0[3], 1e-6 * sum[3]);
+  // Once the cell has its cut, its prior is the cut's, the same weights at the same anchor.
+  store.end_pass(0);
+  std::vector<double> after;
+  store.cell_prior(0, after);
+  for (size_t k = 0; k < 8; ++k) EXPECT_NEAR(after[k], p0[k], 1e-6) << "cluster " << k;
+}
+
+// The pooling rule: visited values are shrunk toward the shares scaled to the visited total,
+// unvisited ones take the guess, pool_weight = 0 included (0 / 0 before).
+TEST(CutStore, ShrinkTowardSharesScaledToTheVisitedTotal) {
+  const bool visited[4] = {true, true, false, false};
+  const float n[4] = {50, 50, 0, 0}, shares[4] = {0.5f, 0.25f, 0.25f, 0};
+  auto is_visited = [&](size_t k) { return visited[k]; };
+  // The visited total: (2 + 0) / (0.5 + 0.25); guesses 4/3, 2/3, 2/3 and 0.
+  float v[4] = {2, 0, 7, 7};
+  shrink_toward(4, is_visited, n, shares, 8.0, v);
+  EXPECT_NEAR(v[0], (50 * 2.0 + 8 * 4.0 / 3) / 58, 1e-6);
+  EXPECT_NEAR(v[1], (8 * 2.0 / 3) / 58, 1e-6);
+  EXPECT_NEAR(v[2], 2.0 / 3, 1e-6);
+  EXPECT_EQ(v[3], 0.0f);
+  float w[4] = {2, 0, 7, 7};
+  shrink_toward(4, is_visited, n, shares, 0.0, w);
+  EXPECT_EQ(w[0], 2.0f);
+  EXPECT_EQ(w[1], 0.0f);
+  EXPECT_NEAR(w[2], 2.0 / 3, 1e-6);
+  EXPECT_EQ(w[3], 0.0f);
+  // Nothing visited is positive: nothing to scale by, the values stand.
+  float z[4] = {0, 0, 7, 7};
+  shrink_toward(4, is_visited, n, shares, 8.0, z);
+  EXPECT_EQ(z[2], 7.0f);
+}

@@ -51,9 +51,10 @@ float largest_pmf_difference(const LightSampler& a, const LightSampler& b,
 }  // namespace
 
 TEST(SamplerState, LoadedSamplerHasTheSavedPmfsAndSamples) {
-  // rll's table, Fermat's, and rll's guided descent (its factors baked again on loading).
+  // rll's table, Fermat's, rll's guided descent (its factors baked again on loading), and rll
+  // pooling in two tiers, by ratio (both tiers' coarse cells saved).
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
-      {"rll", {}}, {"fermat", {}}, {"rll", {"rll.sampling=guided"}}};
+      {"rll", {}}, {"fermat", {}}, {"rll", {"rll.sampling=guided"}}, {"rll", {"rll.pool_up=1", "rll.pool_guess=ratio"}}};
   for (const auto& [name, set] : cases) {
     Trained t;
     auto trained = t.make(name, set);

@@ -143,14 +143,14 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   for (size_t i = 0; i < n; ++i) m_count[i].store(0, std::memory_order_relaxed);
 }
 
-size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, bool pool) {
-  const size_t per_cluster_floats = guided ? 7 : pool ? 9 : 5;
+size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, int pool_tiers) {
+  const size_t per_cluster_floats = guided ? 7 : pool_tiers > 0 ? 6 + 3 * size_t(pool_tiers) : 5;
   const size_t per_cell = size_t(cut_size) * (2 * sizeof(uint32_t) + per_cluster_floats * sizeof(float) + 2 * sizeof(ExactSum) + sizeof(uint32_t)) +
                           sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t) + sizeof(double) + sizeof(CellAnchor);
   return size_t(cells) * per_cell;
 }
 
-size_t CutStore::bytes() const { return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided, m_s.pool_levels > 0); }
+size_t CutStore::bytes() const { return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided, m_s.pool_levels > 0 ? 1 + (m_s.pool_up > 0) : 0); }
 
 float CutStore::weight_of(uint32_t cell, uint32_t node) const {
   if (m_s.prior == ClusterWeight::Power) return m_tree.node(node).bounds.power;
@@ -204,35 +204,35 @@ void CutStore::values(uint32_t cell, const Cut& cut, const std::vector<double>& 
   values(cut, pri, out);
   if (m_has_pool.empty() || !m_has_pool[cell]) return;
   const size_t K = cut.nodes.size();
-  const float* pool = &m_pool[size_t(cell) * m_m];
-  // The cell's total by the coarse distribution: its visited clusters' values over their coarse
-  // shares (at least a quarter, as for the prior).
-  double v_sum = 0, s_sum = 0;
-  for (size_t k = 0; k < K; ++k)
-    if (cut.q[k] >= 0) {
-      v_sum += out[k];
-      s_sum += pool[k];
-    }
-  if (!(v_sum > 0)) return;
-  const double total = v_sum / std::max(s_sum, 0.25);
-  const double c = m_s.pool_weight;
-  for (size_t k = 0; k < K; ++k) {
-    const double guess = total * pool[k];
-    const double n = cut.q[k] >= 0 ? double(cut.n[k]) : 0.0;
-    out[k] = float((n * out[k] + c * guess) / (n + c));
-  }
+  shrink_toward(K, [&](size_t k) { return cut.q[k] >= 0; }, cut.n.data(), &m_pool[size_t(cell) * m_m],
+                m_s.pool_weight, out.data());
 }
 
 void CutStore::add_pass_rewards(uint32_t cell, double* sum, double* sq, uint64_t* count) const {
   const size_t base = size_t(cell) * m_m;
   const double unit = 1 / m_inv_unit[cell];
+  thread_local std::vector<double> pri;
+  if (m_s.pool_ratio) cell_prior(cell, pri);
   for (size_t k = 0; k < m_initial.size(); ++k) {
     const uint32_t n = m_count[base + k].load(std::memory_order_relaxed);
     if (n == 0) continue;
+    const double u = m_s.pool_ratio ? unit / pri[k] : unit;
     count[k] += n;
-    sum[k] += m_sum[base + k].value() * unit;
-    sq[k] += m_sq[base + k].value() * unit * unit;
+    sum[k] += m_sum[base + k].value() * u;
+    sq[k] += m_sq[base + k].value() * u * u;
   }
+}
+
+void CutStore::cell_prior(uint32_t cell, std::vector<double>& out) const {
+  thread_local Cut cut;
+  if (active(cell)) {
+    load(cell, cut);
+  } else {  // no cut yet (new in this pass): the initial cut's, at the cell's anchor
+    cut.nodes = m_initial;
+    cut.weight.resize(m_initial.size());
+    for (size_t k = 0; k < m_initial.size(); ++k) cut.weight[k] = weight_of(cell, m_initial[k]);
+  }
+  prior(cut, out);
 }
 
 void CutStore::set_pool(uint32_t cell, const float* shares) {

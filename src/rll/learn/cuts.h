@@ -60,6 +60,16 @@ struct CutSettings {
   // cell (splits = 0).
   int pool_levels = 0;  // (rll's default is 1: RllSettings)
   float pool_weight = 8;
+  // What the coarse cell learns (rll.pool_guess): false (share), Q and M2 of the pooled
+  // rewards, its distribution taken as the cell's; true (ratio), of the rewards divided by each
+  // cell's own prior share of their cluster, so that the guess is the cell's prior times the
+  // coarse cell's factor per cluster (visibility seen by the neighbours, the light's falloff
+  // seen at the cell's own anchor).
+  bool pool_ratio = false;
+  // Pooling in two tiers (rll.pool_up=U, 0: off): a coarse cell's values are themselves shrunk,
+  // by the same rule and weight, toward those of the cell U levels coarser still, which pools
+  // every cell under it; where the first tier has few rewards of a cluster, the second speaks.
+  int pool_up = 0;
   ClusterWeight split = ClusterWeight::Importance;
   // The value of a cluster never visited: < 0, the visited clusters' estimate of the cell's total
   // shared by prior; >= 0, this constant (Fermat's RLL starts every Q at 0.01).
@@ -102,6 +112,28 @@ inline void shrinkage_fold(float& q, float& m2, float& weight, double w, double 
   q = float((w * old_q + n * r.mean) / (w + n));
   m2 = float((w * old_m2 + n * r.mean2) / (w + n));
   weight = float(std::min(w + n, cap));
+}
+
+// Pooling: shrinks K values, each held with the weight of n[k] rewards (visited[k] false: none,
+// and the value is ignored), toward a distribution `shares` scaled to what the visited values say
+// the total is (their sum over their shares, the shares' sum taken as at least a quarter, so that
+// one bright, rarely chosen cluster does not inflate every unvisited one): each becomes
+// (n v + c guess) / (n + c), an unvisited one the guess (also for c = 0). Unchanged where no
+// visited value is positive.
+template <class Visited>
+void shrink_toward(size_t K, Visited visited, const float* n, const float* shares, double c, float* values) {
+  double v_sum = 0, s_sum = 0;
+  for (size_t k = 0; k < K; ++k)
+    if (visited(k)) {
+      v_sum += values[k];
+      s_sum += shares[k];
+    }
+  if (!(v_sum > 0)) return;
+  const double total = v_sum / std::max(s_sum, 0.25);
+  for (size_t k = 0; k < K; ++k) {
+    const double guess = total * shares[k], w = visited(k) ? double(n[k]) : 0.0;
+    values[k] = w + c > 0 ? float((w * values[k] + c * guess) / (w + c)) : float(guess);
+  }
 }
 
 struct Scene;
@@ -238,8 +270,9 @@ class CutStore {
  public:
   CutStore(const LightTree& tree, uint32_t cells, const CutSettings& settings, double reward_scale);
   // The memory a store of `cells` cells of cuts of `cut_size` clusters takes (bytes()).
-  // Pooling adds, per cell, its coarse shares and at most one coarse cell's Q, M2 and weights.
-  static size_t bytes_for(uint32_t cells, int cut_size, bool guided = false, bool pool = false);
+  // Pooling in `pool_tiers` tiers (0: off) adds, per cell, its coarse shares and at most one
+  // coarse cell's Q, M2 and weights per tier.
+  static size_t bytes_for(uint32_t cells, int cut_size, bool guided = false, int pool_tiers = 0);
 
   const CutSettings& settings() const { return m_s; }
   int max_size() const { return m_m; }
@@ -303,8 +336,12 @@ class CutStore {
   // Light powers or positions changed: recompute prior weights and the CDF of a cell.
   void refresh(uint32_t cell);
   // Pooling: adds the pass's rewards of `cell` (under the shared cut's indices) in absolute
-  // units to sum, sq and count (each K = initial_size() long).
+  // units to sum, sq and count (each K = initial_size() long); with pool_ratio, each divided by
+  // the cell's prior share of its cluster (cell_prior).
   void add_pass_rewards(uint32_t cell, double* sum, double* sq, uint64_t* count) const;
+  // The normalized prior of every cluster of the cell's cut, as its baked table mixes it in (of
+  // the initial cut at the cell's anchor while it has no cut).
+  void cell_prior(uint32_t cell, std::vector<double>& out) const;
   // Pooling: the coarse distribution the cell's values are shrunk toward (K shares; nullptr:
   // none, the prior as without pooling). Called between passes, before end_pass.
   void set_pool(uint32_t cell, const float* shares);

@@ -83,6 +83,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
   fixed.cut.guided = false;  // the oracle knows each cluster's contribution: a table per cell
   fixed.grid.direction_bins = 0;  // its discovery paths find cells by position and normal only
   fixed.cut.pool_levels = 0;  // it knows each cell's clusters: nothing to pool
+  fixed.cut.pool_up = 0;
   m_rll = std::make_unique<RllLightSampler>(scene, fixed);
   const LightTree& tree = *scene.light_tree;
 

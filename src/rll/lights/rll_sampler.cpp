@@ -54,6 +54,8 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   s.cut.pool_levels = int(p.get_int_in(key("pool"), s.cut.pool_levels, 0, 8));
   s.cut.pool_weight = p.get_float(key("pool_weight"), s.cut.pool_weight);
   if (!(s.cut.pool_weight >= 0) || !std::isfinite(s.cut.pool_weight)) bad("pool_weight", "must be >= 0");
+  s.cut.pool_ratio = choice("pool_guess", s.cut.pool_ratio ? 1 : 0, {"share", "ratio"}) == 1;
+  s.cut.pool_up = int(p.get_int_in(key("pool_up"), s.cut.pool_up, 0, 8));
   s.cold_uniform = choice("cold", s.cold_uniform ? 1 : 0, {"tree", "uniform"}) == 1;
   s.sample_jitter = p.get_float(key("sample_jitter"), s.sample_jitter);
   s.reset_every = uint32_t(p.get_int_in(key("reset_every"), s.reset_every, 0, 1l << 30));
@@ -69,6 +71,10 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   if (s.cut.pool_levels > 0 && (s.cut.splits > 0 || s.cut.guided)) {
     if (p.has(key("pool"))) bad("pool", "needs splits=0 and sampling=table (a cut every cell shares)");
     s.cut.pool_levels = 0;
+  }
+  if (s.cut.pool_levels == 0) {
+    if (p.has(key("pool_up")) && s.cut.pool_up > 0) bad("pool_up", "needs pooling (pool > 0)");
+    s.cut.pool_up = 0;
   }
   if (!(s.cut.prior_samples > 0)) bad("prior_samples", "must be positive");
   if (!(s.grid.footprint_scale > 0)) bad("footprint_scale", "must be positive");
@@ -94,6 +100,7 @@ RllSettings fermat_settings() {
   s.cut.epsilon = 0.75f;  // P(s) = 0.75 / K + 0.25 Q(s) / sum Q from the first reward on
   s.cut.trust = 0;
   s.cut.pool_levels = 0;
+  s.cut.pool_up = 0;
   s.cut.prior = ClusterWeight::Uniform;
   s.cut.split = ClusterWeight::Uniform;
   s.cut.q_init = 0.01f;
@@ -112,7 +119,7 @@ namespace {
 void check_memory(const RllSettings& s) {
   // The cell table, the cuts and the point sums, allocated up front: refuse a configuration the
   // machine cannot hold rather than grow towards the out-of-memory killer.
-  const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_levels > 0)) +
+  const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_levels > 0 ? 1 + (s.cut.pool_up > 0) : 0)) +
                         double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t));
   const size_t usable = usable_memory_bytes();
   if (usable > 0 && needed > 0.8 * double(usable))
@@ -512,13 +519,13 @@ void RllLightSampler::end_pass() {
   }
 }
 
-std::vector<uint64_t> RllLightSampler::coarse_keys(const std::vector<uint32_t>& cells) const {
+std::vector<uint64_t> RllLightSampler::coarse_keys(const std::vector<uint32_t>& cells, int up) const {
   std::vector<uint64_t> keys(cells.size());
   parallel_for(cells.size(), 256, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
       // The anchor, a mean of the cell's points, lies inside the cell, so the coarse cell holds it.
       const CellAnchor& a = m_cuts->anchor(cells[i]);
-      keys[i] = m_keyer.key(m_keyer.locate_at_level(a.p, a.n, a.level + m_s.cut.pool_levels));
+      keys[i] = m_keyer.key(m_keyer.locate_at_level(a.p, a.n, a.level + m_s.cut.pool_levels + up));
     }
   });
   return keys;
@@ -529,6 +536,10 @@ void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
   // Sums in the order of the cells' keys, so that they do not depend on which thread created
   // which cell id.
   const std::vector<uint64_t> coarse = coarse_keys(cells);
+  // Two tiers (pool_up): every cell's rewards also reach the cell pool_up levels coarser still.
+  // Keys hold the level, so both tiers live in one map; a coarse cell of either tier sums the
+  // cells under it.
+  const std::vector<uint64_t> upper = m_s.cut.pool_up > 0 ? coarse_keys(cells, m_s.cut.pool_up) : std::vector<uint64_t>();
   std::vector<std::pair<uint64_t, size_t>> order;  // (cell key, index in cells)
   order.reserve(cells.size());
   for (size_t i = 0; i < cells.size(); ++i) order.emplace_back(m_table->key_of(cells[i]), i);
@@ -539,13 +550,15 @@ void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
   };
   std::map<uint64_t, Pass> pass;
   for (const auto& [key, i] : order) {
-    Pass& p = pass[coarse[i]];
-    if (p.sum.empty()) {
-      p.sum.assign(K, 0.0);
-      p.sq.assign(K, 0.0);
-      p.count.assign(K, 0);
+    for (int tier = 0; tier < (upper.empty() ? 1 : 2); ++tier) {
+      Pass& p = pass[tier == 0 ? coarse[i] : upper[i]];
+      if (p.sum.empty()) {
+        p.sum.assign(K, 0.0);
+        p.sq.assign(K, 0.0);
+        p.count.assign(K, 0);
+      }
+      m_cuts->add_pass_rewards(cells[i], p.sum.data(), p.sq.data(), p.count.data());
     }
-    m_cuts->add_pass_rewards(cells[i], p.sum.data(), p.sq.data(), p.count.data());
   }
   // Fold into the coarse cells by the shrinkage rule without a prior (a cluster's first rewards
   // are its values); coarse cells no cell uses any more are forgotten.
@@ -567,21 +580,42 @@ void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
     }
   }
   m_pool = std::move(kept);
-  give_pool_shares(cells, coarse);
+  give_pool_shares(cells, coarse, upper);
 }
 
-void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells, const std::vector<uint64_t>& coarse) {
+void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells, const std::vector<uint64_t>& coarse,
+                                       const std::vector<uint64_t>& upper) {
   const size_t K = m_cuts->initial_size();
   const bool moment = m_s.cut.target == LearnTarget::Moment;
+  // A coarse cell's values (zero where it has none), normalized if `normalize`; false if none.
+  auto values_of = [&](const PoolCell& pc, float* out, bool normalize) {
+    double total = 0;
+    for (size_t k = 0; k < K; ++k) {
+      out[k] = pc.q[k] < 0 ? 0.0f : moment ? std::sqrt(std::max(pc.m2[k], 0.0f)) : pc.q[k];
+      total += out[k];
+    }
+    if (normalize && total > 0)
+      for (size_t k = 0; k < K; ++k) out[k] = float(out[k] / total);
+    return total > 0;
+  };
   parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
-    std::vector<float> shares(K);
+    std::vector<float> shares(K), above(K);
+    std::vector<double> pri;
     for (size_t i = b; i < e; ++i) {
       const auto it = m_pool.find(coarse[i]);
       double total = 0;
       if (it != m_pool.end()) {
         const PoolCell& pc = it->second;
+        values_of(pc, shares.data(), false);
+        // pool_up: the coarse cell's values shrunk toward its own coarse cell's.
+        if (!upper.empty())
+          if (const auto up = m_pool.find(upper[i]); up != m_pool.end() && values_of(up->second, above.data(), true))
+            shrink_toward(K, [&](size_t k) { return pc.q[k] >= 0; }, pc.n.data(), above.data(), m_s.cut.pool_weight,
+                          shares.data());
+        // pool_guess=ratio: the coarse cell's factors times this cell's prior.
+        if (m_s.cut.pool_ratio) m_cuts->cell_prior(cells[i], pri);
         for (size_t k = 0; k < K; ++k) {
-          shares[k] = pc.q[k] < 0 ? 0.0f : moment ? std::sqrt(std::max(pc.m2[k], 0.0f)) : pc.q[k];
+          if (m_s.cut.pool_ratio) shares[k] = float(shares[k] * pri[k]);
           total += shares[k];
         }
         if (total > 0)
@@ -651,7 +685,7 @@ void RllLightSampler::load_state(BinaryReader& r) {
   if (m_s.cut.pool_levels > 0) {
     const size_t K = m_cuts->initial_size();
     const uint32_t count = r.get<uint32_t>();
-    if (count > used) damaged("more coarse cells than cells");
+    if (count > (m_s.cut.pool_up > 0 ? 2 * uint64_t(used) : used)) damaged("more coarse cells than cells");
     uint64_t last = 0;
     for (uint32_t i = 0; i < count; ++i) {
       const uint64_t key = r.get<uint64_t>();
@@ -680,7 +714,8 @@ void RllLightSampler::load_state(BinaryReader& r) {
     std::vector<uint32_t> cells;
     for (uint32_t c = 0; c < m_s.capacity; ++c)
       if (m_table->in_use(c)) cells.push_back(c);
-    give_pool_shares(cells, coarse_keys(cells));
+    give_pool_shares(cells, coarse_keys(cells),
+                     m_s.cut.pool_up > 0 ? coarse_keys(cells, m_s.cut.pool_up) : std::vector<uint64_t>());
   }
 }
 
@@ -721,6 +756,8 @@ nlohmann::json RllLightSampler::describe() const {
         {"trust", m_s.cut.trust},
         {"pool", m_s.cut.pool_levels},
         {"pool_weight", m_s.cut.pool_weight},
+        {"pool_guess", m_s.cut.pool_ratio ? "ratio" : "share"},
+        {"pool_up", m_s.cut.pool_up},
         {"q_init", m_s.cut.q_init},
         {"cold", m_s.cold_uniform ? "uniform" : "tree"},
         {"sample_jitter", m_s.sample_jitter},

@@ -33,10 +33,13 @@ enum class RewardKind { Cluster, FullPdf, Fermat };
 // itself (a walk from the root per sample and per pmf).
 enum class Defensive { Cell, Tree };
 
-// rll's cut settings: CutSettings' own, with pooling one level up (docs/rll.md, "Pooling").
+// rll's cut settings: CutSettings' own, with pooling one level up, in two tiers, by ratio to each
+// cell's prior (docs/rll.md, "Pooling").
 inline CutSettings rll_cut_defaults() {
   CutSettings c;
   c.pool_levels = 1;
+  c.pool_up = 1;
+  c.pool_ratio = true;
   return c;
 }
 
@@ -131,11 +134,13 @@ class RllLightSampler final : public LightSampler {
   // Pooling (rll.pool): pools this pass's rewards of the cells into their coarse cells, folds
   // them into the coarse cells' values and gives every cell its coarse cell's shares.
   void pool_pass(const std::vector<uint32_t>& cells);
-  // Pooling: the coarse cell of each cell (its anchor, pool levels up).
-  std::vector<uint64_t> coarse_keys(const std::vector<uint32_t>& cells) const;
+  // Pooling: the coarse cell of each cell (its anchor, pool + up levels up).
+  std::vector<uint64_t> coarse_keys(const std::vector<uint32_t>& cells, int up = 0) const;
   // Pooling: gives each cell its coarse cell's shares (none where that has no values);
-  // `coarse[i]` is the coarse key of cells[i].
-  void give_pool_shares(const std::vector<uint32_t>& cells, const std::vector<uint64_t>& coarse);
+  // `coarse[i]` is the coarse key of cells[i], `upper[i]` (pool_up; empty: none) that of the
+  // cell the coarse cell's values are shrunk toward.
+  void give_pool_shares(const std::vector<uint32_t>& cells, const std::vector<uint64_t>& coarse,
+                        const std::vector<uint64_t>& upper);
 
   struct PoolCell {  // a coarse cell: Q, M2 and reward weight per cluster of the shared cut
     std::vector<float> q, m2, n;
