@@ -150,7 +150,7 @@ size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, int pool_t
   return size_t(cells) * per_cell;
 }
 
-size_t CutStore::bytes() const { return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided, m_s.pool_levels > 0 ? 1 + (m_s.pool_up > 0) : 0); }
+size_t CutStore::bytes() const { return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided, m_s.pool_tiers()); }
 
 float CutStore::weight_of(uint32_t cell, uint32_t node) const {
   if (m_s.prior == ClusterWeight::Power) return m_tree.node(node).bounds.power;

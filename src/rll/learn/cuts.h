@@ -70,6 +70,8 @@ struct CutSettings {
   // by the same rule and weight, toward those of the cell U levels coarser still, which pools
   // every cell under it; where the first tier has few rewards of a cluster, the second speaks.
   int pool_up = 0;
+  // Tiers of coarse cells: 0 without pooling, 2 with pool_up.
+  int pool_tiers() const { return pool_levels > 0 ? 1 + (pool_up > 0) : 0; }
   ClusterWeight split = ClusterWeight::Importance;
   // The value of a cluster never visited: < 0, the visited clusters' estimate of the cell's total
   // shared by prior; >= 0, this constant (Fermat's RLL starts every Q at 0.01).

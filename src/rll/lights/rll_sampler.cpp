@@ -119,7 +119,7 @@ namespace {
 void check_memory(const RllSettings& s) {
   // The cell table, the cuts and the point sums, allocated up front: refuse a configuration the
   // machine cannot hold rather than grow towards the out-of-memory killer.
-  const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_levels > 0 ? 1 + (s.cut.pool_up > 0) : 0)) +
+  const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_tiers())) +
                         double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t));
   const size_t usable = usable_memory_bytes();
   if (usable > 0 && needed > 0.8 * double(usable))
@@ -519,13 +519,15 @@ void RllLightSampler::end_pass() {
   }
 }
 
-std::vector<uint64_t> RllLightSampler::coarse_keys(const std::vector<uint32_t>& cells, int up) const {
+std::vector<uint64_t> RllLightSampler::coarse_keys(const std::vector<uint32_t>& cells, int tier) const {
+  if (tier >= m_s.cut.pool_tiers()) return {};
+  const int up = m_s.cut.pool_levels + (tier > 0 ? m_s.cut.pool_up : 0);
   std::vector<uint64_t> keys(cells.size());
   parallel_for(cells.size(), 256, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
       // The anchor, a mean of the cell's points, lies inside the cell, so the coarse cell holds it.
       const CellAnchor& a = m_cuts->anchor(cells[i]);
-      keys[i] = m_keyer.key(m_keyer.locate_at_level(a.p, a.n, a.level + m_s.cut.pool_levels + up));
+      keys[i] = m_keyer.key(m_keyer.locate_at_level(a.p, a.n, a.level + up));
     }
   });
   return keys;
@@ -535,11 +537,11 @@ void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
   const size_t K = m_cuts->initial_size();
   // Sums in the order of the cells' keys, so that they do not depend on which thread created
   // which cell id.
-  const std::vector<uint64_t> coarse = coarse_keys(cells);
+  const std::vector<uint64_t> coarse = coarse_keys(cells, 0);
   // Two tiers (pool_up): every cell's rewards also reach the cell pool_up levels coarser still.
   // Keys hold the level, so both tiers live in one map; a coarse cell of either tier sums the
   // cells under it.
-  const std::vector<uint64_t> upper = m_s.cut.pool_up > 0 ? coarse_keys(cells, m_s.cut.pool_up) : std::vector<uint64_t>();
+  const std::vector<uint64_t> upper = coarse_keys(cells, 1);
   std::vector<std::pair<uint64_t, size_t>> order;  // (cell key, index in cells)
   order.reserve(cells.size());
   for (size_t i = 0; i < cells.size(); ++i) order.emplace_back(m_table->key_of(cells[i]), i);
@@ -549,7 +551,13 @@ void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
     std::vector<uint64_t> count;
   };
   std::map<uint64_t, Pass> pass;
+  Pass cell{std::vector<double>(K), std::vector<double>(K), std::vector<uint64_t>(K)};  // one cell's
   for (const auto& [key, i] : order) {
+    // The cell's rewards once (with pool_guess=ratio, its prior too), then into each tier.
+    std::fill(cell.sum.begin(), cell.sum.end(), 0.0);
+    std::fill(cell.sq.begin(), cell.sq.end(), 0.0);
+    std::fill(cell.count.begin(), cell.count.end(), 0);
+    m_cuts->add_pass_rewards(cells[i], cell.sum.data(), cell.sq.data(), cell.count.data());
     for (int tier = 0; tier < (upper.empty() ? 1 : 2); ++tier) {
       Pass& p = pass[tier == 0 ? coarse[i] : upper[i]];
       if (p.sum.empty()) {
@@ -557,7 +565,12 @@ void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
         p.sq.assign(K, 0.0);
         p.count.assign(K, 0);
       }
-      m_cuts->add_pass_rewards(cells[i], p.sum.data(), p.sq.data(), p.count.data());
+      for (size_t k = 0; k < K; ++k) {
+        if (cell.count[k] == 0) continue;
+        p.sum[k] += cell.sum[k];
+        p.sq[k] += cell.sq[k];
+        p.count[k] += cell.count[k];
+      }
     }
   }
   // Fold into the coarse cells by the shrinkage rule without a prior (a cluster's first rewards
@@ -685,7 +698,7 @@ void RllLightSampler::load_state(BinaryReader& r) {
   if (m_s.cut.pool_levels > 0) {
     const size_t K = m_cuts->initial_size();
     const uint32_t count = r.get<uint32_t>();
-    if (count > (m_s.cut.pool_up > 0 ? 2 * uint64_t(used) : used)) damaged("more coarse cells than cells");
+    if (count > uint64_t(used) * uint64_t(m_s.cut.pool_tiers())) damaged("more coarse cells than cells");
     uint64_t last = 0;
     for (uint32_t i = 0; i < count; ++i) {
       const uint64_t key = r.get<uint64_t>();
@@ -714,8 +727,7 @@ void RllLightSampler::load_state(BinaryReader& r) {
     std::vector<uint32_t> cells;
     for (uint32_t c = 0; c < m_s.capacity; ++c)
       if (m_table->in_use(c)) cells.push_back(c);
-    give_pool_shares(cells, coarse_keys(cells),
-                     m_s.cut.pool_up > 0 ? coarse_keys(cells, m_s.cut.pool_up) : std::vector<uint64_t>());
+    give_pool_shares(cells, coarse_keys(cells, 0), coarse_keys(cells, 1));
   }
 }
 

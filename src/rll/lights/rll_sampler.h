@@ -134,8 +134,9 @@ class RllLightSampler final : public LightSampler {
   // Pooling (rll.pool): pools this pass's rewards of the cells into their coarse cells, folds
   // them into the coarse cells' values and gives every cell its coarse cell's shares.
   void pool_pass(const std::vector<uint32_t>& cells);
-  // Pooling: the coarse cell of each cell (its anchor, pool + up levels up).
-  std::vector<uint64_t> coarse_keys(const std::vector<uint32_t>& cells, int up = 0) const;
+  // Pooling: the coarse cell of each cell in tier 0 (its anchor, pool levels up) or tier 1 (pool +
+  // pool_up levels up); empty for a tier the settings do not have.
+  std::vector<uint64_t> coarse_keys(const std::vector<uint32_t>& cells, int tier) const;
   // Pooling: gives each cell its coarse cell's shares (none where that has no values);
   // `coarse[i]` is the coarse key of cells[i], `upper[i]` (pool_up; empty: none) that of the
   // cell the coarse cell's values are shrunk toward.
