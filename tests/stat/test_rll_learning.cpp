@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <map>
 
 #include "rll/accel/accel.h"
 #include "rll/core/parallel.h"
+#include "rll/core/binary_io.h"
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
 #include "rll/lights/rll_sampler.h"
@@ -451,4 +453,53 @@ TEST(RllLearning, AnimatedFramesRefitAndStayUnbiased) {
   t.spp = 512;
   Estimate diff = difference_estimate(film.resolve(), render_scene(scene, t));
   EXPECT_LE(std::abs(diff.mean), 4.5 * diff.stderr_) << diff.mean << " +- " << diff.stderr_;
+}
+
+TEST(RllLearning, PoolSharesFollowTheLampsThatSwitchOff) {
+  // With pool_guess=ratio a cell's pool shares are its coarse cell's factors times the cell's own
+  // prior. When lamps switch off or move between frames the priors change, and the shares must
+  // follow at once (as a sampler loaded from the state would compute them), not keep the old
+  // priors' weights until the next pass ends.
+  Scene scene = small_builtin_scene("cornell-boxes-dynamic", 32, 24);
+  Accel accel(scene.mesh);
+  Params params;
+  const RllSettings settings = rll_settings_from(params);
+  ASSERT_GT(settings.cut.pool_levels, 0);
+  ASSERT_TRUE(settings.cut.pool_ratio);
+  RllLightSampler rll(scene, settings);
+  scene.animate(scene, 0);
+  train_sampler(scene, accel, rll, 6);
+  auto shares_of = [](const RllLightSampler& s) {
+    std::map<uint64_t, std::vector<float>> out;  // by cell key
+    for (uint32_t c = 0; c < s.table().capacity(); ++c)
+      if (const float* p = s.cuts().pool_shares(c); s.table().in_use(c) && p)
+        out[s.table().key_of(c)].assign(p, p + s.cuts().initial_size());
+    return out;
+  };
+  const auto before = shares_of(rll);
+  scene.animate(scene, 1);
+  scene.refresh_lights_from_mesh();
+  accel.update_vertices(scene.mesh);
+  rll.lights_changed(scene);
+  const auto after = shares_of(rll);
+  BinaryWriter w;
+  rll.save_state(w);
+  RllLightSampler loaded(scene, settings);
+  BinaryReader r(w.bytes(), "state");
+  loaded.load_state(r);
+  ASSERT_EQ(shares_of(loaded).size(), after.size());
+  EXPECT_GT(after.size(), 10u);
+  size_t moved = 0;
+  for (const auto& [key, shares] : shares_of(loaded)) {
+    ASSERT_EQ(after.count(key), 1u);
+    const std::vector<float>& mine = after.at(key);
+    double sum = 0;
+    for (size_t k = 0; k < shares.size(); ++k) {
+      EXPECT_NEAR(mine[k], shares[k], 1e-6f * (1 + shares[k])) << "cell " << key << ", cluster " << k;
+      sum += mine[k];
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-4);
+    moved += before.count(key) && before.at(key) != mine;
+  }
+  EXPECT_GT(moved, 0u) << "no cell's shares changed with the lamps: the test checks nothing";
 }

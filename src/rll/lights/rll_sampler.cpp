@@ -437,9 +437,7 @@ void RllLightSampler::end_pass() {
   if (m_frozen) return;
   const uint32_t cap = m_s.capacity;
   std::atomic<uint32_t> splits{0}, collapses{0}, touched{0};
-  std::vector<uint32_t> cells;
-  for (uint32_t c = 0; c < cap; ++c)
-    if (m_table->in_use(c)) cells.push_back(c);
+  const std::vector<uint32_t> cells = cells_in_use();
   parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
       const uint32_t c = cells[i];
@@ -488,9 +486,7 @@ void RllLightSampler::end_pass() {
   }
   std::vector<uint32_t> evict;
   if (failed > 0 || m_table->used() > cap * 9ull / 10) {
-    std::vector<uint32_t> used;
-    for (uint32_t c = 0; c < cap; ++c)
-      if (m_table->in_use(c)) used.push_back(c);
+    std::vector<uint32_t> used = cells_in_use();
     size_t target = cap * 7ull / 10;
     if (used.size() > target) {
       std::stable_sort(used.begin(), used.end(), [&](uint32_t a, uint32_t b) {
@@ -509,14 +505,24 @@ void RllLightSampler::end_pass() {
   m_keyer.set_pass(m_pass, 0);
   if (m_s.reset_every > 0 && m_pass % m_s.reset_every == 0) {
     // Fermat's periodic reset: every cell starts over.
-    std::vector<uint32_t> all;
-    for (uint32_t c = 0; c < cap; ++c)
-      if (m_table->in_use(c)) all.push_back(c);
+    const std::vector<uint32_t> all = cells_in_use();
     for (uint32_t c : all) m_cuts->clear(c);
     m_table->remove_and_rebuild(all);
     m_pool.clear();
     ++m_resets;
   }
+}
+
+std::vector<uint32_t> RllLightSampler::cells_in_use() const {
+  std::vector<uint32_t> cells;
+  for (uint32_t c = 0; c < m_s.capacity; ++c)
+    if (m_table->in_use(c)) cells.push_back(c);
+  return cells;
+}
+
+void RllLightSampler::give_pool_shares() {
+  const std::vector<uint32_t> cells = cells_in_use();
+  give_pool_shares(cells, coarse_keys(cells, 0), coarse_keys(cells, 1));
 }
 
 std::vector<uint64_t> RllLightSampler::coarse_keys(const std::vector<uint32_t>& cells, int tier) const {
@@ -641,9 +647,19 @@ void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells, const
 
 void RllLightSampler::lights_changed(const Scene& scene) {
   refresh_light_powers(scene);
-  parallel_for(m_s.capacity, 256, [&](size_t b, size_t e) {
-    for (size_t c = b; c < e; ++c) m_cuts->refresh(uint32_t(c));
-  });
+  auto refresh_all = [&] {
+    parallel_for(m_s.capacity, 256, [&](size_t b, size_t e) {
+      for (size_t c = b; c < e; ++c) m_cuts->refresh(uint32_t(c));
+    });
+  };
+  refresh_all();
+  // pool_guess=ratio: a cell's pool shares are the coarse factors times its prior, which has just
+  // changed (a lamp switched off has prior 0): give them again from the new priors and bake the
+  // tables once more, instead of guessing with the old priors until the end of the next pass.
+  if (m_s.cut.pool_levels > 0 && m_s.cut.pool_ratio && !m_pool.empty()) {
+    give_pool_shares();
+    refresh_all();
+  }
 }
 
 void RllLightSampler::save_state(BinaryWriter& w) const {
@@ -723,12 +739,7 @@ void RllLightSampler::load_state(BinaryReader& r) {
   m_pass = pass;
   m_resets = resets;
   m_keyer.set_pass(m_pass, 0);
-  if (m_s.cut.pool_levels > 0) {
-    std::vector<uint32_t> cells;
-    for (uint32_t c = 0; c < m_s.capacity; ++c)
-      if (m_table->in_use(c)) cells.push_back(c);
-    give_pool_shares(cells, coarse_keys(cells, 0), coarse_keys(cells, 1));
-  }
+  if (m_s.cut.pool_levels > 0) give_pool_shares();
 }
 
 nlohmann::json RllLightSampler::describe() const {

@@ -142,6 +142,10 @@ class RllLightSampler final : public LightSampler {
   // cell the coarse cell's values are shrunk toward.
   void give_pool_shares(const std::vector<uint32_t>& cells, const std::vector<uint64_t>& coarse,
                         const std::vector<uint64_t>& upper);
+  // The same for every cell in use, from their anchors.
+  void give_pool_shares();
+  // The cells in use, in id order.
+  std::vector<uint32_t> cells_in_use() const;
 
   struct PoolCell {  // a coarse cell: Q, M2 and reward weight per cluster of the shared cut
     std::vector<float> q, m2, n;
