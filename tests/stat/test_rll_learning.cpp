@@ -317,9 +317,11 @@ TEST(RllLearning, RewardsOfANewCellReachTheClustersOfTheirLights) {
   // rewards must land on the clusters of the lights that earned them. Without pooling: the two
   // cells disagree by construction, and pooling (tested on its own below) would rightly pull
   // each toward what the other saw (with two tiers the fine cell's upper coarse cell is the
-  // coarse cell's first).
+  // coarse cell's first). Stochastic level rounding gives the same point a coarse and a fine
+  // cell (u picks one); nearest rounding would give it only one.
   Scene scene = small_builtin_scene("many-lights-open", 32, 24);
-  RllLightSampler rll(scene, rll_settings_from(Params::parse({"rll.pool=0"})));
+  RllLightSampler rll(
+      scene, rll_settings_from(Params::parse({"rll.pool=0", "rll.level_rounding=stochastic"})));
   const uint32_t L = uint32_t(scene.lights.size()), half = L / 2;
   LightContext coarse;
   coarse.p = scene.bounds.center();

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "rll/core/params.h"
 #include "rll/learn/cell_grid.h"
@@ -66,4 +67,44 @@ TEST(CellGrid, DirectionBinsCoverTheSphereAndEnterTheKey) {
   }
   std::sort(keys.begin(), keys.end());
   EXPECT_EQ(std::unique(keys.begin(), keys.end()), keys.end());
+}
+
+TEST(CellGrid, LevelRoundingNearestOrStochastic) {
+  // The level of detail of a footprint: with `Nearest` one level whatever u, the cell edge
+  // within a factor sqrt(2) of the footprint's cell size; with `Stochastic` the level below or
+  // above, the upper one for a fraction of u equal to the fractional level (so that the edge
+  // follows the footprint on average).
+  const Bounds3 bounds{Vec3(0), Vec3(1)};
+  const float diameter = length(bounds.diagonal());
+  CellGridSettings near, random;
+  random.level_rounding = CellGridSettings::LevelRounding::Stochastic;
+  ASSERT_EQ(near.level_rounding, CellGridSettings::LevelRounding::Nearest) << "the default";
+  const CellKeyer kn(near, bounds), kr(random, bounds);
+  const Vec3 p(0.3f), n(0, 0, 1);
+  for (float footprint : {1e-4f, 3e-4f, 7.1e-4f, 1.5e-3f, 4e-3f}) {
+    const float size = kn.cell_size(footprint), lf = std::log2(size / diameter);
+    const int level = kn.locate(p, n, footprint, 0.0f).level;
+    const float edge = std::ldexp(diameter, level);
+    EXPECT_LE(edge, size * std::sqrt(2.0f) * 1.0001f) << footprint;
+    EXPECT_GE(edge, size / std::sqrt(2.0f) * 0.9999f) << footprint;
+    int upper = 0;
+    const int samples = 1000;
+    for (int i = 0; i < samples; ++i) {
+      const float u = (float(i) + 0.5f) / samples;
+      EXPECT_EQ(kn.locate(p, n, footprint, u).level, level) << "nearest must not depend on u";
+      const int l = kr.locate(p, n, footprint, u).level;
+      ASSERT_TRUE(l == int(std::floor(lf)) || l == int(std::floor(lf)) + 1) << l << " for " << lf;
+      upper += l == int(std::floor(lf)) + 1;
+    }
+    EXPECT_NEAR(double(upper) / samples, lf - std::floor(lf), 2.0 / samples) << footprint;
+  }
+}
+
+TEST(CellGrid, LevelRoundingIsAParameterFermatKeepsStochastic) {
+  EXPECT_EQ(rll_settings_from(Params{}).grid.level_rounding,
+            CellGridSettings::LevelRounding::Nearest);
+  EXPECT_EQ(rll_settings_from(Params::parse({"rll.level_rounding=stochastic"})).grid.level_rounding,
+            CellGridSettings::LevelRounding::Stochastic);
+  EXPECT_EQ(fermat_settings().grid.level_rounding, CellGridSettings::LevelRounding::Stochastic);
+  EXPECT_THROW(rll_settings_from(Params::parse({"rll.level_rounding=up"})), std::exception);
 }

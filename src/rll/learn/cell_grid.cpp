@@ -52,10 +52,12 @@ float CellKeyer::cell_size(float footprint) const {
 }
 
 int CellKeyer::level_of(float footprint, float u) const {
-  // Level of detail: the cell edge is a power of two times the scene diameter, rounded up or
-  // down at random in proportion to the fractional level, so that cell size follows the
-  // footprint on average.
+  // Level of detail: the cell edge is a power of two times the scene diameter: the nearest in
+  // log scale, or rounded up or down at random in proportion to the fractional level, so that
+  // cell size follows the footprint on average.
   float lf = std::log2(cell_size(footprint)) - m_log2_extent;
+  if (m_s.level_rounding == CellGridSettings::LevelRounding::Nearest)
+    return int(std::floor(lf + 0.5f));
   float lo = std::floor(lf);
   return int(lo) + (u < lf - lo ? 1 : 0);
 }

@@ -1,8 +1,9 @@
 // RLL's cells: a sparse 5D grid over (position, normal) addressed by hashing. The position cell
-// size follows the ray footprint, quantized to a power-of-two level of detail by stochastic
-// rounding; position and normal are jittered by an offset that changes every pass. The table
-// has a fixed capacity and is lock-free: inserts never block, and a failed insert (table full)
-// means "no cell" (the sampler falls back to its prior) until end-of-pass eviction frees room.
+// size follows the ray footprint, quantized to a power-of-two level of detail (the nearest, or by
+// stochastic rounding); position and normal are jittered by an offset that changes every pass. The
+// table has a fixed capacity and is lock-free: inserts never block, and a failed insert (table
+// full) means "no cell" (the sampler falls back to its prior) until end-of-pass eviction frees
+// room.
 #pragma once
 
 #include <atomic>
@@ -26,6 +27,13 @@ struct CellGridSettings {
   // (0: none): such a point's cell is also keyed by where it is seen from (Wang et al. 2021 bin
   // wo 8 x 8), since its BSDF, and so which lights matter, depends on wo.
   int direction_bins = 0;
+  // How a footprint's fractional level of detail becomes a level: `Nearest`, the nearest power
+  // of two in log scale, so that every point of a surface at one distance shares one cell size;
+  // `Stochastic` (DESIGN 2), rounded up or down at random in proportion to the fraction, so that
+  // the size follows the footprint on average but the points of one region are split between
+  // two cells of different sizes, each learning from part of their rewards (docs/rll.md).
+  enum class LevelRounding { Stochastic, Nearest };
+  LevelRounding level_rounding = LevelRounding::Nearest;
 };
 
 // The integer coordinates of a cell in the 5D grid.
@@ -49,7 +57,7 @@ class CellKeyer {
   // Sets the jitter for a pass (every pass gets a fresh one, from the pass index and seed).
   void set_pass(uint64_t pass, uint64_t seed);
   // Cell of point p with unit normal n and ray footprint radius `footprint`; u drives the
-  // stochastic rounding of the level of detail.
+  // stochastic rounding of the level of detail (with LevelRounding::Stochastic).
   CellCoord locate(const Vec3& p, const Vec3& n, float footprint, float u) const;
   // The cell of p, n at a given level of detail.
   CellCoord locate_at_level(const Vec3& p, const Vec3& n, int level) const;

@@ -48,6 +48,8 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   s.grid.normal_bins = int(p.get_int(key("normal_bins"), s.grid.normal_bins));
   s.grid.jitter = p.get_float(key("jitter"), s.grid.jitter);
   s.grid.direction_bins = int(p.get_int_in(key("direction_bins"), s.grid.direction_bins, 0, 16));
+  s.grid.level_rounding = CellGridSettings::LevelRounding(
+      choice("level_rounding", int(s.grid.level_rounding), {"stochastic", "nearest"}));
   s.cut.rule = LearningRule(choice("learning", int(s.cut.rule), {"shrinkage", "exponential"}));
   s.cut.prior_samples = p.get_float(key("prior_samples"), s.cut.prior_samples);
   s.cut.trust = p.get_float(key("trust"), s.cut.trust);
@@ -110,6 +112,7 @@ RllSettings fermat_settings() {
   s.cold_uniform = true;
   s.grid.footprint_scale = 32;  // cell radius min(32 R, 0.05 scene size)
   s.grid.max_cell = 0.05f;
+  s.grid.level_rounding = CellGridSettings::LevelRounding::Stochastic;  // DESIGN 2, as PEERS says
   s.sample_jitter = 1.5f;
   s.reset_every = 32;
   return s;
@@ -786,7 +789,10 @@ nlohmann::json RllLightSampler::describe() const {
         {"sample_jitter", m_s.sample_jitter},
         {"reset_every", m_s.reset_every},
         {"sampling", m_s.cut.guided ? "guided" : "table"},
-        {"direction_bins", m_s.grid.direction_bins}}},
+        {"direction_bins", m_s.grid.direction_bins},
+        {"level_rounding", m_s.grid.level_rounding == CellGridSettings::LevelRounding::Nearest
+                               ? "nearest"
+                               : "stochastic"}}},
       {"resets", m_resets},
       {"passes", m_pass},
       {"cells_used", m_table->used()},
