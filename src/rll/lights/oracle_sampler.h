@@ -14,7 +14,9 @@ namespace rll {
 class Accel;
 
 struct OracleSettings {
-  int discovery_spp = 4;      // camera paths per pixel used to find cells and their points
+  // Camera paths per pixel used to find cells and their points. 16: with 4, cells of secondary
+  // vertices were missed, and the oracle in `path` had fireflies (docs/rll.md, "The oracle").
+  int discovery_spp = 16;
   int bounces = 2;            // diffuse bounces followed during discovery (0: camera only)
   int points_per_cell = 32;   // shading points kept per cell (reservoir)
   int rays = 8;               // shadow rays per point and cluster
