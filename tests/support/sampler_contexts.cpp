@@ -66,19 +66,23 @@ bool light_can_contribute(const Light& l, const Vec3& p, const Vec3& n) {
   return false;
 }
 
-void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler, int passes,
-                   PointSet points) {
-  if (!sampler.learns()) return;
+void render_path_passes(const Scene& scene, const Accel& accel, LightSampler& sampler, int spp,
+                        PointSet points) {
   IntegratorSettings is;
   is.type = IntegratorType::Path;
   is.max_depth = 3;
   Integrator integrator(scene, accel, sampler, is);
   Film film(scene.width, scene.height);
   RenderSettings rs;
-  rs.spp = passes;
+  rs.spp = spp;
   rs.pass_spp = 1;
   rs.points = points;
   render(scene, integrator, sampler, film, rs);
+}
+
+void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler, int passes,
+                   PointSet points) {
+  if (sampler.learns()) render_path_passes(scene, accel, sampler, passes, points);
 }
 
 }  // namespace rll::test

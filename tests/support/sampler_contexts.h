@@ -19,6 +19,11 @@ std::vector<LightContext> make_contexts(const Scene& scene, const Accel& accel, 
 // occlusion: then a sampler must give the light a nonzero probability.
 bool light_can_contribute(const Light& light, const Vec3& p, const Vec3& n);
 
+// Renders `spp` samples per pixel of the scene with `path` (3 vertices), one per pass, with
+// `sampler`; the image is dropped.
+void render_path_passes(const Scene& scene, const Accel& accel, LightSampler& sampler, int spp,
+                        PointSet points = PointSet::Sobol);
+
 // Trains a learning sampler by rendering `passes` passes of the scene (no-op otherwise).
 void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler, int passes,
                    PointSet points = PointSet::Sobol);

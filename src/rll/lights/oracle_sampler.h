@@ -38,6 +38,9 @@ class OracleLightSampler final : public LightSampler {
   void lights_changed(const Scene& scene) override;
   nlohmann::json describe() const override;
   double precompute_seconds() const { return m_seconds; }
+  // For tests: the frozen RLL sampler holding the knowledge (a cell it has no cut for was not
+  // found by discovery).
+  const RllLightSampler& rll() const { return *m_rll; }
 
  private:
   void precompute(const Scene& scene);
