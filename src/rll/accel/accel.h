@@ -6,15 +6,10 @@
 #include <vector>
 
 #include "rll/core/math.h"
+#include "rll/scene/hit.h"
 #include "rll/scene/mesh.h"
 
 namespace rll {
-
-struct Hit {
-  float t = kInf;
-  uint32_t tri = ~0u;
-  float u = 0, v = 0;  // barycentrics of vertices 1 and 2: p = (1-u-v) p0 + u p1 + v p2
-};
 
 // Rays recorded by an Accel for replay (benchmarks): not thread-safe, record with one thread.
 struct RayLog {

@@ -1,8 +1,8 @@
 // The local geometry at a ray hit: position, normals, uv, material and light of the triangle.
 #pragma once
 
-#include "rll/accel/accel.h"
 #include "rll/core/image.h"
+#include "rll/scene/hit.h"
 #include "rll/scene/scene.h"
 
 namespace rll {
