@@ -6,9 +6,17 @@
 #include <string>
 #include <vector>
 
+#include "rll/core/device.h"
 #include "rll/core/math.h"
 
 namespace rll {
+
+// An image's texels as kernels read them: row by row from the top, owning nothing.
+struct TexelView {
+  View<const Rgb> texels;
+  int width = 0, height = 0;
+  RLL_HD const Rgb& at(int x, int y) const { return texels[size_t(y) * width + x]; }
+};
 
 // The largest image rll reads: a header claiming more is refused before anything is allocated.
 // 2^28 pixels (16384 x 16384, 3 GiB as floats), at most 65536 a side.
@@ -18,9 +26,11 @@ constexpr size_t kMaxImagePixels = size_t(1) << 28;
 class Image {
  public:
   Image() = default;
-  Image(int width, int height, Rgb fill = Rgb(0)) : m_w(width), m_h(height), m_px(size_t(width) * height, fill) {}
+  Image(int width, int height, Rgb fill = Rgb(0))
+      : m_w(width), m_h(height), m_px(size_t(width) * height, fill) {}
   // Takes `pixels` (width * height of them, row by row).
-  Image(int width, int height, std::vector<Rgb> pixels) : m_w(width), m_h(height), m_px(std::move(pixels)) {}
+  Image(int width, int height, std::vector<Rgb> pixels)
+      : m_w(width), m_h(height), m_px(std::move(pixels)) {}
   int width() const { return m_w; }
   int height() const { return m_h; }
   size_t pixel_count() const { return m_px.size(); }
@@ -30,6 +40,7 @@ class Image {
   const Rgb& operator[](size_t i) const { return m_px[i]; }
   const std::vector<Rgb>& pixels() const { return m_px; }
   std::vector<Rgb>& pixels() { return m_px; }
+  TexelView texel_view() const { return {view_of(m_px), m_w, m_h}; }
 
  private:
   int m_w = 0, m_h = 0;

@@ -11,30 +11,34 @@
 
 namespace rll {
 
-// PCG32 (O'Neill 2014): a small sequential generator for preprocessing and tests.
+// PCG32 (O'Neill 2014): a small sequential generator for preprocessing, tests and the random
+// walk of the layered BSDF (RLL_HD: kernels run it).
 class Pcg32 {
  public:
-  explicit Pcg32(uint64_t seed = 0x853c49e6748fea9bull, uint64_t stream = 0xda3e39cb94b95bdbull) {
+  RLL_HD explicit Pcg32(uint64_t seed = 0x853c49e6748fea9bull,
+                        uint64_t stream = 0xda3e39cb94b95bdbull) {
     m_inc = (stream << 1u) | 1u;
     m_state = 0;
     next_u32();
     m_state += seed;
     next_u32();
   }
-  uint32_t next_u32() {
+  RLL_HD uint32_t next_u32() {
     uint64_t old = m_state;
     m_state = old * 6364136223846793005ull + m_inc;
     uint32_t xorshifted = uint32_t(((old >> 18u) ^ old) >> 27u);
     uint32_t rot = uint32_t(old >> 59u);
     return (xorshifted >> rot) | (xorshifted << ((~rot + 1u) & 31));
   }
-  float next_float() { return u32_to_unit_float(next_u32()); }
-  double next_double() {
+  RLL_HD float next_float() { return u32_to_unit_float(next_u32()); }
+  RLL_HD double next_double() {
     uint64_t hi = next_u32(), lo = next_u32();
     return double(((hi << 32) | lo) >> 11) * 0x1p-53;
   }
   // Uniform integer in [0, bound).
-  uint32_t next_bounded(uint32_t bound) { return uint32_t((uint64_t(next_u32()) * bound) >> 32); }
+  RLL_HD uint32_t next_bounded(uint32_t bound) {
+    return uint32_t((uint64_t(next_u32()) * bound) >> 32);
+  }
 
  private:
   uint64_t m_state, m_inc;

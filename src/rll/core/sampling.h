@@ -1,4 +1,5 @@
-// Sampling warps from the unit square and small discrete distributions.
+// Sampling warps from the unit square (RLL_HD: kernels call them) and small discrete
+// distributions (host only).
 #pragma once
 
 #include <span>
@@ -8,7 +9,7 @@
 
 namespace rll {
 
-inline Vec2 sample_uniform_disk_concentric(Vec2 u) {
+RLL_HD inline Vec2 sample_uniform_disk_concentric(Vec2 u) {
   float ox = 2 * u.x - 1, oy = 2 * u.y - 1;
   if (ox == 0 && oy == 0) return {0, 0};
   float r, theta;
@@ -22,14 +23,16 @@ inline Vec2 sample_uniform_disk_concentric(Vec2 u) {
   return {r * std::cos(theta), r * std::sin(theta)};
 }
 
-inline Vec3 sample_cosine_hemisphere(Vec2 u) {
+RLL_HD inline Vec3 sample_cosine_hemisphere(Vec2 u) {
   Vec2 d = sample_uniform_disk_concentric(u);
   float z = safe_sqrt(1 - d.x * d.x - d.y * d.y);
   return {d.x, d.y, z};
 }
-inline float cosine_hemisphere_pdf(float cos_theta) { return cos_theta > 0 ? cos_theta * kInvPi : 0; }
+RLL_HD inline float cosine_hemisphere_pdf(float cos_theta) {
+  return cos_theta > 0 ? cos_theta * kInvPi : 0;
+}
 
-inline Vec3 sample_uniform_sphere(Vec2 u) {
+RLL_HD inline Vec3 sample_uniform_sphere(Vec2 u) {
   float z = 1 - 2 * u.x;
   float r = safe_sqrt(1 - z * z);
   float phi = 2 * kPi * u.y;
@@ -38,7 +41,7 @@ inline Vec3 sample_uniform_sphere(Vec2 u) {
 
 // Uniform point on a triangle as barycentrics (b0, b1); b2 = 1 - b0 - b1.
 // Heitz 2019's low-distortion square-to-triangle map.
-inline Vec2 sample_uniform_triangle(Vec2 u) {
+RLL_HD inline Vec2 sample_uniform_triangle(Vec2 u) {
   float b0, b1;
   if (u.x < u.y) {
     b0 = u.x / 2;
@@ -50,7 +53,7 @@ inline Vec2 sample_uniform_triangle(Vec2 u) {
   return {b0, b1};
 }
 
-inline float power_heuristic(float f_pdf, float g_pdf) {
+RLL_HD inline float power_heuristic(float f_pdf, float g_pdf) {
   float f = f_pdf * f_pdf, g = g_pdf * g_pdf;
   if (std::isinf(f)) return 1;
   return f + g > 0 ? f / (f + g) : 0;
@@ -70,7 +73,7 @@ class DiscreteDistribution {
 
  private:
   std::vector<float> m_pmf;
-  std::vector<double> m_cdf;  // m_cdf[i] = sum of pmf[0..i], last == 1
+  std::vector<double> m_cdf;      // m_cdf[i] = sum of pmf[0..i], last == 1
   std::vector<uint32_t> m_guide;  // size()+1 cutpoints: first index whose cdf exceeds k/size()
   double m_total = 0;
 };

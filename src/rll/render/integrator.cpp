@@ -67,7 +67,9 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sam
       m_sampler(sampler),
       m_settings(settings),
       m_learns(sampler.learns()),
-      m_prepares(sampler.prepares()) {}
+      m_prepares(sampler.prepares()),
+      m_data(scene),
+      m_view(m_data.view()) {}
 
 namespace {
 // Each decision of a path has a fixed dimension of the sample: the pixel position takes the first
@@ -97,7 +99,7 @@ Rgb Integrator::sample_light(const Vertex& v, const Rgb& beta, SampleStream& str
   Vec2 u_pos = stream.next2();
   SampledLight sl = m_sampler.sample(v.ctx, u_light);
   if (sl.pmf <= 0) return Rgb(0);
-  const Light& light = m_scene.lights[sl.light];
+  const Light& light = m_view.lights[sl.light];
   LightLiSample ls = sample_li(light, v.ctx.p, u_pos);
   Rgb contribution(0), unoccluded(0);
   if (ls.pdf > 0) {
@@ -151,25 +153,25 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     Hit hit;
     if (!m_accel.intersect(ray, hit)) break;
     // Past the last vertex a hit only matters if it is an emitter (MIS of the BSDF ray).
-    if (depth >= max_depth && m_scene.mesh.light[hit.tri] < 0) break;
-    SurfaceHit sh = make_surface_hit(m_scene, hit);
+    if (depth >= max_depth && m_view.mesh.light[hit.tri] < 0) break;
+    SurfaceHit sh = make_surface_hit(m_view.mesh, hit);
     Vec3 wo = -ray.d;
 
     if (sh.light >= 0) {
-      Rgb Le = emitted_radiance(m_scene.lights[sh.light], wo);
+      Rgb Le = emitted_radiance(m_view.lights[sh.light], wo);
       if (!is_black(Le)) {
         if (depth == 0 || strategy == LightStrategy::Bsdf || prev_delta) {
           L += beta * Le;
         } else if (mis) {
           float light_pdf = m_sampler.pmf(prev_ctx, uint32_t(sh.light)) *
-                            pdf_li(m_scene.lights[sh.light], prev_ctx.p, sh.p);
+                            pdf_li(m_view.lights[sh.light], prev_ctx.p, sh.p);
           L += beta * Le * power_heuristic(prev_bsdf_pdf, light_pdf);
         }
       }
     }
     if (depth >= max_depth) break;
 
-    const Material& mat = m_scene.materials[sh.material];
+    const MaterialData& mat = m_view.materials[sh.material];
     // The BSDF's own numbers, drawn here (their values depend on the dimension only) so that
     // the walk of a stochastic BSDF (CoatedDiffuse) can be seeded from them.
     seek(stream, depth, kLobe);
@@ -178,7 +180,7 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     const uint64_t bsdf_seed =
         mix64(std::bit_cast<uint32_t>(u_lobe) | uint64_t(std::bit_cast<uint32_t>(u_dir.x)) << 32) ^
         mix64(std::bit_cast<uint32_t>(u_dir.y) + 0x9e3779b97f4a7c15ull * uint64_t(depth + 1));
-    Bsdf bsdf(mat, albedo_at(m_scene, sh), sh.ns, sh.ng, wo, roughness_at(m_scene, sh), bsdf_seed);
+    Bsdf bsdf(mat, albedo_at(m_view, sh), sh.ns, sh.ng, wo, roughness_at(m_view, sh), bsdf_seed);
     if (bsdf.is_black()) break;
 
     float cos_in = std::max(1e-2f, absdot(wo, sh.ng));

@@ -9,6 +9,7 @@
 #include "rll/core/rng.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/scene/scene.h"
+#include "rll/scene/scene_view.h"
 
 namespace rll {
 
@@ -20,13 +21,14 @@ enum class LightStrategy { Mis, Nee, Bsdf };
 
 struct IntegratorSettings {
   IntegratorType type = IntegratorType::Path;
-  int max_depth = 5;        // path: bounces; 1 = direct light only
+  int max_depth = 5;  // path: bounces; 1 = direct light only
   LightStrategy strategy = LightStrategy::Mis;
-  int rr_depth = 3;         // Russian roulette from this bounce on
+  int rr_depth = 3;  // Russian roulette from this bounce on
 };
 
 // Parses --integrator and the integrator's `--set` keys (path.strategy, path.rr_depth).
-IntegratorSettings make_integrator_settings(const std::string& name, int max_depth, const Params& params);
+IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
+                                            const Params& params);
 const char* integrator_name(IntegratorType t);
 const char* strategy_name(LightStrategy s);
 
@@ -44,7 +46,8 @@ struct RayCounters {
 
 class Integrator {
  public:
-  Integrator(const Scene& scene, const Accel& accel, LightSampler& sampler, IntegratorSettings settings);
+  Integrator(const Scene& scene, const Accel& accel, LightSampler& sampler,
+             IntegratorSettings settings);
   // Radiance along a camera ray; `stream` supplies the per-sample random numbers.
   Rgb li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters) const;
   const IntegratorSettings& settings() const { return m_settings; }
@@ -61,6 +64,8 @@ class Integrator {
   LightSampler& m_sampler;
   IntegratorSettings m_settings;
   bool m_learns, m_prepares;
+  SceneData m_data;  // the hot data the functions below read, as flat views
+  SceneView m_view;
 };
 
 }  // namespace rll

@@ -1,9 +1,14 @@
-// The local geometry at a ray hit: position, normals, uv, material and light of the triangle.
+// The local geometry at a ray hit: position, normals, uv, material and light of the triangle;
+// the rays leaving it and the textures looked up there. RLL_HD over the scene's views: the CPU
+// renderer and the GPU kernels call the same functions.
 #pragma once
+
+#include <cmath>
 
 #include "rll/core/image.h"
 #include "rll/scene/hit.h"
 #include "rll/scene/scene.h"
+#include "rll/scene/scene_view.h"
 
 namespace rll {
 
@@ -17,21 +22,94 @@ struct SurfaceHit {
   int32_t light = -1;
 };
 
-SurfaceHit make_surface_hit(const Scene& scene, const Hit& hit);
+RLL_HD inline SurfaceHit make_surface_hit(const MeshView& m, const Hit& hit) {
+  const Triangle& t = m.triangles[hit.tri];
+  float b0 = 1 - hit.u - hit.v;
+  SurfaceHit s;
+  s.tri = hit.tri;
+  s.p = m.positions[t[0]] * b0 + m.positions[t[1]] * hit.u + m.positions[t[2]] * hit.v;
+  Vec3 c = m.face_cross(hit.tri);
+  float len = length(c);
+  s.ng = len > 0 ? c / len : Vec3(0, 0, 1);
+  s.ns = s.ng;
+  if (!m.normals.empty()) {
+    Vec3 n = m.normals[t[0]] * b0 + m.normals[t[1]] * hit.u + m.normals[t[2]] * hit.v;
+    float nl = length(n);
+    if (nl > 1e-6f && std::isfinite(nl)) s.ns = dot(n, s.ng) < 0 ? -n / nl : n / nl;
+  }
+  if (!m.uvs.empty()) {
+    const Vec2 &a = m.uvs[t[0]], &b = m.uvs[t[1]], &d = m.uvs[t[2]];
+    s.uv = {a.x * b0 + b.x * hit.u + d.x * hit.v, a.y * b0 + b.y * hit.u + d.y * hit.v};
+  } else {
+    s.uv = {hit.u, hit.v};
+  }
+  s.material = m.material[hit.tri];
+  s.light = m.light[hit.tri];
+  return s;
+}
+inline SurfaceHit make_surface_hit(const Scene& scene, const Hit& hit) {
+  return make_surface_hit(scene.mesh.view(), hit);
+}
 
 // Ray leaving p in direction d, offset to the side of the geometric normal that d points to.
-Ray spawn_ray(const Vec3& p, const Vec3& ng, const Vec3& d, float tmax = kInf);
+RLL_HD inline Ray spawn_ray(const Vec3& p, const Vec3& ng, const Vec3& d, float tmax = kInf) {
+  Ray r;
+  r.o = p + face_forward(ng, d) * ray_epsilon(p);
+  r.d = d;
+  r.tmin = 0;
+  r.tmax = tmax;
+  return r;
+}
+
 // Shadow ray from surface point p (geometric normal ng) to point y on a light with normal ny
 // (zero for a point light): both ends are pushed off their surfaces and the ray is aimed from
 // one offset end to the other, so that it never hits the light itself, even at grazing angles.
-Ray spawn_ray_to(const Vec3& p, const Vec3& ng, const Vec3& y, const Vec3& ny);
+RLL_HD inline Ray spawn_ray_to(const Vec3& p, const Vec3& ng, const Vec3& y, const Vec3& ny) {
+  Vec3 d0 = y - p;
+  Ray r;
+  r.o = p + face_forward(ng, d0) * ray_epsilon(p);
+  Vec3 target = length_sq(ny) > 0 ? y + face_forward(ny, -d0) * ray_epsilon(y) : y;
+  Vec3 d = target - r.o;
+  float len = length(d);
+  r.d = d / len;
+  r.tmin = 0;
+  r.tmax = len * (1 - 1e-4f);
+  return r;
+}
 
 // Bilinear lookup with repeat wrapping, v pointing up the image.
-Rgb sample_texture(const Image& texture, Vec2 uv);
+RLL_HD inline Rgb sample_texture(const TexelView& tex, Vec2 uv) {
+  if (tex.width == 0) return Rgb(1);
+  float x = (uv.x - std::floor(uv.x)) * tex.width - 0.5f;
+  float y = (1 - (uv.y - std::floor(uv.y))) * tex.height - 0.5f;
+  int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+  float fx = x - x0, fy = y - y0;
+  auto texel = [&](int i, int j) {
+    i %= tex.width;
+    j %= tex.height;
+    if (i < 0) i += tex.width;
+    if (j < 0) j += tex.height;
+    return tex.at(i, j);
+  };
+  return (texel(x0, y0) * (1 - fx) + texel(x0 + 1, y0) * fx) * (1 - fy) +
+         (texel(x0, y0 + 1) * (1 - fx) + texel(x0 + 1, y0 + 1) * fx) * fy;
+}
+inline Rgb sample_texture(const Image& texture, Vec2 uv) {
+  return sample_texture(texture.texel_view(), uv);
+}
 
 // Material albedo at a hit (texture applied).
-Rgb albedo_at(const Scene& scene, const SurfaceHit& hit);
+RLL_HD inline Rgb albedo_at(const SceneView& scene, const SurfaceHit& hit) {
+  const MaterialData& m = scene.materials[hit.material];
+  if (m.albedo_texture < 0) return m.albedo;
+  return m.albedo * sample_texture(scene.textures[m.albedo_texture], hit.uv);
+}
+
 // Material roughness at a hit: the first channel of its roughness texture where it has one.
-float roughness_at(const Scene& scene, const SurfaceHit& hit);
+RLL_HD inline float roughness_at(const SceneView& scene, const SurfaceHit& hit) {
+  const MaterialData& m = scene.materials[hit.material];
+  if (m.roughness_texture < 0) return m.roughness;
+  return std::max(0.0f, sample_texture(scene.textures[m.roughness_texture], hit.uv).x);
+}
 
 }  // namespace rll

@@ -1,9 +1,12 @@
 // Lights: every emissive triangle is one, and so are point and directional (sun) lights.
+// Light is trivially copyable and its sampling functions are RLL_HD: kernels read an array of
+// lights (SceneView::lights).
 #pragma once
 
 #include <cstdint>
 
 #include "rll/core/math.h"
+#include "rll/core/sampling.h"
 
 namespace rll {
 
@@ -20,9 +23,9 @@ struct Light {
   bool two_sided = false;
   uint32_t triangle = ~0u;  // the mesh triangle of a triangle light
 
-  bool is_delta() const { return type != LightType::Triangle; }
-  bool has_position() const { return type != LightType::Directional; }
-  Vec3 centroid() const { return type == LightType::Triangle ? (p0 + p1 + p2) / 3.0f : p0; }
+  RLL_HD bool is_delta() const { return type != LightType::Triangle; }
+  RLL_HD bool has_position() const { return type != LightType::Directional; }
+  RLL_HD Vec3 centroid() const { return type == LightType::Triangle ? (p0 + p1 + p2) / 3.0f : p0; }
 };
 
 // A light sample as seen from a shading point: incident radiance along wi, distance to the
@@ -41,20 +44,193 @@ Light make_triangle_light(const Vec3& a, const Vec3& b, const Vec3& c, const Rgb
 Light make_point_light(const Vec3& position, const Rgb& intensity);
 Light make_directional_light(const Vec3& direction_to_light, const Rgb& irradiance);
 
+// Radiance a triangle light emits from its surface towards direction w (pointing away).
+RLL_HD inline Rgb emitted_radiance(const Light& l, const Vec3& w) {
+  if (l.type != LightType::Triangle) return Rgb(0);
+  float c = dot(l.n, w);
+  return (c > 0 || (l.two_sided && c < 0)) ? l.radiance : Rgb(0);
+}
+
 // Solid angle of a triangle seen from p (Van Oosterom & Strackee).
-float triangle_solid_angle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+RLL_HD inline float triangle_solid_angle(const Vec3& p, const Vec3& a, const Vec3& b,
+                                         const Vec3& c) {
+  Vec3 A = a - p, B = b - p, C = c - p;
+  float la = length(A), lb = length(B), lc = length(C);
+  if (!(la > 0 && lb > 0 && lc > 0)) return 0;
+  A /= la;
+  B /= lb;
+  C /= lc;
+  float num = std::abs(dot(A, cross(B, C)));
+  float den = 1 + dot(A, B) + dot(B, C) + dot(C, A);
+  return std::abs(2 * std::atan2(num, den));
+}
+
 // Triangle lights are sampled uniformly in the solid angle they subtend (Arvo 1995) where that
 // pays, by area elsewhere (small or far triangles); sample_li and pdf_li apply the same rule.
 // Below 0.01 sr the pdf of area sampling varies little over the triangle, and the spherical
 // warp's trigonometry is not worth its cost (a sky dome's triangles are ~3e-3 sr).
 inline constexpr float kMinSphericalSolidAngle = 1e-2f, kMaxSphericalSolidAngle = 6.2f;
 
+namespace light_detail {
+
+// Double-precision 3-vectors for the spherical warp below, whose angle differences lose most
+// of a float's precision on thin triangles.
+struct D3 {
+  double x, y, z;
+};
+RLL_HD inline D3 d3(const Vec3& v) {
+  return {v.x, v.y, v.z};
+}
+RLL_HD inline D3 operator+(D3 a, D3 b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+RLL_HD inline D3 operator-(D3 a, D3 b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+RLL_HD inline D3 operator*(D3 a, double s) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+RLL_HD inline double ddot(D3 a, D3 b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+RLL_HD inline D3 dcross(D3 a, D3 b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+RLL_HD inline double dlen(D3 a) {
+  return std::sqrt(ddot(a, a));
+}
+RLL_HD inline D3 dnorm(D3 a) {
+  return a * (1 / dlen(a));
+}
+// The angle between x and y, given their lengths.
+RLL_HD inline double angle(D3 x, double lx, D3 y, double ly) {
+  return std::acos(clamp(ddot(x, y) / (lx * ly), -1.0, 1.0));
+}
+
+// Uniform direction in the spherical triangle spanned by directions a, b, c (Arvo 1995):
+// choose the sub-triangle area u.x * omega, which fixes a point C' on arc AC, then a point on
+// arc BC' with the right density.
+RLL_HD inline Vec3 sample_spherical_triangle(const Vec3& a, const Vec3& b, const Vec3& c, Vec2 u) {
+  D3 A = dnorm(d3(a)), B = dnorm(d3(b)), C = dnorm(d3(c));
+  // Angles at the vertices, from the normals of the planes through the origin and two vertices.
+  D3 n_ab = dcross(A, B), n_ac = dcross(A, C), n_bc = dcross(B, C);
+  double l_ab = dlen(n_ab), l_ac = dlen(n_ac), l_bc = dlen(n_bc);
+  if (!(l_ab > 0 && l_ac > 0 && l_bc > 0)) return a;
+  double alpha = angle(n_ab, l_ab, n_ac, l_ac);
+  double beta = angle(n_ab * -1.0, l_ab, n_bc, l_bc);
+  double gamma = angle(n_ac, l_ac, n_bc, l_bc);
+  double omega = alpha + beta + gamma - M_PI;
+  double cos_alpha = std::cos(alpha), sin_alpha = std::sin(alpha), cos_c = ddot(A, B);
+  double area = u.x * omega;
+  double s = std::sin(area - alpha), t = std::cos(area - alpha);
+  double uu = t - cos_alpha, vv = s + sin_alpha * cos_c;
+  double q =
+      clamp(((vv * t - uu * s) * cos_alpha - vv) / ((vv * s + uu * t) * sin_alpha), -1.0, 1.0);
+  D3 c_perp = C - A * ddot(C, A);
+  double lp = dlen(c_perp);
+  if (!(lp > 0)) return a;
+  D3 C2 = A * q + c_perp * (std::sqrt(std::max(0.0, 1 - q * q)) / lp);
+  double z = 1 - u.y * (1 - ddot(C2, B));
+  D3 b_perp = C2 - B * ddot(C2, B);
+  double lb = dlen(b_perp);
+  if (!(lb > 0)) return b;
+  D3 w = dnorm(B * z + b_perp * (std::sqrt(std::max(0.0, 1 - z * z)) / lb));
+  return {float(w.x), float(w.y), float(w.z)};
+}
+
+RLL_HD inline bool use_spherical(float omega) {
+  return omega > kMinSphericalSolidAngle && omega < kMaxSphericalSolidAngle;
+}
+
+// The solid angle a triangle light subtends at p where spherical sampling may use it, else 0.
+// A triangle inside a sphere of radius r around its centroid, seen from distance d > r,
+// subtends at most area / (d - r)^2: when that bound is already below the spherical threshold
+// (a sky dome's triangles, far lamps) the exact formula, with its three normalisations and an
+// arctangent, is skipped. The decision is the same as with the exact angle.
+RLL_HD inline float spherical_solid_angle(const Light& l, const Vec3& p) {
+  const Vec3 c = l.centroid();
+  const float r2 =
+      std::max(std::max(length_sq(l.p0 - c), length_sq(l.p1 - c)), length_sq(l.p2 - c));
+  const float d2 = length_sq(p - c);
+  if (d2 > r2) {
+    const float gap = std::sqrt(d2) - std::sqrt(r2);
+    if (l.area < kMinSphericalSolidAngle * 0.5f * gap * gap) return 0;
+  }
+  return triangle_solid_angle(p, l.p0, l.p1, l.p2);
+}
+
+}  // namespace light_detail
+
 // Samples a point on the light as seen from p; pdf 0 when nothing is emitted towards p.
-LightLiSample sample_li(const Light& light, const Vec3& p, Vec2 u);
+RLL_HD inline LightLiSample sample_li(const Light& l, const Vec3& p, Vec2 u) {
+  using namespace light_detail;
+  LightLiSample s;
+  switch (l.type) {
+    case LightType::Triangle: {
+      if (l.area <= 0) return s;
+      float omega = spherical_solid_angle(l, p);
+      Vec3 y;
+      if (use_spherical(omega)) {
+        Vec3 w = sample_spherical_triangle(l.p0 - p, l.p1 - p, l.p2 - p, u);
+        // The point on the triangle's plane along w.
+        float denom = dot(l.n, w);
+        if (denom == 0) return s;
+        float t = dot(l.n, l.p0 - p) / denom;
+        if (!(t > 0)) return s;
+        y = p + w * t;
+      } else {
+        Vec2 b = sample_uniform_triangle(u);
+        y = l.p0 * b.x + l.p1 * b.y + l.p2 * (1 - b.x - b.y);
+      }
+      Vec3 d = y - p;
+      float d2 = length_sq(d);
+      if (!(d2 > 0)) return s;
+      float dist = std::sqrt(d2);
+      Vec3 wi = d / dist;
+      float cos_l = std::abs(dot(l.n, wi));
+      Rgb L = emitted_radiance(l, -wi);
+      if (cos_l <= 0 || is_black(L)) return s;
+      s.L = L;
+      s.wi = wi;
+      s.dist = dist;
+      s.pdf = use_spherical(omega) ? 1 / omega : d2 / (cos_l * l.area);
+      s.point = y;
+      return s;
+    }
+    case LightType::Point: {
+      Vec3 d = l.p0 - p;
+      float d2 = length_sq(d);
+      if (!(d2 > 0)) return s;
+      s.dist = std::sqrt(d2);
+      s.wi = d / s.dist;
+      s.L = l.radiance / d2;
+      s.pdf = 1;
+      s.point = l.p0;
+      return s;
+    }
+    case LightType::Directional:
+      s.wi = l.p0;
+      s.dist = kInf;
+      s.L = l.radiance;
+      s.pdf = 1;
+      return s;
+  }
+  return s;
+}
+
 // Solid-angle pdf that sample_li produced point y on a triangle light, seen from p along wi.
-float pdf_li(const Light& light, const Vec3& p, const Vec3& y);
-// Radiance a triangle light emits from its surface towards direction w (pointing away).
-Rgb emitted_radiance(const Light& light, const Vec3& w);
+RLL_HD inline float pdf_li(const Light& l, const Vec3& p, const Vec3& y) {
+  using namespace light_detail;
+  if (l.type != LightType::Triangle || l.area <= 0) return 0;
+  Vec3 d = y - p;
+  float d2 = length_sq(d);
+  if (!(d2 > 0)) return 0;
+  float omega = spherical_solid_angle(l, p);
+  if (use_spherical(omega)) return 1 / omega;
+  float cos_l = std::abs(dot(l.n, d)) / std::sqrt(d2);
+  return cos_l > 0 ? d2 / (cos_l * l.area) : 0;
+}
+
 // Total emitted power (luminance units): phi = pi * A * L (x2 if two-sided), 4 pi I for a
 // point light, pi r^2 E for a directional light over a scene of radius r.
 float light_power(const Light& light, float scene_radius);
