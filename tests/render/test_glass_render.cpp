@@ -112,9 +112,9 @@ TEST(GlassRender, RoughnessTexture) {
   SurfaceHit hit;
   hit.material = id;
   hit.uv = {0.3f, 0.6f};
-  EXPECT_NEAR(roughness_at(s, hit), 0.05f, 1e-6f);
+  EXPECT_NEAR(roughness_at(SceneData(s).view(), hit), 0.05f, 1e-6f);
   s.materials[id].roughness_texture = -1;
-  EXPECT_EQ(roughness_at(s, hit), 0.3f);
+  EXPECT_EQ(roughness_at(SceneData(s).view(), hit), 0.3f);
 }
 
 }  // namespace
