@@ -66,8 +66,10 @@ struct ProbeScene {
       mesh.light.insert(mesh.light.end(), 2, -1);
     }
     // Near triangles (sampled by solid angle), a far small one (by area), a point and a sun.
-    lights.push_back(make_triangle_light({0, 0, 2}, {12, 0, 2.5f}, {6, 3, 2}, Rgb(4, 3, 2), false, 0));
-    lights.push_back(make_triangle_light({5, 2, 1}, {5.5f, 2, 1.2f}, {5, 2.5f, 1}, Rgb(9), true, 1));
+    lights.push_back(
+        make_triangle_light({0, 0, 2}, {12, 0, 2.5f}, {6, 3, 2}, Rgb(4, 3, 2), false, 0));
+    lights.push_back(
+        make_triangle_light({5, 2, 1}, {5.5f, 2, 1.2f}, {5, 2.5f, 1}, Rgb(9), true, 1));
     lights.push_back(
         make_triangle_light({0, 40, 30}, {1, 40, 30}, {0, 41, 30}, Rgb(20, 10, 5), false, 2));
     lights.push_back(make_point_light({3, 1, 2}, Rgb(5)));

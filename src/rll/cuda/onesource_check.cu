@@ -88,9 +88,9 @@ std::vector<OneSourceResult> onesource_probe_gpu(const SceneView& scene,
   const unsigned block = 128, grid = unsigned((hits.size() + block - 1) / block);
   onesource_probe_kernel<<<grid, block>>>(d.view(), d_hits, {d_out, hits.size()});
   cuda_check(cudaGetLastError(), "launching onesource_probe_kernel");
-  cuda_check(cudaMemcpy(out.data(), d_out, out.size() * sizeof(OneSourceResult),
-                        cudaMemcpyDeviceToHost),
-             "copying the probes back");
+  cuda_check(
+      cudaMemcpy(out.data(), d_out, out.size() * sizeof(OneSourceResult), cudaMemcpyDeviceToHost),
+      "copying the probes back");
   return out;
 }
 
