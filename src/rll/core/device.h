@@ -7,7 +7,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <type_traits>
 #include <vector>
 
 #if defined(__CUDACC__)
@@ -42,13 +41,8 @@ struct View {
   RLL_HD T* begin() const { return data; }
   RLL_HD T* end() const { return data + size; }
   RLL_HD bool empty() const { return size == 0; }
-  // A view of const elements of the same array (for views of non-const elements only: nvcc
-  // warns of a conversion to the view's own type).
-  template <typename U>
-    requires(std::is_same_v<U, const T> && !std::is_const_v<T>)
-  RLL_HD operator View<U>() const {
-    return {data, size};
-  }
+  // A view of const elements of the same array.
+  RLL_HD operator View<const T>() const { return {data, size}; }
 };
 
 template <typename T>
