@@ -97,7 +97,11 @@ TEST_P(BvhScene, AgreesWithEmbree) {
   Accel accel(scene.mesh);
   double embree_build = seconds_since(start);
   Bvh bvh = build_bvh(scene.mesh);
-  std::vector<Ray> rays = test_rays(scene, kRays, 7);
+  // many-lights-1m's rays cross a field of a million tiny triangles, some 30x slower per ray than
+  // the other scenes' for either tracer (Embree 0.03 M rays/s against 0.8-1.3 on 2 busy cores):
+  // it gets 20,000 rays, closest hits and occlusion.
+  bool slow = GetParam() == "many-lights-1m";
+  std::vector<Ray> rays = test_rays(scene, slow ? kRays / 50 : kRays, 7);
   Agreement g = compare(accel, bvh.view(), rays);
   auto mrays = [&](double s) { return double(g.rays) / s * 1e-6; };
   std::printf(
