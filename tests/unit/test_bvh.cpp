@@ -28,10 +28,14 @@ constexpr size_t kRays = 1'000'000 / 16;
 constexpr size_t kRays = 1'000'000;
 #endif
 
-// The largest share of rays on which the two tracers may disagree: a ray through an edge or a
-// vertex, where Embree and the watertight test can pick different triangles at different
-// distances, or hit where the other grazes past. Measured: at most 2e-5 (report in the log).
-constexpr double kMaxDisagreement = 1e-4;
+// The largest share of rays on which the two tracers may disagree: rays whose answer float
+// rounding decides, where Embree's triangle test and the watertight one may each go either way: a
+// ray through an edge or a vertex, a ray leaving a surface that meets a neighbouring triangle at
+// t just above tmin, a segment between two points of one flat facet (in its plane). Measured on
+// 1e6 rays: 2.3e-4 closest on the furnace (a coarse sphere seen from inside, the worst), at
+// most 4e-5 elsewhere; a traversal that skips a leaf's last triangle or drops the far child
+// differs on more than a quarter of the rays.
+constexpr double kMaxDisagreement = 5e-4;
 
 Scene finalized(const std::string& name) {
   Scene s = make_builtin_scene(name);
