@@ -363,8 +363,8 @@ TEST(LightTree, FinalizeBuildsNoTreeAndSamplersSayWhatIsMissing) {
   s.height = 12;
   s.finalize();
   EXPECT_FALSE(s.light_tree);
-  expect_mentions(error_of([&] { TreeLightSampler sampler(s); }),
-                  {"builtin:cornell-box", "light tree"});
+  test::expect_mentions(test::error_of([&] { TreeLightSampler sampler(s); }),
+                        {"builtin:cornell-box", "light tree"});
   build_light_tree(s);
   ASSERT_TRUE(s.light_tree);
   expect_tree_invariants(light_tree_of(s), s.lights);

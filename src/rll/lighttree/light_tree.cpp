@@ -505,6 +505,10 @@ int LightTree::contributing_groups(uint32_t node, const Vec3& p, const Vec3& n) 
 }
 
 void build_light_tree(Scene& scene) {
+  // A build over lights already in tree order can order ties differently, which would change
+  // the scene's fingerprint: the tree finalize() left in place (it drops any tree when it remakes
+  // the lights) is kept.
+  if (scene.light_tree && scene.light_tree->light_count() == scene.lights.size()) return;
   scene.light_tree = std::make_shared<LightTree>(LightTree::build(scene));
 }
 

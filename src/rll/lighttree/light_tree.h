@@ -103,9 +103,9 @@ class LightTree {
 // Builds the light tree of a finalized scene into scene.light_tree and reorders scene.lights
 // (and the mesh's triangle -> light ids) into tree order. The render session calls it once,
 // right after loading; so does every other user of a tree (the reference cache, tests,
-// benchmarks). Scene::fingerprint, and with it reference keys, render shares and learnt states,
-// is taken after it: the light order it hashes is the tree's, as it was when finalize() built
-// the tree.
+// benchmarks). A scene that has its tree keeps it (building again could order ties otherwise).
+// Scene::fingerprint, and with it reference keys, render shares and learnt states, is taken
+// after it: the light order it hashes is the tree's, as it was when finalize() built the tree.
 void build_light_tree(Scene& scene);
 // The tree that build_light_tree made for `scene`; throws rll::Error naming the scene if none
 // was built.
