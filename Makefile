@@ -46,7 +46,7 @@ FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 60
 fuzz: deps
 	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-		-DRLL_FUZZ=ON -DRLL_TESTS=OFF -DRLL_BENCH=OFF
+		-DRLL_FUZZ=ON -DRLL_TESTS=OFF -DRLL_BENCH=OFF -DRLL_CUDA=OFF
 	cmake --build $(FUZZ_BUILD) -j $(JOBS)
 	@scripts/fuzz.sh $(FUZZ_BUILD) $(FUZZ_SECONDS)
 

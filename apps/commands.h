@@ -20,6 +20,7 @@ void add_compare_command(CLI::App& app);
 void add_convert_command(CLI::App& app);
 void add_merge_command(CLI::App& app);
 void add_error_command(CLI::App& app);
+void add_devices_command(CLI::App& app);
 
 // ASCII lower case (file extensions).
 std::string lower(std::string s);

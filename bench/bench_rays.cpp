@@ -9,6 +9,7 @@
 #include "rll/core/error.h"
 #include "rll/core/params.h"
 #include "rll/core/parallel.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/render/render.h"
 #include "rll/io/load.h"
 
@@ -26,6 +27,7 @@ int main(int argc, char** argv) try {
   int threads = argc > 4 ? std::atoi(argv[4]) : 0;
   ThreadLimit limit(threads);
   Scene scene = load_scene(scene_name);
+  build_light_tree(scene);
   Accel accel(scene.mesh);
   Params params;
   auto sampler = make_light_sampler(sampler_name, scene, params);

@@ -9,7 +9,7 @@
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
 #include "rll/lights/light_sampler.h"
-#include "rll/lights/light_tree.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/render/render.h"
 #include "rll/scene/builder.h"
 
@@ -37,6 +37,7 @@ Scene emitter_field_scene(int n) {
   s.camera.target = Vec3(0, 0, 0);
   s.has_camera = true;
   s.finalize();
+  build_light_tree(s);
   return s;
 }
 

@@ -11,6 +11,7 @@
 #include "rll/accel/accel.h"
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/scene/builtin.h"
 #include "support/sampler_contexts.h"
 #include "support/statistics.h"
@@ -79,6 +80,7 @@ Fixture make_fixture(const SamplerCase& c, const std::string& scene_name, PointS
   f.scene.width = 48;
   f.scene.height = 36;
   f.scene.finalize();
+  build_light_tree(f.scene);
   f.accel = std::make_unique<Accel>(f.scene.mesh);
   Params params = Params::parse(c.set);
   f.sampler = make_light_sampler(c.sampler, f.scene, params);

@@ -15,6 +15,7 @@
 #include "rll/core/rng.h"
 #include "rll/lights/rll_sampler.h"
 #include "rll/lights/tree_sampler.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/render/render.h"
 #include "rll/scene/builder.h"
 #include "rll/scene/builtin.h"
@@ -52,6 +53,7 @@ Scene two_lamps() {
   s.camera.fov = 40;
   s.has_camera = true;
   s.finalize();
+  build_light_tree(s);
   return s;
 }
 
@@ -417,6 +419,7 @@ TEST(RllLearning, AnimatedFramesRefitAndStayUnbiased) {
   for (int f = 0; f < 3; ++f) {
     scene.animate(scene, f);
     scene.refresh_lights_from_mesh();
+    refit_light_tree(scene);
     accel.update_vertices(scene.mesh);
     rll.lights_changed(scene);
     train_sampler(scene, accel, rll, 8);
@@ -481,6 +484,7 @@ TEST(RllLearning, PoolSharesFollowTheLampsThatSwitchOff) {
   const auto before = shares_of(rll);
   scene.animate(scene, 1);
   scene.refresh_lights_from_mesh();
+  refit_light_tree(scene);
   accel.update_vertices(scene.mesh);
   rll.lights_changed(scene);
   const auto after = shares_of(rll);

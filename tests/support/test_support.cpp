@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -16,6 +17,7 @@
 #include "rll/core/parallel.h"
 #include "rll/core/params.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/render/render.h"
 #include "rll/scene/builtin.h"
 
@@ -84,10 +86,15 @@ Scene small_builtin_scene(const std::string& name, int width, int height) {
   s.width = width;
   s.height = height;
   s.finalize();
+  build_light_tree(s);
   return s;
 }
 
-Image render_scene(const Scene& scene, const RenderRequest& req) {
+Image render_scene(const Scene& given, const RenderRequest& req) {
+  // A scene without a tree renders as a render session would render it: with one.
+  std::optional<Scene> treed;
+  if (!given.light_tree) build_light_tree(treed.emplace(given));
+  const Scene& scene = treed ? *treed : given;
   ThreadLimit limit(req.threads);
   Params params = Params::parse(req.set);
   Accel accel(scene.mesh);
@@ -198,8 +205,7 @@ void expect_images_agree(const Image& a, const Image& b, const std::string& what
 }
 
 RenderRequest request(const std::string& sampler, const std::string& integrator, int max_depth,
-                      const std::string& strategy, int spp, uint64_t seed,
-                      PointSet points) {
+                      const std::string& strategy, int spp, uint64_t seed, PointSet points) {
   RenderRequest r;
   r.sampler = sampler;
   std::vector<std::string> set;

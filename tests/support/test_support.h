@@ -81,9 +81,9 @@ RenderRequest request(const std::string& sampler, const std::string& integrator,
                       const std::string& strategy, int spp, uint64_t seed,
                       PointSet points = PointSet::Sobol);
 
-Scene small_builtin_scene(const std::string& name, int width, int height);
+Scene small_builtin_scene(const std::string& name, int width, int height);  // with its light tree
 
-// Renders an already finalized scene and returns the per-pixel mean image.
+// Renders a finalized scene (from a copy with a light tree, where it has none): the mean image.
 Image render_scene(const Scene& scene, const RenderRequest& request);
 
 // Mean over all pixels and channels.

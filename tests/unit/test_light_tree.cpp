@@ -9,11 +9,13 @@
 
 #include "rll/accel/accel.h"
 #include "rll/core/rng.h"
-#include "rll/lights/light_tree.h"
 #include "rll/lights/tree_sampler.h"
+#include "rll/lighttree/light_tree.h"
+#include "rll/render/session.h"
 #include "rll/scene/builder.h"
 #include "rll/scene/builtin.h"
 #include "support/sampler_contexts.h"
+#include "support/test_support.h"
 
 using namespace rll;
 
@@ -25,6 +27,7 @@ Scene builtin(const std::string& name, void (*edit)(Scene&) = nullptr) {
   s.height = 12;
   if (edit) edit(s);
   s.finalize();
+  build_light_tree(s);
   return s;
 }
 
@@ -161,6 +164,7 @@ TEST(LightTree, DegenerateLayoutsStayShallow) {
       s.lights.push_back(make_point_light(p, Rgb(1.0f + float(i % 7))));
     }
     s.finalize();
+    build_light_tree(s);
     SCOPED_TRACE(layout);
     expect_tree_invariants(*s.light_tree, s.lights);
     EXPECT_LE(int(s.light_tree->depth()), layout == 0 ? 200 : 11);
@@ -247,6 +251,7 @@ TEST(LightTree, TinyImportanceNextToAHugeOneKeepsAPositivePmf) {
   b.triangle(Vec3(-1, 1, -1), Vec3(1, 1, -1), Vec3(0, 1, 1), b.emitter(Rgb(1e6f)));
   b.triangle(Vec3(-0.01f, 100, 0), Vec3(0.01f, 100, 0), Vec3(0, 100, 0.01f), b.emitter(Rgb(1e-3f)));
   s.finalize();
+  build_light_tree(s);
   ASSERT_EQ(s.lights.size(), 2u);
   ASSERT_EQ(s.light_tree->node_count(), 3u);
   TreeLightSampler sampler(s);
@@ -271,6 +276,7 @@ TEST(LightTree, RefitAfterLightsMoveKeepsBoundsConservative) {
     SCOPED_TRACE(frame);
     s.animate(s, frame);
     s.refresh_lights_from_mesh();
+    refit_light_tree(s);
     accel.update_vertices(s.mesh);
     expect_tree_invariants(*s.light_tree, s.lights);
     expect_conservative_bounds(*s.light_tree, s.lights);
@@ -347,4 +353,72 @@ TEST(LightBounds, ImportanceStopsGrowingAtTheLightsArea) {
   EXPECT_EQ(b2.side_power, b.side_power);
   EXPECT_NEAR(light_importance(b2, Vec3(0.5f, -3, 0.3f), Vec3(0, 1, 0)),
               light_importance(b, Vec3(0.5f, -3, 0.3f), Vec3(0, 1, 0)), 1e-6f);
+}
+
+// The tree is built by whoever renders (the render session), not by Scene::finalize: a sampler
+// made over a scene without one says so, naming the scene, instead of reading a null tree.
+TEST(LightTree, FinalizeBuildsNoTreeAndSamplersSayWhatIsMissing) {
+  Scene s = make_builtin_scene("cornell-box");
+  s.width = 16;
+  s.height = 12;
+  s.finalize();
+  EXPECT_FALSE(s.light_tree);
+  test::expect_mentions(test::error_of([&] { TreeLightSampler sampler(s); }),
+                        {"builtin:cornell-box", "light tree"});
+  build_light_tree(s);
+  ASSERT_TRUE(s.light_tree);
+  expect_tree_invariants(light_tree_of(s), s.lights);
+  // finalize() again remakes the triangle lights: the old tree would index them wrongly.
+  s.finalize();
+  EXPECT_FALSE(s.light_tree);
+}
+
+// Everything keyed by the light order (reference keys, render shares, learnt states) is keyed
+// by the order a tree build leaves: building again on the same scene must not move a light.
+TEST(LightTree, BuildingAgainKeepsTheLightOrder) {
+  for (const char* name : {"cornell-boxes-room", "arch-interior", "many-lights-open"}) {
+    SCOPED_TRACE(name);
+    Scene s = builtin(name);
+    const uint64_t fingerprint = s.fingerprint();
+    const std::vector<Light> order = s.lights;
+    build_light_tree(s);
+    ASSERT_EQ(s.lights.size(), order.size());
+    for (size_t l = 0; l < order.size(); ++l) {
+      ASSERT_EQ(s.lights[l].type, order[l].type) << "light " << l;
+      ASSERT_EQ(s.lights[l].triangle, order[l].triangle) << "light " << l;
+    }
+    EXPECT_EQ(s.fingerprint(), fingerprint);
+  }
+}
+
+// The session builds the tree after loading, so the fingerprints of its scenes, which learnt
+// states and cached references were saved under, are those of the scenes whose finalize() built
+// the tree (the values before the tree left Scene). A builtin scene that changes on purpose
+// changes its value here too.
+TEST(LightTree, SessionScenesKeepTheirFingerprints) {
+  const std::pair<const char*, uint64_t> expected[] = {
+      {"builtin:cornell-boxes-room", 0xdb061c600378efb3ull},
+      {"builtin:arch-interior", 0x7ed099802e51520bull},
+  };
+  for (const auto& [scene, fingerprint] : expected) {
+    SessionSettings ss;
+    ss.scene = scene;
+    ss.resolution = "64x48";
+    RenderSession session(ss);
+    EXPECT_EQ(session.scene().fingerprint(), fingerprint) << scene;
+  }
+}
+
+// Between frames the session refits the tree it built: its bounds stay conservative as the
+// lamps of cornell-boxes-dynamic move and switch.
+TEST(LightTree, SessionRefitsTheTreeBetweenFrames) {
+  SessionSettings ss;
+  ss.scene = "builtin:cornell-boxes-dynamic";
+  ss.resolution = "16x12";
+  RenderSession session(ss);
+  for (int frame : {1, 3}) {
+    SCOPED_TRACE(frame);
+    session.set_frame(frame, nullptr);
+    expect_conservative_bounds(light_tree_of(session.scene()), session.scene().lights);
+  }
 }

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #if defined(__CUDACC__)
@@ -41,8 +42,10 @@ struct View {
   RLL_HD T* begin() const { return data; }
   RLL_HD T* end() const { return data + size; }
   RLL_HD bool empty() const { return size == 0; }
-  // A view of const elements of the same array.
-  RLL_HD operator View<const T>() const { return {data, size}; }
+  // A view of const elements of the same array (a template, so that View<const T> declares no
+  // conversion to itself, which nvcc warns about).
+  template <typename U = T>
+  requires(!std::is_const_v<U>) RLL_HD operator View<const U>() const { return {data, size}; }
 };
 
 template <typename T>

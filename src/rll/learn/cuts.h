@@ -14,7 +14,7 @@
 
 #include "rll/core/binary_io.h"
 #include "rll/learn/cell_grid.h"
-#include "rll/lights/light_tree.h"
+#include "rll/lighttree/light_tree.h"
 
 namespace rll {
 

@@ -10,6 +10,7 @@
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
 #include "rll/core/sampling.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/scene/scene.h"
 
 namespace rll {
@@ -159,7 +160,7 @@ inline double unit_hash(uint64_t key, uint64_t node, uint64_t pass) {
 }  // namespace
 
 LtcLightSampler::LtcLightSampler(const Scene& scene, const LtcSettings& s)
-    : m_tree(*scene.light_tree), m_s(s), m_m(s.max_cut) {
+    : m_tree(light_tree_of(scene)), m_s(s), m_m(s.max_cut) {
   if (m_tree.depth() >= kMaxTreeDepth) fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
   m_clusters = SpatialClusters::build(scene, s.clusters);
   m_initial = power_cut(m_tree, s.initial_cut);
@@ -268,12 +269,12 @@ uint32_t LtcLightSampler::find_node(uint32_t entry, uint32_t light) const {
 
 SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
   const uint32_t e = ctx.cell;
-  if (e == kNoCell) return tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u);
+  if (e == kNoCell) return sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u));
   if (!has_cut(e)) {
     // The entry's first pass: sample like the tree; the reward goes to the node of the global
     // cut that holds the light, whose P(l | node) is the descent's product below that node.
     DescentPath path;
-    SampledLight s = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &path);
+    SampledLight s = sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &path));
     if (!(s.pmf > 0)) return {};
     s.cluster = uint32_t(std::upper_bound(m_initial_ends.begin(), m_initial_ends.end(), s.light) - m_initial_ends.begin());
     const int at = path.index_of(m_initial[s.cluster]);
@@ -292,7 +293,7 @@ SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
   const double lo = k > 0 ? double(cdf[k - 1]) : 0.0, q = double(cdf[k]) - lo;
   if (!(q > 0)) return {};
   const double uw = std::clamp((u - lo) / q, 0.0, 0x1.fffffffffffffp-1);
-  SampledLight w = tree_descend(m_tree, m_node[base + k], ctx.p, ctx.n, uw);
+  const TreeSample w = tree_descend(m_tree, m_node[base + k], ctx.p, ctx.n, uw);
   if (!(w.pmf > 0)) return {};
   SampledLight s;
   s.light = w.light;

@@ -11,6 +11,7 @@
 #include "rll/core/rng.h"
 #include "rll/core/sampling.h"
 #include "rll/learn/cuts.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/lights/tree_sampler.h"
 #include "rll/scene/interaction.h"
 
@@ -41,11 +42,11 @@ struct CellPoint {
 // descent inside the node.
 double estimate(const Scene& scene, const Accel& accel, uint32_t node, const std::vector<LightContext>& pts,
                 int rays, Pcg32& rng, uint64_t& traced) {
-  const LightTree& tree = *scene.light_tree;
+  const LightTree& tree = light_tree_of(scene);
   double sum = 0;
   for (const LightContext& x : pts)
     for (int r = 0; r < rays; ++r) {
-      SampledLight t = tree_descend(tree, node, x.p, x.n, rng.next_double());
+      const TreeSample t = tree_descend(tree, node, x.p, x.n, rng.next_double());
       Vec2 u{rng.next_float(), rng.next_float()};
       if (!(t.pmf > 0)) continue;
       const Light& light = scene.lights[t.light];
@@ -85,7 +86,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
   fixed.cut.pool_levels = 0;  // it knows each cell's clusters: nothing to pool
   fixed.cut.pool_up = 0;
   m_rll = std::make_unique<RllLightSampler>(scene, fixed);
-  const LightTree& tree = *scene.light_tree;
+  const LightTree& tree = light_tree_of(scene);
 
   // 1. Discovery: camera paths (diffuse bounces) find the cells and points where NEE happens.
   const int w = scene.width, h = scene.height;

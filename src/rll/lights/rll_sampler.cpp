@@ -13,6 +13,7 @@
 #include "rll/core/params.h"
 #include "rll/core/sampling.h"
 #include "rll/core/sysinfo.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/lights/tree_sampler.h"
 #include "rll/scene/scene.h"
 
@@ -133,7 +134,7 @@ void check_memory(const RllSettings& s) {
 }  // namespace
 
 RllLightSampler::RllLightSampler(const Scene& scene, const RllSettings& s)
-    : m_tree(*scene.light_tree), m_s(s), m_keyer(s.grid, scene.bounds) {
+    : m_tree(light_tree_of(scene)), m_s(s), m_keyer(s.grid, scene.bounds) {
   check_memory(s);
   m_table = std::make_unique<CellTable>(s.capacity);
   // Guided: the rewards are ratios to the tree's importance, of the order of a reflectance.
@@ -208,7 +209,7 @@ SampledLight RllLightSampler::sample_within(const LightContext& ctx, uint32_t no
                                             double u) const {
   const uint32_t count = end - begin;
   if (count == 1) return {begin, 1.0f};
-  if (descends(begin, end)) return tree_descend(m_tree, node, ctx.p, ctx.n, u);
+  if (descends(begin, end)) return sampled_light(tree_descend(m_tree, node, ctx.p, ctx.n, u));
   if (m_s.within != WithinCluster::Uniform) {
     // The static table: light powers in tree order as a prefix sum.
     double lo = m_power_prefix[begin], total = m_power_prefix[end] - lo;
@@ -281,7 +282,7 @@ SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
     // A point without a learnt cut (a cell new in this pass, or none: table full) samples
     // like the light tree. Its reward still goes to its cluster of the initial cut: given the
     // cluster, the tree chose the light with the probability of the path below the cluster.
-    SampledLight s = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &path);
+    SampledLight s = sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &path));
     if (!(s.pmf > 0)) return {};
     s.cluster = cluster_of(v, s.light);
     int at = path.index_of(v.nodes[s.cluster]);
@@ -297,7 +298,7 @@ SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
   const DescentPath* descent = nullptr;
   if (u < eps) {
     // The defensive branch: a descent of the whole tree, then its cluster in this cut.
-    SampledLight t = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u / eps, &path);
+    const TreeSample t = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u / eps, &path);
     if (!(t.pmf > 0)) return {};
     l = t.light;
     k = cluster_of(v, l);

@@ -4,6 +4,7 @@
 #include <charconv>
 
 #include "rll/core/error.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/render/progress.h"
 
 namespace rll {
@@ -39,6 +40,8 @@ RenderSession::RenderSession(const SessionSettings& settings)
   const LoadOptions lo = parse_resolution(settings.resolution);
   m_points = parse_point_set(settings.points, "--points");
   m_scene = load_scene(settings.scene, lo);
+  // Reorders the lights: everything keyed by their order (fingerprint, learnt states) follows.
+  build_light_tree(m_scene);
   m_integrator = make_integrator_settings(settings.integrator, settings.max_depth, m_params);
   m_accel = std::make_unique<Accel>(m_scene.mesh);
 }
@@ -69,6 +72,7 @@ void RenderSession::set_frame(int frame, LightSampler* sampler) {
   if (!m_scene.animate) return;
   m_scene.animate(m_scene, frame);
   m_scene.refresh_lights_from_mesh();
+  refit_light_tree(m_scene);
   m_accel->update_vertices(m_scene.mesh);
   if (sampler) sampler->lights_changed(m_scene);
 }

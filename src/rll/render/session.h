@@ -37,7 +37,7 @@ LoadOptions parse_resolution(const std::string& resolution);
 
 class RenderSession {
  public:
-  // Parses the parameters, loads and finalizes the scene, builds its acceleration structure.
+  // Parses the parameters, loads and finalizes the scene, builds its light tree and its accel.
   explicit RenderSession(const SessionSettings& settings);
 
   Scene& scene() { return m_scene; }

@@ -7,7 +7,6 @@
 
 #include "rll/core/error.h"
 #include "rll/core/hash.h"
-#include "rll/lights/light_tree.h"
 #include "rll/scene/interaction.h"
 
 namespace rll {
@@ -280,7 +279,9 @@ void Scene::finalize() {
   if (sky && sky_triangle_count == 0) add_sky_dome(*this, *sky, bounds.center(), radius * sky->radius_scale);
 
   mesh.light.assign(mesh.triangles.size(), -1);
-  // Drop triangle lights from an earlier finalize() (finalize is idempotent).
+  // Drop triangle lights from an earlier finalize() (finalize is idempotent), and the tree over
+  // them, which would no longer match the lights.
+  light_tree.reset();
   std::erase_if(lights, [](const Light& l) { return l.type == LightType::Triangle; });
   for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     const Material& m = materials[mesh.material[t]];
@@ -333,7 +334,6 @@ void Scene::finalize() {
     fail("{}: camera 'up' must not be parallel to the viewing direction", source);
   if (!(camera.fov > 0 && camera.fov < 180)) fail("{}: camera fov must be in (0, 180) degrees", source);
   camera.setup(width, height);
-  build_light_tree(*this);
 }
 
 void Scene::reorder_lights(const std::vector<uint32_t>& order) {
@@ -354,7 +354,6 @@ void Scene::refresh_lights_from_mesh() {
     l.radiance = materials[mesh.material[l.triangle]].emission;
     refresh_triangle_light(l);
   }
-  if (light_tree) light_tree->refit(lights);
 }
 
 static_assert(sizeof(Vec3) == 12 && sizeof(Vec2) == 8, "hashed as packed floats");

@@ -76,7 +76,7 @@ struct Scene {
   bool is_sky_triangle(size_t t) const {
     return t >= sky_first_triangle && t < sky_first_triangle + sky_triangle_count;
   }
-  // The reference light tree over `lights`, which finalize() reorders into tree order.
+  // The light tree over `lights`: null until build_light_tree (rll/lighttree/) builds it.
   std::shared_ptr<LightTree> light_tree;
 
   // Animated scenes move lights between frames: called with the frame index, it updates the
@@ -85,8 +85,8 @@ struct Scene {
   int frame_count = 1;
 
   // Validates the scene (finite vertices, valid indices, at least one light, film size), adds
-  // the sky dome, creates one light per emissive triangle, fits a camera if none was given and
-  // builds the light tree (reordering the lights). Throws rll::Error naming `source`.
+  // the sky dome, creates one light per emissive triangle and fits a camera if none was given;
+  // build_light_tree (not this) builds the light tree. Throws rll::Error naming `source`.
   void finalize();
 
   // A hash of everything in the finalized scene that the expected image depends on (mesh
@@ -100,7 +100,7 @@ struct Scene {
   // Reorders lights: new_lights[i] = lights[order[i]]; triangle->light ids follow.
   void reorder_lights(const std::vector<uint32_t>& order);
   // Re-reads triangle light geometry and emission from the mesh and materials (after
-  // animate()) and refits the light tree.
+  // animate()); the light tree, if any, is refitted by refit_light_tree.
   void refresh_lights_from_mesh();
 };
 

@@ -1,4 +1,4 @@
-#include "rll/lights/light_bounds.h"
+#include "rll/lighttree/light_bounds.h"
 
 namespace rll {
 

@@ -1,4 +1,4 @@
-#include "rll/lights/light_tree.h"
+#include "rll/lighttree/light_tree.h"
 
 #include <algorithm>
 #include <atomic>
@@ -505,7 +505,20 @@ int LightTree::contributing_groups(uint32_t node, const Vec3& p, const Vec3& n) 
 }
 
 void build_light_tree(Scene& scene) {
+  // A build over lights already in tree order can order ties differently, which would change
+  // the scene's fingerprint: the tree finalize() left in place (it drops any tree when it remakes
+  // the lights) is kept.
+  if (scene.light_tree && scene.light_tree->light_count() == scene.lights.size()) return;
   scene.light_tree = std::make_shared<LightTree>(LightTree::build(scene));
+}
+
+const LightTree& light_tree_of(const Scene& scene) {
+  if (!scene.light_tree) fail("{}: the light tree was not built (build_light_tree)", scene.source);
+  return *scene.light_tree;
+}
+
+void refit_light_tree(Scene& scene) {
+  if (scene.light_tree) scene.light_tree->refit(scene.lights);
 }
 
 }  // namespace rll

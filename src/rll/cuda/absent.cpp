@@ -1,0 +1,44 @@
+// The CUDA backend where rll was built without nvcc: no GPUs, and a check that says why.
+#include "rll/core/error.h"
+#include "rll/cuda/cuda.h"
+#include "rll/cuda/trace.h"
+
+namespace rll::cuda {
+
+bool cuda_built() {
+  return false;
+}
+
+std::vector<GpuInfo> gpus() {
+  return {};
+}
+
+void require_gpu() {
+  fail(
+      "this rll was built without CUDA (nvcc was not found when it was configured): install the "
+      "CUDA toolkit (nvcc on PATH or in /usr/local/cuda/bin) and re-run cmake");
+}
+
+// cuda/trace.h: every entry needs a GpuBvh, whose constructor says why there is none.
+struct GpuBvh::Impl {};
+GpuBvh::GpuBvh(const Bvh&) {
+  require_gpu();
+}
+GpuBvh::~GpuBvh() = default;
+size_t GpuBvh::bytes() const {
+  return 0;
+}
+std::vector<Hit> gpu_intersect(const GpuBvh&, const std::vector<Ray>&) {
+  require_gpu();
+  return {};
+}
+std::vector<uint8_t> gpu_occluded(const GpuBvh&, const std::vector<Ray>&) {
+  require_gpu();
+  return {};
+}
+TraceRate gpu_trace_rate(const GpuBvh&, const std::vector<Ray>&, bool, int) {
+  require_gpu();
+  return {};
+}
+
+}  // namespace rll::cuda

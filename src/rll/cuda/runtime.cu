@@ -1,0 +1,105 @@
+// The CUDA backend's host side: errors as rll::Error, the device list, the GPU check, the timer.
+#include <fmt/format.h>
+
+#include "rll/core/error.h"
+#include "rll/cuda/cuda.h"
+#include "rll/cuda/launch.cuh"
+
+namespace rll::cuda {
+
+namespace {
+// The compute capability that rll's kernels are built for (sm_90 and its PTX): older GPUs cannot
+// run them.
+constexpr int kMinSmMajor = 9;
+
+std::string version_text(int v) {
+  return fmt::format("{}.{}", v / 1000, v % 1000 / 10);
+}
+}  // namespace
+
+void check(cudaError_t e, const char* what) {
+  if (e != cudaSuccess) fail("CUDA: {}: {}", what, cudaGetErrorString(e));
+}
+
+namespace detail {
+void size_mismatch(const char* what, size_t expected, size_t got) {
+  fail("CUDA: {}: the device array holds {} elements, the host side {}", what, expected, got);
+}
+}  // namespace detail
+
+EventTimer::EventTimer() {
+  check(cudaEventCreate(&m_start), "cudaEventCreate");
+  check(cudaEventCreate(&m_stop), "cudaEventCreate");
+}
+
+EventTimer::~EventTimer() {
+  cudaEventDestroy(m_start);
+  cudaEventDestroy(m_stop);
+}
+
+void EventTimer::start(cudaStream_t s) {
+  check(cudaEventRecord(m_start, s), "cudaEventRecord");
+}
+
+float EventTimer::stop_ms(cudaStream_t s) {
+  check(cudaEventRecord(m_stop, s), "cudaEventRecord");
+  check(cudaEventSynchronize(m_stop), "cudaEventSynchronize");
+  float ms = 0;
+  check(cudaEventElapsedTime(&ms, m_start, m_stop), "cudaEventElapsedTime");
+  return ms;
+}
+
+bool cuda_built() {
+  return true;
+}
+
+std::vector<GpuInfo> gpus() {
+  int driver = 0, runtime = 0, count = 0;
+  if (cudaDriverGetVersion(&driver) != cudaSuccess || driver == 0) return {};
+  cudaRuntimeGetVersion(&runtime);
+  if (cudaGetDeviceCount(&count) != cudaSuccess) {
+    cudaGetLastError();  // the failure is the answer; leave no error behind for later calls
+    return {};
+  }
+  std::vector<GpuInfo> result;
+  for (int d = 0; d < count; ++d) {
+    cudaDeviceProp p{};
+    if (cudaGetDeviceProperties(&p, d) != cudaSuccess) continue;
+    result.push_back(
+        {p.name, p.major, p.minor, p.multiProcessorCount, p.totalGlobalMem, driver, runtime});
+  }
+  return result;
+}
+
+void require_gpu() {
+  int driver = 0, runtime = 0, count = 0;
+  cudaRuntimeGetVersion(&runtime);
+  if (cudaDriverGetVersion(&driver) != cudaSuccess || driver == 0)
+    fail(
+        "no NVIDIA driver found: GPU work needs a machine with an NVIDIA GPU and its driver (CUDA "
+        "{} or newer); use the CPU renderer here",
+        version_text(runtime));
+  if (driver < runtime)
+    fail(
+        "the NVIDIA driver supports CUDA {}, older than the CUDA {} runtime rll was built with: "
+        "update the driver, or build rll with an older CUDA toolkit",
+        version_text(driver), version_text(runtime));
+  const cudaError_t e = cudaGetDeviceCount(&count);
+  if (e != cudaSuccess || count == 0) {
+    cudaGetLastError();
+    fail(
+        "no CUDA device found ({}): GPU work needs a machine with an NVIDIA GPU; use the CPU "
+        "renderer here",
+        e != cudaSuccess ? cudaGetErrorString(e) : "the driver lists none");
+  }
+  const std::vector<GpuInfo> all = gpus();
+  for (const GpuInfo& g : all)
+    if (g.sm_major >= kMinSmMajor) return;
+  if (all.empty()) fail("CUDA: the properties of the {} device(s) could not be read", count);
+  fail(
+      "no CUDA device runs rll's kernels: they are built for compute capability {}.0 and newer "
+      "(sm_90), and {} has {}.{}",
+      kMinSmMajor, all.front().name, all.front().sm_major, all.front().sm_minor);
+}
+
+}  // namespace rll::cuda
