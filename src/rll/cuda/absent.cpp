@@ -1,6 +1,7 @@
 // The CUDA backend where rll was built without nvcc: no GPUs, and a check that says why.
 #include "rll/core/error.h"
 #include "rll/cuda/cuda.h"
+#include "rll/cuda/onesource_check.h"
 #include "rll/cuda/trace.h"
 
 namespace rll::cuda {
@@ -42,3 +43,13 @@ TraceRate gpu_trace_rate(const GpuBvh&, const std::vector<Ray>&, bool, int) {
 }
 
 }  // namespace rll::cuda
+
+namespace rll {
+
+// cuda/onesource_check.h: the probes of the hot functions need a GPU.
+std::vector<OneSourceResult> onesource_probe_gpu(const SceneView&, const std::vector<Hit>&) {
+  cuda::require_gpu();
+  return {};
+}
+
+}  // namespace rll
