@@ -389,21 +389,22 @@ TEST(ImageFiles, ExrHeaderClaimsAreCheckedAgainstTheFileWithoutTakingTheirMemory
   patch_ints_after(share, attribute_marker("rll.share", "string"), 0, {INT32_MAX});
   EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_exr_file(share), "share.exr.*'rll.share'.*2147483647");
   EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(share), "share.exr.*'rll.share'");  // a texture
-  // A string inside a string vector.
+  // Counts inside values, which OpenEXR 3.1 checks itself (these pass without rll's check too):
+  // a string inside a string vector,
   const fs::path names = dir / "names.exr";
   write_exr_channels(names, {"R", "G", "B"}, [](Imf::Header& h) {
     h.insert("names", Imf::StringVectorAttribute({"abc"}));
   });
   patch_ints_after(names, attribute_marker("names", "stringvector"), 4, {INT32_MAX});
-  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(names), "names.exr.*'names'");
-  // A preview image of 60000 x 60000 (14 GB) in an attribute of 24 bytes.
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(names), "names.exr");
+  // a preview image of 60000 x 60000 (14 GB) in an attribute of 24 bytes,
   const fs::path preview = dir / "preview.exr";
   write_exr_channels(preview, {"R", "G", "B"}, [](Imf::Header& h) {
     h.insert("preview", Imf::PreviewImageAttribute(Imf::PreviewImage(2, 2)));
   });
   patch_ints_after(preview, attribute_marker("preview", "preview"), 4, {60000, 60000});
-  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(preview), "preview.exr.*60000x60000 preview");
-  // A tiled image of 16000 x 16000 one-pixel tiles: 2 GB of tile offsets the file cannot hold.
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(preview), "preview.exr");
+  // a tiled image of 16000 x 16000 one-pixel tiles: 2 GB of tile offsets the file cannot hold.
   const fs::path tiled = dir / "tiled.exr";
   {
     Imf::Header hd(64, 64);
@@ -414,7 +415,7 @@ TEST(ImageFiles, ExrHeaderClaimsAreCheckedAgainstTheFileWithoutTakingTheirMemory
   patch_ints_after(tiled, attribute_marker("dataWindow", "box2i"), 4, {0, 0, 15999, 15999});
   patch_ints_after(tiled, attribute_marker("displayWindow", "box2i"), 4, {0, 0, 15999, 15999});
   patch_ints_after(tiled, attribute_marker("tiles", "tiledesc"), 4, {1, 1});
-  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(tiled), "tiled.exr.*256000000 tiles");
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(tiled), "tiled.exr");
 }
 
 TEST(ImageFiles, ShareCountsMustBeUnsignedIntegers) {
