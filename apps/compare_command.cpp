@@ -139,20 +139,6 @@ struct ChosenReference {
   std::string caption;
 };
 
-// A reference file must be a linear, high-dynamic-range image with finite pixels.
-void check_reference_file(const std::string& path, const Image& image) {
-  const std::string ext = lower_extension(path);
-  if (ext == ".png")
-    fail("--reference {}: a PNG holds 8-bit sRGB values clamped at 1, not a rendering's radiance; "
-         "give the reference as .exr (or .hdr)",
-         path);
-  size_t bad = 0;
-  for (size_t i = 0; i < image.pixel_count(); ++i) bad += !is_finite(image[i]);
-  if (bad)
-    fail("--reference {}: {} pixels are NaN or infinite; every error against it would be NaN",
-         path, bad);
-}
-
 // The reference's own noise, in relMSE units: the mean of Var(ref) / (ref^2 + eps).
 double reference_noise_relmse(const Image& ref, const Image& variance) {
   double sum = 0;
@@ -167,8 +153,7 @@ ChosenReference choose_reference(const CompareOptions& o, const RenderSession& s
   ChosenReference ref;
   const Scene& scene = session.scene();
   if (!o.reference.empty()) {
-    ref.image = read_image(o.reference);
-    check_reference_file(o.reference, ref.image);
+    ref.image = read_measured_image(o.reference, MeasuredRole::reference);
     if (ref.image.width() != scene.width || ref.image.height() != scene.height)
       fail("--reference {}: the image is {}x{} but the scene renders at {}x{}", o.reference,
            ref.image.width(), ref.image.height(), scene.width, scene.height);
@@ -188,6 +173,7 @@ ChosenReference choose_reference(const CompareOptions& o, const RenderSession& s
              got.from_cache ? "reused" : "rendered and cached", got.info.image.string(),
              got.info.spp, got.info.sampler);
   ref.image = std::move(got.image);
+  check_measured_pixels(ref.image, got.info.image.string(), MeasuredRole::reference);
   ref.variance = std::move(got.variance);
   ref.json = {{"source", got.from_cache ? "cache" : "rendered"},
               {"cache_entry", got.info.image.string()},

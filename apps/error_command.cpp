@@ -20,13 +20,14 @@ struct ErrorOptions {
 };
 
 void run(const ErrorOptions& o) {
-  const Image image = read_image(o.image), reference = read_image(o.reference);
+  const Image image = read_measured_image(o.image, MeasuredRole::image),
+              reference = read_measured_image(o.reference, MeasuredRole::reference);
   if (image.width() != reference.width() || image.height() != reference.height())
     fail("error: '{}' is {}x{} and the reference '{}' is {}x{}", o.image, image.width(),
          image.height(), o.reference, reference.width(), reference.height());
   Image variance;
   if (!o.variance.empty()) {
-    variance = read_image(o.variance);
+    variance = read_measured_image(o.variance, MeasuredRole::reference_variance);
     if (variance.width() != reference.width() || variance.height() != reference.height())
       fail("error: --reference-variance '{}' is {}x{}, the reference {}x{}", o.variance,
            variance.width(), variance.height(), reference.width(), reference.height());

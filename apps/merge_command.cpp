@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "rll/core/error.h"
 #include "rll/core/image.h"
+#include "rll/eval/metrics.h"
 #include "rll/render/share.h"
 
 namespace rll::cli {
@@ -39,7 +40,7 @@ void merge(const MergeOptions& o) {
              output.string(), m.min_count,
              m.max_count != m.min_count ? fmt::format(" (up to {} in some pixels)", m.max_count) : "");
   if (!o.check_against.empty()) {
-    const Image ref = read_image(o.check_against);
+    const Image ref = read_measured_image(o.check_against, MeasuredRole::reference);
     const double d = max_relative_difference(m.file.image, ref);
     if (!(d <= o.tolerance))
       fail("merge --check-against {}: the merged image differs from it by up to {:.3g} "

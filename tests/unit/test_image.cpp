@@ -5,6 +5,9 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
+#include <ImfPreviewImageAttribute.h>
+#include <ImfStringAttribute.h>
+#include <ImfStringVectorAttribute.h>
 #include <ImfTiledOutputFile.h>
 #include <gtest/gtest.h>
 #include <sys/resource.h>
@@ -13,6 +16,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <sstream>
@@ -306,6 +310,119 @@ TEST(ImageFiles, AFolderIsNotAnImage) {
   fs::create_directory(dir / "tex.png");
   expect_mentions(error_of([&] { read_image(dir / "tex.png"); }), {"tex.png", "is a folder"});
   expect_mentions(error_of([&] { read_image(dir / "missing.png"); }), {"missing.png", "not found"});
+}
+
+// A 4 x 3 EXR of the given float channels, channel k holding (k + 1) / 4 everywhere, with
+// `header` filled in further by `more` (attributes).
+void write_exr_channels(const fs::path& path, const std::vector<std::string>& channels,
+                        const std::function<void(Imf::Header&)>& more = {}) {
+  const int w = 4, h = 3;
+  Imf::Header header(w, h);
+  for (const auto& c : channels) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+  if (more) more(header);
+  std::vector<std::vector<float>> data;
+  Imf::FrameBuffer fb;
+  for (size_t k = 0; k < channels.size(); ++k) {
+    data.emplace_back(size_t(w) * h, float(k + 1) / 4);
+    fb.insert(channels[k], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(data.back().data()),
+                                      sizeof(float), sizeof(float) * w));
+  }
+  Imf::OutputFile file(path.c_str(), header);
+  file.setFrameBuffer(fb);
+  file.writePixels(h);
+}
+
+// Overwrites the 32-bit little-endian integers `skip` bytes after the first `marker` in a file.
+void patch_ints_after(const fs::path& path, const std::string& marker, size_t skip,
+                      std::initializer_list<int32_t> values) {
+  std::string bytes = read_bytes(path);
+  const size_t at = bytes.find(marker);
+  ASSERT_NE(at, std::string::npos) << "no " << marker << " in " << path;
+  size_t pos = at + marker.size() + skip;
+  for (int32_t v : values) {
+    for (int b = 0; b < 4; ++b) bytes[pos++] = char((uint32_t(v) >> (8 * b)) & 0xff);
+  }
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// An attribute's name and type as they stand in an EXR header, each ended by a zero byte.
+std::string attribute_marker(const std::string& name, const std::string& type) {
+  return name + std::string(1, '\0') + type + std::string(1, '\0');
+}
+
+TEST(ImageFiles, ExrMissingAColourChannelIsRefusedNamingIt) {
+  TempDir dir;
+  write_exr_channels(dir / "gb.exr", {"G", "B"});
+  expect_mentions(error_of([&] { read_image(dir / "gb.exr"); }),
+                  {"gb.exr", "no channel R", "B, G"});
+  expect_mentions(error_of([&] { read_exr_file(dir / "gb.exr"); }), {"gb.exr", "no channel R"});
+  write_exr_channels(dir / "r.exr", {"R", "A"});
+  expect_mentions(error_of([&] { read_image(dir / "r.exr"); }), {"r.exr", "no channel G, B"});
+  // Luminance and chroma (Y, RY, BY) is not a grey image: reading its Y alone would lose colour.
+  write_exr_channels(dir / "yc.exr", {"Y", "RY", "BY"});
+  expect_mentions(error_of([&] { read_image(dir / "yc.exr"); }), {"yc.exr", "no channel R, G, B"});
+  // Other channels beside R, G and B are no harm.
+  write_exr_channels(dir / "rgba.exr", {"R", "G", "B", "A"});
+  EXPECT_EQ(read_image(dir / "rgba.exr")[5], Rgb(0.25f, 0.5f, 0.75f));
+}
+
+TEST(ImageFiles, LuminanceOnlyExrIsGreyOrRefusedAsTheCallerAsks) {
+  TempDir dir;
+  write_exr_channels(dir / "y.exr", {"Y"});
+  const Image grey = read_image(dir / "y.exr");  // a texture, an environment map
+  ASSERT_EQ(grey.pixel_count(), 12u);
+  for (size_t i = 0; i < grey.pixel_count(); ++i) ASSERT_EQ(grey[i], Rgb(0.25f)) << "pixel " << i;
+  expect_mentions(error_of([&] { read_image(dir / "y.exr", true, LuminanceOnly::refuse); }),
+                  {"y.exr", "luminance channel Y", "no R, G, B"});
+  // A render share is never grey.
+  expect_mentions(error_of([&] { read_exr_file(dir / "y.exr"); }), {"y.exr", "luminance"});
+}
+
+TEST(ImageFiles, ExrHeaderClaimsAreCheckedAgainstTheFileWithoutTakingTheirMemory) {
+  ::testing::FLAGS_gtest_death_test_style = "threadsafe";
+  TempDir dir;
+  // A string attribute claiming 2^31 - 1 bytes: OpenEXR alone allocates them before reading.
+  const fs::path share = dir / "share.exr";
+  write_exr_channels(share, {"R", "G", "B"},
+                     [](Imf::Header& h) { h.insert("rll.share", Imf::StringAttribute("{}")); });
+  ASSERT_LT(fs::file_size(share), 1000u);
+  patch_ints_after(share, attribute_marker("rll.share", "string"), 0, {INT32_MAX});
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_exr_file(share), "share.exr.*'rll.share'.*2147483647");
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(share), "share.exr.*'rll.share'");  // a texture
+  // Counts inside values, which OpenEXR 3.1 checks itself (these pass without rll's check too):
+  // a string inside a string vector,
+  const fs::path names = dir / "names.exr";
+  write_exr_channels(names, {"R", "G", "B"}, [](Imf::Header& h) {
+    h.insert("names", Imf::StringVectorAttribute({"abc"}));
+  });
+  patch_ints_after(names, attribute_marker("names", "stringvector"), 4, {INT32_MAX});
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(names), "names.exr");
+  // a preview image of 60000 x 60000 (14 GB) in an attribute of 24 bytes,
+  const fs::path preview = dir / "preview.exr";
+  write_exr_channels(preview, {"R", "G", "B"}, [](Imf::Header& h) {
+    h.insert("preview", Imf::PreviewImageAttribute(Imf::PreviewImage(2, 2)));
+  });
+  patch_ints_after(preview, attribute_marker("preview", "preview"), 4, {60000, 60000});
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(preview), "preview.exr");
+  // a tiled image of 16000 x 16000 one-pixel tiles: 2 GB of tile offsets the file cannot hold.
+  const fs::path tiled = dir / "tiled.exr";
+  {
+    Imf::Header hd(64, 64);
+    for (const char* c : {"R", "G", "B"}) hd.channels().insert(c, Imf::Channel(Imf::HALF));
+    hd.setTileDescription(Imf::TileDescription(64, 64));
+    Imf::TiledOutputFile out(tiled.c_str(), hd);
+  }
+  patch_ints_after(tiled, attribute_marker("dataWindow", "box2i"), 4, {0, 0, 15999, 15999});
+  patch_ints_after(tiled, attribute_marker("displayWindow", "box2i"), 4, {0, 0, 15999, 15999});
+  patch_ints_after(tiled, attribute_marker("tiles", "tiledesc"), 4, {1, 1});
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(tiled), "tiled.exr");
+}
+
+TEST(ImageFiles, ShareCountsMustBeUnsignedIntegers) {
+  TempDir dir;
+  write_exr_channels(dir / "float_count.exr", {"R", "G", "B", "count"});
+  expect_mentions(error_of([&] { read_exr_file(dir / "float_count.exr"); }),
+                  {"float_count.exr", "'count'", "32-bit unsigned"});
 }
 
 }  // namespace

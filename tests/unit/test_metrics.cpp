@@ -1,10 +1,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "rll/core/error.h"
 #include "rll/core/rng.h"
 #include "rll/eval/metrics.h"
+#include "support/test_support.h"
 
 using namespace rll;
 
@@ -179,4 +181,41 @@ TEST(Metrics, NoiseCorrectionRecoversTheErrorAgainstTheTrueImage) {
     EXPECT_GT(r / e, 1.4) << name;
     EXPECT_NEAR(c / e, 1.0, 0.04) << name;
   }
+}
+
+// What `rll error` and `rll compare` both refuse to measure with, and the message naming the
+// file, the pixel and the value.
+TEST(MeasuredImages, AreLinearFiniteNonNegativeRgbFiles) {
+  rll::test::TempDir dir;
+  Image good(4, 2, Rgb(0.5f));
+  write_image(dir / "good.exr", good);
+  EXPECT_EQ(read_measured_image(dir / "good.exr", MeasuredRole::reference)[3], Rgb(0.5f));
+  auto refusal = [&](const std::string& name, const Image& image, MeasuredRole role) {
+    write_image(dir / name, image);
+    return rll::test::error_of([&] { read_measured_image(dir / name, role); });
+  };
+  Image nan = good;
+  nan.at(3, 1).y = std::numeric_limits<float>::quiet_NaN();
+  rll::test::expect_mentions(
+      refusal("nan.exr", nan, MeasuredRole::image),
+      {"image '", "nan.exr'", "NaN", "1 of its values", "nan in channel G of pixel (3, 1)"});
+  Image negative = good;
+  negative.at(1, 0).x = -0.5f;
+  negative.at(2, 1).z = -1.0f;
+  rll::test::expect_mentions(refusal("neg.exr", negative, MeasuredRole::reference),
+                             {"reference '", "neg.exr'", "2 of its values",
+                              "-0.5 in channel R of pixel (1, 0)", "non-negative"});
+  Image inf = good;
+  inf[0].z = std::numeric_limits<float>::infinity();
+  rll::test::expect_mentions(
+      refusal("var.exr", inf, MeasuredRole::reference_variance),
+      {"reference variance '", "var.exr'", "inf in channel B of pixel (0, 0)"});
+  rll::test::expect_mentions(refusal("ldr.png", good, MeasuredRole::reference),
+                             {"reference '", "ldr.png'", "8-bit", ".exr"});
+  // The same checks for an image in memory (a cached reference).
+  rll::test::expect_mentions(rll::test::error_of([&] {
+                               check_measured_pixels(nan, "cache/x.exr", MeasuredRole::reference);
+                             }),
+                             {"reference 'cache/x.exr'", "pixel (3, 1)"});
+  EXPECT_NO_THROW(check_measured_pixels(good, "good.exr", MeasuredRole::reference));
 }

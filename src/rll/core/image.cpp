@@ -7,10 +7,12 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
+#include <fmt/ranges.h>
 #include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cstdio>
 #include <fstream>
@@ -76,11 +78,104 @@ uint64_t min_hdr_bytes(int64_t w, int64_t h) {
   return line * uint64_t(h);
 }
 
-// `extras`: also the string attributes and the "count" channel.
-ExrFile read_exr_unchecked(const fs::path& path, bool extras) {
+// An attribute name or type as a message can show it: printable ASCII, at most 64 bytes.
+std::string shown(const std::string& text) {
+  std::string out;
+  for (char c : text.substr(0, 64)) out += c >= 32 && c < 127 ? c : '?';
+  return text.size() > 64 ? out + "..." : out;
+}
+
+// OpenEXR takes the memory an attribute's size field claims before it reads the value (a
+// string attribute claiming 2^31 - 1 bytes costs 2 GiB in a file of 300 bytes), and its reader
+// has no bound to set. So the header is walked here first, reading only the header's bytes, and
+// every attribute's size is checked against the bytes the file has left. (The counts inside
+// values, a string vector's lengths, a preview's size, a tiled file's offset table, OpenEXR
+// 3.1 checks itself: tests/unit/test_image.cpp keeps them in bounded memory.) The layout
+// (OpenEXR's "file layout" document): magic number and version (8 bytes), then per part the
+// attributes (name\0 type\0 int32 size, value), ended by an empty name; a multi-part file ends
+// its list of headers with one more empty name.
+void check_exr_header(const fs::path& path) {
   const std::string name = path.string();
+  std::error_code ec;
+  const uint64_t file_size = fs::file_size(path, ec);
+  std::ifstream in(path, std::ios::binary);
+  if (ec || !in) fail("cannot read '{}'", name);
+  auto damaged = [&](const std::string& why) {
+    fail("cannot read '{}': not an OpenEXR file, or a damaged one ({})", name, why);
+  };
+  unsigned char head[8];
+  if (!in.read(reinterpret_cast<char*>(head), 8)) damaged("shorter than its 8-byte preamble");
+  if (head[0] != 0x76 || head[1] != 0x2f || head[2] != 0x31 || head[3] != 0x01)
+    damaged("no OpenEXR magic number");
+  const bool multipart = head[5] & 0x10;  // bit 12 of the version field
+  auto text = [&](const char* what) {
+    std::string s;
+    for (char c; in.get(c) && c != '\0';)
+      if (s += c; s.size() > 255)
+        damaged(fmt::format("an attribute {} longer than 255 bytes", what));
+    if (!in) damaged("it ends inside its header");
+    return s;
+  };
+  auto int32 = [&] {
+    unsigned char b[4];
+    if (!in.read(reinterpret_cast<char*>(b), 4)) damaged("it ends inside its header");
+    return int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 |
+                   uint32_t(b[3]) << 24);
+  };
+  for (bool more = true; more;) {
+    int attributes = 0;
+    for (std::string attr = text("name"); !attr.empty(); attr = text("name"), ++attributes) {
+      const std::string type = text("type");
+      const int32_t size = int32();
+      const uint64_t start = uint64_t(in.tellg()), left = file_size - start;
+      if (size < 0) damaged(fmt::format("attribute '{}' claims {} bytes", shown(attr), size));
+      if (uint64_t(size) > left)
+        fail(
+            "cannot read '{}': its header attribute '{}' claims a {} value of {} bytes, but the "
+            "file has only {} bytes left",
+            name, shown(attr), shown(type), size, left);
+      in.seekg(std::streamoff(start + uint64_t(size)));
+    }
+    more = multipart && attributes > 0;
+  }
+}
+
+// The R, G and B channels an EXR is read from: the names to read into each (Y three times
+// for a grey image), or an error naming the file and what is missing.
+std::array<const char*, 3> rgb_channels(const Imf::ChannelList& channels, const std::string& name,
+                                        LuminanceOnly luminance) {
+  std::vector<std::string> missing, present;
+  for (const char* c : {"R", "G", "B"})
+    if (!channels.findChannel(c)) missing.push_back(c);
+  if (missing.empty()) return {"R", "G", "B"};
+  for (auto c = channels.begin(); c != channels.end(); ++c) present.push_back(shown(c.name()));
+  if (present.size() > 8) present.resize(8), present.push_back("...");
+  const bool grey = missing.size() == 3 && channels.findChannel("Y") &&
+                    !channels.findChannel("RY") && !channels.findChannel("BY");
+  if (grey && luminance == LuminanceOnly::read_as_grey) {
+    fmt::print(stderr, "rll: note: '{}' has a luminance channel Y and no R, G, B: read as grey\n",
+               name);
+    return {"Y", "Y", "Y"};
+  }
+  if (grey)
+    fail(
+        "cannot read '{}': it has a luminance channel Y and no R, G, B; an RGB image measured "
+        "against or merged with a grey one gives wrong numbers, so it must have R, G and B",
+        name);
+  fail(
+      "cannot read '{}': it has no channel {} (its channels: {}); rll reads RGB images and "
+      "never reads a missing channel as black",
+      name, fmt::join(missing, ", "),
+      present.empty() ? "none" : fmt::format("{}", fmt::join(present, ", ")));
+}
+
+// `extras`: also the string attributes and the "count" channel.
+ExrFile read_exr_unchecked(const fs::path& path, bool extras, LuminanceOnly luminance) {
+  const std::string name = path.string();
+  check_exr_header(path);
   Imf::InputFile file(path.c_str());
   const Imf::Header& header = file.header();
+  const std::array<const char*, 3> rgb = rgb_channels(header.channels(), name, luminance);
   ExrFile out;
   const bool has_counts = extras && header.channels().findChannel("count") != nullptr;
   if (has_counts && header.channels().findChannel("count")->type != Imf::UINT)
@@ -120,9 +215,10 @@ ExrFile read_exr_unchecked(const fs::path& path, bool extras) {
     char* base = reinterpret_cast<char*>(px.data() + y0 * w) - origin;
     const size_t xs = sizeof(Rgb), ys = sizeof(Rgb) * size_t(w);
     Imf::FrameBuffer fb;
-    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys, 1, 1, 0.0));
-    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys, 1, 1, 0.0));
-    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys, 1, 1, 0.0));
+    // A grey image's Y goes to R, and is copied to G and B below.
+    for (int c = 0; c < 3; ++c)
+      if (c == 0 || std::string_view(rgb[c]) != rgb[0])
+        fb.insert(rgb[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
     if (has_counts) {
       const ptrdiff_t corigin = ptrdiff_t(((dw.min.y + y0) * w + dw.min.x) * int64_t(sizeof(uint32_t)));
       char* cbase = reinterpret_cast<char*>(out.counts.data() + y0 * w) - corigin;
@@ -131,14 +227,16 @@ ExrFile read_exr_unchecked(const fs::path& path, bool extras) {
     file.setFrameBuffer(fb);
     file.readPixels(int(dw.min.y + y0), int(dw.min.y + y0 + rows - 1));
   }
+  if (std::string_view(rgb[1]) == rgb[0])
+    for (Rgb& p : px) p = Rgb(p.x);
   out.image = Image(int(w), int(h), std::move(px));
   return out;
 }
 
 // read_exr_unchecked with OpenEXR's exceptions as rll::Errors naming the file.
-ExrFile read_exr(const fs::path& path, bool extras) {
+ExrFile read_exr(const fs::path& path, bool extras, LuminanceOnly luminance) {
   try {
-    return read_exr_unchecked(path, extras);
+    return read_exr_unchecked(path, extras, luminance);
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
@@ -213,7 +311,7 @@ void write_exr(const fs::path& path, const ExrFile& file) {
 ExrFile read_exr_file(const fs::path& path) {
   if (lower_extension(path) != ".exr") fail("'{}' is not an OpenEXR file (.exr)", path.string());
   read_image_checks(path);
-  return read_exr(path, true);
+  return read_exr(path, true, LuminanceOnly::refuse);
 }
 
 uint8_t to_srgb8(float v, float scale) {
@@ -267,11 +365,11 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
   commit(tmp, path);
 }
 
-Image read_image(const fs::path& path, bool srgb) {
+Image read_image(const fs::path& path, bool srgb, LuminanceOnly luminance) {
   read_image_checks(path);
   std::error_code ec;
   std::string ext = lower_extension(path);
-  if (ext == ".exr") return read_exr(path, false).image;
+  if (ext == ".exr") return read_exr(path, false, luminance).image;
   int w = 0, h = 0, n = 0;
   if (!stbi_info(path.c_str(), &w, &h, &n))
     fail("cannot read '{}': {}", path.string(), stbi_failure_reason());

@@ -53,9 +53,17 @@ uint8_t to_srgb8(float linear, float exposure_scale = 1.0f);
 // Writes by extension: .exr (32-bit float, ZIP), .png (sRGB 8-bit, clamped after exposure).
 // The file is written to a temporary name beside the target, then renamed over it.
 void write_image(const std::filesystem::path& path, const Image& image, float exposure_stops = 0);
+// What a reader makes of an EXR with a luminance channel Y and no R, G, B (OpenEXR's grey
+// image): grey pixels (a texture or an environment map, where grey is what the file means, as
+// for a grey PNG; a note on stderr says so), or an error (a reference: an RGB render measured
+// against a grey image gives a number that looks right and is not). An EXR missing one of R,
+// G, B in any other way is always refused, naming the channel: it is never read as black.
+enum class LuminanceOnly { read_as_grey, refuse };
+
 // Reads .exr, or any format stb_image reads (.png, .jpg, .hdr, ...); 8-bit files are decoded
 // from sRGB to linear when `srgb` is true.
-Image read_image(const std::filesystem::path& path, bool srgb = true);
+Image read_image(const std::filesystem::path& path, bool srgb = true,
+                 LuminanceOnly luminance = LuminanceOnly::read_as_grey);
 
 // An OpenEXR file with what rll keeps beside the pixels: string attributes of the header (a
 // render share's metadata) and, optionally, the number of samples behind each pixel (channel
@@ -71,6 +79,7 @@ struct ExrFile {
 // Writes atomically, as write_image does for .exr (32-bit float RGB, ZIP).
 void write_exr(const std::filesystem::path& path, const ExrFile& file);
 // Reads an .exr with its string attributes and its "count" channel (empty if it has none).
+// It must have R, G and B (a share or a cache entry: LuminanceOnly::refuse).
 ExrFile read_exr_file(const std::filesystem::path& path);
 
 // Decodes an image file held in memory (PNG, JPEG and the other formats stb_image reads);

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "rll/core/error.h"
+#include "rll/core/paths.h"
 
 namespace rll {
 
@@ -23,7 +24,48 @@ double relative_squared_error(float x, float ref) {
   return d * d / (double(ref) * ref + kRelMseEpsilon);
 }
 
+const char* role_name(MeasuredRole role) {
+  switch (role) {
+    case MeasuredRole::image:
+      return "image";
+    case MeasuredRole::reference:
+      return "reference";
+    case MeasuredRole::reference_variance:
+      return "reference variance";
+  }
+  return "image";
+}
+
 }  // namespace
+
+Image read_measured_image(const std::filesystem::path& path, MeasuredRole role) {
+  const std::string ext = lower_extension(path);
+  if (ext != ".exr" && ext != ".hdr")
+    fail(
+        "{} '{}': a {} file holds 8-bit values (sRGB, clamped at 1), not a rendering's "
+        "radiance; errors are measured on linear images: give it as .exr (or .hdr)",
+        role_name(role), path.string(), ext.empty() ? "extensionless" : ext);
+  Image image = read_image(path, /*srgb=*/false, LuminanceOnly::refuse);
+  check_measured_pixels(image, path.string(), role);
+  return image;
+}
+
+void check_measured_pixels(const Image& image, const std::string& file, MeasuredRole role) {
+  size_t bad = 0, first = 0;
+  int first_channel = 0;
+  for (size_t i = image.pixel_count(); i-- > 0;)
+    for (int c = 3; c-- > 0;)
+      if (!std::isfinite(image[i][c]) || image[i][c] < 0) bad++, first = i, first_channel = c;
+  if (!bad) return;
+  const float v = image[first][first_channel];
+  const size_t w = size_t(std::max(1, image.width()));
+  fail(
+      "{} '{}': {} of its values are NaN, infinite or negative, the first {} in channel {} of "
+      "pixel "
+      "({}, {}); a {} must be finite and non-negative, or every error measured with it is "
+      "meaningless",
+      role_name(role), file, bad, v, "RGB"[first_channel], first % w, first / w, role_name(role));
+}
 
 ErrorMetrics error_metrics(const Image& image, const Image& reference,
                            const Image* reference_variance) {

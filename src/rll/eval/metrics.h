@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,18 @@ struct ErrorMetrics {
 };
 ErrorMetrics error_metrics(const Image& image, const Image& reference,
                            const Image* reference_variance = nullptr);
+// What an image is to a measurement, for its checks and its messages.
+enum class MeasuredRole { image, reference, reference_variance };
+// Reads an image that is measured against a reference, or is one, or is its variance, and
+// checks it as both `rll error` and `rll compare` do, with the same message naming the file:
+// a linear high-dynamic-range file (.exr or .hdr: an 8-bit format holds sRGB values clamped at
+// 1, not radiance), R, G and B (a Y-only EXR is refused: see LuminanceOnly), and every pixel
+// finite and non-negative (a NaN would make every error NaN; radiance and variance are never
+// negative). Throws rll::Error otherwise.
+Image read_measured_image(const std::filesystem::path& path, MeasuredRole role);
+// The pixel checks of read_measured_image, for an image already in memory; `file` names it.
+void check_measured_pixels(const Image& image, const std::string& file, MeasuredRole role);
+
 // Names of the metrics as they appear in summary.json, --plot-metric and tables.
 inline constexpr const char* kMetricNames[] = {"relmse", "trimmed_relmse", "mrse", "mse"};
 // The metric of that name; throws rll::Error listing the names for an unknown one.

@@ -144,8 +144,21 @@ MergeResult merge_shares(const std::vector<fs::path>& inputs) {
       out.info.held.push_back(t);
     }
     uint32_t lo = std::numeric_limits<uint32_t>::max();
+    // Each share the file holds gave a pixel at most task_spp samples (--task renders a fixed
+    // range of them): a larger count would weigh the pixel's mean above its samples. A whole
+    // render (1 share) records the spp of its last complete pass, and an interrupted pass
+    // leaves some pixels more; it is never merged with another file, so its counts weigh
+    // nothing. (The channel is 32-bit unsigned, which read_exr_file checks: a count cannot be
+    // negative, NaN or fractional.)
+    const uint64_t most = uint64_t(s.task_spp) * s.held.size();
     for (size_t i = 0; i < exr.counts.size(); ++i) {
       const double n = exr.counts[i];
+      if (s.tasks > 1 && exr.counts[i] > most)
+        fail(
+            "cannot merge '{}': pixel ({}, {}) counts {} samples, but the file holds {} share{} "
+            "of {} spp, so at most {}",
+            name, i % size_t(exr.image.width()), i / size_t(exr.image.width()), exr.counts[i],
+            s.held.size(), s.held.size() == 1 ? "" : "s", s.task_spp, most);
       lo = std::min(lo, exr.counts[i]);
       for (int c = 0; c < 3; ++c) {
         const float v = exr.image[i][c];
