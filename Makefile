@@ -39,9 +39,10 @@ test-asan: deps
 bench: build
 	@scripts/bench.sh $(BUILD)
 
-# libFuzzer targets for the PLY, glTF, pbrt, JSON and OBJ (with its MTL) parsers (clang, ASan +
-# UBSan), each run for FUZZ_SECONDS from a corpus seeded with generated files and the regression
-# inputs in tests/fuzz/. A crash stops the run; its input is left in $(FUZZ_BUILD)/crashes.
+# libFuzzer targets for the PLY, glTF, pbrt, JSON and OBJ (with its MTL) parsers, the gzip
+# inflater and the EXR reader (clang, ASan + UBSan), each run for FUZZ_SECONDS from a corpus
+# seeded with generated files and the regression inputs in tests/fuzz/, each input held to 1 GiB
+# of memory and 10 s. A crash stops the run; its input is left in $(FUZZ_BUILD)/crashes.
 FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 60
 fuzz: deps

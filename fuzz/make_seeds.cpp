@@ -1,19 +1,20 @@
 // Writes the fuzz targets' seed corpora: small valid files of each format, made by rll's own
-// writers (PLY, glTF, OBJ + MTL) or written out here (pbrt and JSON, which must not refer to
-// other files). Usage: rll_fuzz_seeds DIR  (writes DIR/ply, DIR/gltf, DIR/pbrt, DIR/json, DIR/obj)
+// writers (PLY, gzip, glTF, OBJ + MTL, EXR) or written out here (pbrt and JSON, which must not
+// refer to other files). Usage: rll_fuzz_seeds DIR  (writes DIR/ply, DIR/gltf, DIR/pbrt,
+// DIR/json, DIR/obj, DIR/gzip, DIR/exr)
 #include <fmt/format.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 
-
+#include "../fuzz/fuzz_input.h"
 #include "rll/core/error.h"
-#include "rll/scene/builder.h"
+#include "rll/core/image.h"
 #include "rll/io/load.h"
 #include "rll/io/save.h"
 #include "rll/io/text_scan.h"
-#include "../fuzz/fuzz_input.h"
+#include "rll/scene/builder.h"
 
 namespace fs = std::filesystem;
 using namespace rll;
@@ -242,7 +243,8 @@ int main(int argc, char** argv) {
   }
   try {
     const fs::path dir = argv[1];
-    for (const char* f : {"ply", "gltf", "pbrt", "json", "obj"}) fs::create_directories(dir / f);
+    for (const char* f : {"ply", "gltf", "pbrt", "json", "obj", "gzip", "exr"})
+      fs::create_directories(dir / f);
     Scene s = small_scene();
     Mesh tri;
     tri.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
@@ -262,6 +264,24 @@ int main(int argc, char** argv) {
     const std::string ascii = ply_bytes(tri, PlyEncoding::Ascii);
     write(dir / "ply/ascii-two-members.ply.gz",
           gzip(ascii.substr(0, ascii.size() / 2)) + gzip(ascii.substr(ascii.size() / 2)));
+    // The gzip target: the same members, and a header followed by more than it declares.
+    write(dir / "gzip/little.ply.gz", gzip(ply_bytes(tri, PlyEncoding::BinaryLittleEndian)));
+    write(dir / "gzip/ascii-two-members.ply.gz",
+          gzip(ascii.substr(0, ascii.size() / 2)) + gzip(ascii.substr(ascii.size() / 2)));
+    write(dir / "gzip/big-endian.ply.gz", gzip(ply_bytes(tri, PlyEncoding::BinaryBigEndian), 9));
+    write(dir / "gzip/overlong.ply.gz", gzip(ply_bytes(tri, PlyEncoding::BinaryLittleEndian) +
+                                             std::string(size_t(1) << 16, '\0')));
+    // EXR: an image as textures and references are written, and a share with its attributes
+    // and sample counts.
+    Image image(5, 3);
+    for (size_t i = 0; i < image.pixel_count(); ++i)
+      image[i] = Rgb(float(i), 0.5f, 1e-3f * float(i));
+    write_image(dir / "exr/image.exr", image);
+    ExrFile share;
+    share.image = image;
+    share.attributes = {{"rll.share", "seed 1 spp 4"}, {"rll.scene", "builtin:cornell-box"}};
+    share.counts.assign(image.pixel_count(), 4);
+    write_exr(dir / "exr/share.exr", share);
     const fs::path gltf = dir / "gltf/scene.gltf";
     save_gltf_scene(s, gltf);
     write(dir / "gltf/scene.glb", glb_of(read_text_file(gltf)));

@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# Runs each scene-parser fuzzer (PLY, glTF, pbrt, JSON, OBJ+MTL) for a bounded time (make fuzz). Usage: fuzz.sh BUILD SECONDS
+# Runs each fuzzer (the PLY, glTF, pbrt, JSON and OBJ+MTL parsers, the gzip inflater, the EXR
+# reader) for a bounded time (make fuzz), each input held to 1 GiB of memory and 10 seconds.
+# Usage: fuzz.sh BUILD SECONDS
 set -euo pipefail
 build=${1:-build-fuzz}
 seconds=${2:-60}
@@ -12,18 +14,18 @@ mkdir -p "$crashes"
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 status=0
-for format in ply gltf pbrt json obj; do
+for format in ply gltf pbrt json obj gzip exr; do
   fuzzer=$build/fuzz/rll_fuzz_$format
   regressions=$root/tests/fuzz/$format
   mkdir -p "$corpus/$format"
   echo "== $format: regression inputs"
   if compgen -G "$regressions/*" > /dev/null; then
-    "$fuzzer" -runs=0 "$regressions" || status=1
+    "$fuzzer" -runs=0 -rss_limit_mb=1024 -timeout=10 "$regressions" || status=1
   fi
   echo "== $format: fuzzing for ${seconds}s"
   # The working corpus grows across runs; seeds and regression inputs are read-only extras.
   "$fuzzer" "$corpus/$format" "$corpus/seeds/$format" "$regressions" \
-    -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+    -max_total_time="$seconds" -timeout=10 -rss_limit_mb=1024 -max_len=65536 \
     -artifact_prefix="$crashes/$format-" -print_final_stats=1 2>&1 | tail -n 25 || status=1
 done
 if [ "$status" -ne 0 ]; then

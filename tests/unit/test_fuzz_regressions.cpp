@@ -16,7 +16,8 @@ TEST(FuzzRegressions, EveryInputIsParsedOrCleanlyRejected) {
   const fs::path root = fs::path(RLL_SOURCE_DIR) / "tests" / "fuzz";
   const std::pair<const char*, fuzz::Format> formats[] = {
       {"ply", fuzz::Format::Ply},   {"gltf", fuzz::Format::Gltf}, {"pbrt", fuzz::Format::Pbrt},
-      {"json", fuzz::Format::Json}, {"obj", fuzz::Format::Obj}};
+      {"json", fuzz::Format::Json}, {"obj", fuzz::Format::Obj},   {"gzip", fuzz::Format::Gzip},
+      {"exr", fuzz::Format::Exr}};
   for (const auto& [folder, format] : formats) {
     size_t inputs = 0;
     for (const auto& entry : fs::directory_iterator(root / folder)) {

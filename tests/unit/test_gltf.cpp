@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -499,4 +500,61 @@ TEST(GltfReader, MalformedFilesAreErrors) {
         dir.write("bad.glb", std::string("glTF\x02\0\0\0\xff\xff\0\0", 12) + std::string(20, 'x'));
     expect_mentions(error_of([&] { read(p); }), {"bad.glb"});
   }
+}
+
+TEST(GltfReader, FieldsOfTheWrongTypeAndImpossibleValuesAreErrors) {
+  // tinygltf keeps a field's default when its type is wrong ("NaN" read as roughness 1): each is
+  // an error naming the field.
+  TempDir dir;
+  auto with = [&](const std::function<void(Doc&)>& change) {
+    Doc d;
+    d.j["materials"] = json::array({json::object()});
+    d.scene({d.node({{"mesh", d.mesh(d.positions(kTriangle), -1, 0)}})});
+    change(d);
+    return d;
+  };
+  struct Case {
+    std::function<void(Doc&)> change;
+    std::vector<std::string> mentions;
+  };
+  const Case cases[] = {
+      {[](Doc& d) { d.j["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = "NaN"; },
+       {"materials[0].pbrMetallicRoughness.roughnessFactor", "must be a number", "\"NaN\""}},
+      {[](Doc& d) {
+         d.j["materials"][0]["emissiveFactor"] = {1, "1", 1};
+       },
+       {"materials[0].emissiveFactor", "an array of numbers"}},
+      {[](Doc& d) { d.j["materials"][0]["extensions"]["KHR_materials_ior"]["ior"] = "1.5"; },
+       {"materials[0].extensions.KHR_materials_ior.ior", "must be a number"}},
+      {[](Doc& d) {
+         d.j["nodes"][0]["translation"] = {0, 0, nullptr};
+       },
+       {"nodes[0].translation", "an array of numbers"}},
+      {[](Doc& d) { d.j["materials"][0]["extensions"]["KHR_materials_ior"]["ior"] = 0.5; },
+       {"material 0", "ior must be at least 1, or 0", "0.5"}},
+      {[](Doc& d) { d.j["materials"][0]["extensions"]["KHR_materials_ior"]["ior"] = -1; },
+       {"material 0", "ior must be at least 1, or 0", "-1"}},
+      {[](Doc& d) {
+         d.j["materials"][0]["extensions"]["KHR_materials_transmission"]["transmissionFactor"] = 1;
+         d.j["materials"][0]["extensions"]["KHR_materials_volume"]["thicknessFactor"] = -0.1;
+       },
+       {"material 0", "thicknessFactor must be finite and >= 0", "-0.1"}},
+      {[](Doc& d) {
+         d.j["materials"][0]["extensions"]["KHR_materials_volume"]["thicknessFactor"] = -1;
+       },
+       {"material 0", "thicknessFactor"}},
+  };
+  for (const Case& c : cases) {
+    Doc d = with(c.change);
+    const std::string e = gltf_error(dir, d);
+    EXPECT_NE(e.find("bad.gltf"), std::string::npos) << e;
+    for (const auto& part : c.mentions) EXPECT_NE(e.find(part), std::string::npos) << e;
+  }
+  // ior 0 is the extension's own special value (a fully reflective specular layer): read with a
+  // warning, as the default 1.5.
+  Doc d = with([](Doc& d) { d.j["materials"][0]["extensions"]["KHR_materials_ior"]["ior"] = 0; });
+  const Scene s = read(d.write_gltf(dir));
+  EXPECT_TRUE(has_warning(s, "ior 0")) << (s.warnings.empty() ? "" : s.warnings[0]);
+  ASSERT_EQ(s.materials.size(), 1u);
+  EXPECT_EQ(s.materials[0].ior, 1.5f);
 }

@@ -1,12 +1,18 @@
 // Scene input that is hostile or can only render black (issue 13): bytes from files are escaped in
 // messages, referenced paths are named for what they are, the in-memory readers the fuzz targets
-// use keep to their policy, and zero-power lights count as no lights.
+// use keep to their policy, and zero-power lights count as no lights. Sizes a file claims are
+// checked against the file and the memory budget before anything is allocated (issue 30), with
+// a small budget here so that no test allocates much.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
+#include "rll/accel/accel.h"
 #include "rll/core/error.h"
-#include "rll/scene/builder.h"
+#include "rll/core/memory_budget.h"
 #include "rll/io/load.h"
 #include "rll/io/text_scan.h"
+#include "rll/scene/builder.h"
 #include "support/test_support.h"
 
 using namespace rll;
@@ -141,6 +147,106 @@ TEST(SceneChecks, LightsWithoutGeometryOrSkyAreWarnedAbout) {
   s.finalize();  // idempotent: one warning
   ASSERT_EQ(s.warnings.size(), 1u);
   EXPECT_NE(s.warnings[0].find("no geometry and no sky"), std::string::npos) << s.warnings[0];
+}
+
+// A small memory budget for one test.
+struct BudgetScope {
+  explicit BudgetScope(size_t bytes) { set_memory_budget_bytes(bytes); }
+  ~BudgetScope() { set_memory_budget_bytes(0); }
+};
+
+// A binary PLY header declaring `vertices` xyz float vertices and `faces` triangles (uchar count,
+// int indices), without its data.
+std::string ply_header(size_t vertices, size_t faces) {
+  return "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(vertices) +
+         "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+         std::to_string(faces) + "\nproperty list uchar int vertex_indices\nend_header\n";
+}
+
+TEST(SizeClaims, GzipInflatesNoFurtherThanThePlyHeaderDeclares) {
+  // 3 vertices and 1 face take at most 36 + 1021 bytes after the header: 16 MB of zeros after
+  // them stop the inflation there, not at the end of the stream.
+  TempDir dir;
+  const std::string header = ply_header(3, 1);
+  const auto p = dir.write("bomb.ply.gz", gzip(header + std::string(size_t(16) << 20, '\0'), 9));
+  const std::string e = error_of([&] { read_ply_file(p); });
+  expect_mentions(e, {"bomb.ply.gz", "decompresses to more than", "header declares"});
+  EXPECT_NE(e.find(std::to_string(header.size() + 3 * 12 + 1 + 255 * 4)), std::string::npos) << e;
+  // The limit is what the header allows: a well-formed file of the same header reads.
+  std::string ok = header;
+  for (float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f})
+    ok.append(reinterpret_cast<const char*>(&v), 4);
+  ok += '\3';
+  for (int32_t i : {0, 1, 2}) ok.append(reinterpret_cast<const char*>(&i), 4);
+  EXPECT_EQ(read_ply_file(dir.write("ok.ply.gz", gzip(ok))).triangle_count(), 1u);
+}
+
+TEST(SizeClaims, GzipInflatesWithinTheMemoryBudget) {
+  // A header that declares 100 M vertices allows 1.2 GB: the budget (1 MiB here) stops it first.
+  BudgetScope budget(size_t(1) << 20);
+  TempDir dir;
+  const auto p = dir.write("big.ply.gz",
+                           gzip(ply_header(100000000, 1) + std::string(size_t(4) << 20, '\0'), 9));
+  expect_mentions(error_of([&] { read_ply_file(p); }),
+                  {"big.ply.gz", "decompresses to more than 1.0 MiB", "a scene may use"});
+  expect_mentions(error_of([&] { gunzip(gzip(std::string(size_t(2) << 20, 'x')), "x.gz"); }),
+                  {"x.gz", "a scene may use"});
+}
+
+TEST(SizeClaims, GltfAccessorCountsAreCheckedBeforeAllocating) {
+  // 2^33 elements of a 36-byte view: refused by the view's size, where reading them first would
+  // ask for 96 GB (std::bad_alloc, not a message).
+  using json = nlohmann::json;
+  TempDir dir;
+  const float tri[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  dir.write("buf.bin", std::string(reinterpret_cast<const char*>(tri), sizeof tri));
+  auto doc = [&](json accessor) {
+    accessor["componentType"] = 5126;
+    accessor["type"] = "VEC3";
+    return json{{"asset", {{"version", "2.0"}}},
+                {"buffers", {{{"byteLength", 36}, {"uri", "buf.bin"}}}},
+                {"bufferViews", {{{"buffer", 0}, {"byteLength", 36}}}},
+                {"accessors", {accessor}},
+                {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}}}}}}},
+                {"nodes", {{{"mesh", 0}}}},
+                {"scenes", {{{"nodes", {0}}}}}}
+        .dump();
+  };
+  Scene s;
+  const auto big = dir.write("big.gltf", doc({{"bufferView", 0}, {"count", size_t(1) << 33}}));
+  expect_mentions(error_of([&] { load_gltf(big, s); }),
+                  {"big.gltf", "POSITION (accessor 0)", "8589934592 elements", "do not fit"});
+  // An accessor without a view is all zeros: its count is held to the memory budget.
+  BudgetScope budget(size_t(1) << 20);
+  const auto zeros = dir.write("zeros.gltf", doc({{"count", 3 << 18}}));
+  expect_mentions(error_of([&] { load_gltf(zeros, s); }),
+                  {"zeros.gltf", "POSITION (accessor 0)", "count 786432", "9.0 MiB",
+                   "more than the 1.0 MiB a scene may use"});
+}
+
+TEST(SizeClaims, EmbreeFailuresSayWhatWasBuilt) {
+  // A 100x100 grid (19602 triangles) under a 1 MiB budget: Embree's allocations are held to the
+  // budget, and its failure names the build, the geometry and the figures.
+  Mesh mesh;
+  const int n = 100;
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) mesh.positions.push_back(Vec3(float(x), float(y), 0));
+  for (int y = 0; y + 1 < n; ++y)
+    for (int x = 0; x + 1 < n; ++x) {
+      const uint32_t i = uint32_t(y * n + x);
+      mesh.triangles.push_back({i, i + 1, i + uint32_t(n)});
+      mesh.triangles.push_back({i + 1, i + uint32_t(n) + 1, i + uint32_t(n)});
+    }
+  {
+    BudgetScope budget(size_t(1) << 20);
+    expect_mentions(
+        error_of([&] { Accel accel(mesh); }),
+        {"Embree failed", "acceleration structure over 19602 triangles and 10000 vertices",
+         "out of memory", "asked for more than the 1.0 MiB a scene may use"});
+  }
+  Accel accel(mesh);  // the default budget holds it
+  Hit hit;
+  EXPECT_TRUE(accel.intersect(Ray{Vec3(10.5f, 10.2f, 1), Vec3(0, 0, -1)}, hit));
 }
 
 }  // namespace

@@ -515,3 +515,19 @@ TEST(JsonLoader, MissingReferencedFilesNameBothFiles) {
   expect_mentions(json_error(dir, R"({"shapes": [{"file": "m.ply"}]})"),
                   {"/shapes/0/file", ".obj"});
 }
+
+TEST(ObjLoader, ImpossibleMtlValuesAreErrorsWithTheirLine) {
+  TempDir dir;
+  const std::string obj = "mtllib m.mtl\nusemtl shiny\n" + std::string(kQuadObj) + "f 1 2 3 4\n";
+  const std::pair<const char*, std::vector<std::string>> cases[] = {
+      {"Ni -1.5", {"m.mtl:3", "Ni", "must be positive", "-1.5"}},
+      {"Ni 0", {"m.mtl:3", "Ni", "must be positive"}},
+      {"d 1.5", {"m.mtl:3", "d must be in [0, 1]", "1.5"}},
+      {"Tr -0.5", {"m.mtl:3", "Tr must be in [0, 1]", "-0.5"}},
+  };
+  for (const auto& [line, mentions] : cases) {
+    dir.write("m.mtl", std::string("newmtl shiny\nKd 0.5\n") + line + "\nKs 0.1\n");
+    const std::string e = error_of([&] { read_obj(dir, obj); });
+    for (const auto& part : mentions) EXPECT_NE(e.find(part), std::string::npos) << e;
+  }
+}

@@ -4,10 +4,12 @@
 // parameter, or, where rll skips what it cannot use, a warning that names them.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
 
 #include <chrono>
 #include <string>
 
+#include "rll/core/memory_budget.h"
 #include "rll/io/load.h"
 #include "rll/io/save.h"
 #include "support/test_support.h"
@@ -436,4 +438,55 @@ TEST(PbrtErrors, ColorSpaceOtherThanSrgbAndBadOption) {
                     load_pbrt(dir.write("bad.pbrt", "\nOption \"bool wavefront\" \"maybe\"\n"), s);
                   }),
                   {"bad.pbrt:2:", "wavefront", "true or false"});
+}
+
+TEST(PbrtErrors, ImpossibleIndicesOfRefractionAreRefused) {
+  // pbrt-v4 checks none of these: it reads eta 0 as 1 and a negative eta gives meaningless
+  // Fresnel terms. An index of refraction is positive (an rgb eta is read by its green value).
+  TempDir dir;
+  const std::string tri = "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n";
+  for (const char* type : {"dielectric", "thindielectric", "coateddiffuse"})
+    for (const char* eta : {"-1.5", "0", "-2"})
+      expect_mentions(
+          error_in_world(dir, fmt::format("Material \"{}\" \"float eta\" {}\n{}", type, eta, tri)),
+          {"bad.pbrt:2:", type, "\"eta\" must be a positive index of refraction", eta});
+  expect_mentions(error_in_world(dir, "Material \"dielectric\" \"rgb eta\" [ 1 0 1 ]\n" + tri),
+                  {"bad.pbrt:2:", "dielectric", "\"eta\" must be a positive index of refraction"});
+  // Below 1, pbrt-v4 renders a relative index (the inside thinner); rll's glass cannot, and says
+  // so.
+  const Scene s = load_world(dir, "Material \"dielectric\" \"float eta\" 0.5\n" + tri);
+  EXPECT_NE(warning_with(s, {"s.pbrt:2", "dielectric", "0.5", "below 1"}), "");
+  ASSERT_FALSE(s.materials.empty());
+  EXPECT_EQ(s.materials.back().ior, 1.0f);
+}
+
+// A small memory budget for one test.
+struct BudgetScope {
+  explicit BudgetScope(size_t bytes) { set_memory_budget_bytes(bytes); }
+  ~BudgetScope() { set_memory_budget_bytes(0); }
+};
+
+TEST(PbrtErrors, SubdivisionAndInstancesAreCountedBeforeTheyAreBuilt) {
+  // A level-6 tetrahedron (16384 triangles) instanced 1000 times is 16 M triangles: against a
+  // 256 MiB budget (1.7 M triangles at 160 bytes each) the instance that crosses it is refused,
+  // and no instance has been built by then.
+  BudgetScope budget(size_t(256) << 20);
+  std::string text =
+      "WorldBegin\nObjectBegin \"ball\"\n" + tetra("\"integer levels\" 6") + "ObjectEnd\n";
+  for (int i = 0; i < 1000; ++i) text += "ObjectInstance \"ball\"\n";
+  Scene s;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string e = error_of([&] { parse_pbrt(text, "many.pbrt", "", s, {}); });
+  expect_mentions(e, {"many.pbrt:", "ObjectInstance of 16384 triangles", "instance 103 ",
+                      "would have 1687552 triangles", "more than the 256.0 MiB a scene may use"});
+  EXPECT_EQ(s.mesh.triangle_count(), 0u);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  // Subdivision is estimated before it is made: 10 levels of 4 triangles are 4 M triangles.
+  Scene t;
+  expect_mentions(error_of([&] {
+                    parse_pbrt("WorldBegin\n" + tetra("\"integer levels\" 10"), "deep.pbrt", "", t,
+                               {});
+                  }),
+                  {"deep.pbrt:2:", "loopsubdiv", "10 levels make 4194304 triangles of 4",
+                   "need about 640.0 MiB", "256.0 MiB a scene may use"});
 }

@@ -3,9 +3,10 @@
 #include <fmt/format.h>
 
 #include "rll/core/error.h"
+#include "rll/core/memory_budget.h"
 #include "rll/core/paths.h"
-#include "rll/scene/builtin.h"
 #include "rll/io/text_scan.h"
+#include "rll/scene/builtin.h"
 
 namespace rll {
 namespace fs = std::filesystem;
@@ -42,6 +43,21 @@ void drop_unused_materials(Scene& scene) {
   scene.textures = std::move(textures);
 }
 }  // namespace
+
+std::string triangle_budget_problem(double triangles, const ReadPolicy& policy) {
+  if (triangles > double(policy.max_triangles))
+    return fmt::format(
+        "the scene would have {:.0f} triangles, more than {} triangles, the most "
+        "it may have",
+        triangles, policy.max_triangles);
+  const double bytes = triangles * kSceneBytesPerTriangle;
+  if (bytes > double(memory_budget_bytes()))
+    return fmt::format(
+        "the scene would have {:.0f} triangles, which need about {} (at {:.0f} bytes each), more "
+        "than {}",
+        triangles, format_bytes(bytes), kSceneBytesPerTriangle, memory_budget_phrase());
+  return "";
+}
 
 Scene read_scene(const std::string& spec) {
   Scene scene;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <string_view>
@@ -33,6 +34,17 @@ struct ReadPolicy {
   std::map<std::string, std::string> memory_files;
 };
 
+// What one triangle costs a loaded scene, all told, as the load's estimate: its indices,
+// material and light (20 bytes), its share of the vertices (positions, normals and uvs of about
+// half a vertex, 16), and the acceleration structure over it with what its build needs (about
+// 120).
+inline constexpr double kSceneBytesPerTriangle = 160;
+// Why a scene may not grow to `triangles` triangles ("" when it may): more than the policy's
+// `max_triangles`, or more than the memory budget (memory_budget_bytes()) holds at
+// kSceneBytesPerTriangle each. Every reader asks before building what multiplies geometry
+// (instances, subdivision, tessellated shapes), and prefixes the answer with what asked.
+std::string triangle_budget_problem(double triangles, const ReadPolicy& policy);
+
 // Format readers. Each appends what it reads to `scene` (geometry, materials, textures,
 // lights, camera when the format has one) without finalizing it.
 void load_json_scene(const std::filesystem::path& path, Scene& scene);
@@ -53,10 +65,17 @@ Mesh parse_ply(std::string_view bytes, const std::string& name);
 // A PLY file from disk, gzip-compressed (.ply.gz, recognized by its magic bytes) or not.
 Mesh read_ply_file(const std::filesystem::path& path);
 // Whether `bytes` begin like gzip data, and that data inflated (concatenated members included);
-// a truncated or corrupt stream, or more than `max_bytes` out, is an error naming `name`.
+// a truncated or corrupt stream is an error naming `name`, and so is more output than
+// `max_bytes` (0: the memory budget, memory_budget_bytes()) or than `declared` allows:
+// `declared` is asked with the output so far until it answers the most bytes the file can hold
+// by what its beginning declares (0: not known yet), e.g. ply_declared_bytes.
 bool is_gzip(std::string_view bytes);
-std::string gunzip(std::string_view bytes, const std::string& name,
-                   size_t max_bytes = size_t(1) << 33);
+std::string gunzip(std::string_view bytes, const std::string& name, size_t max_bytes = 0,
+                   const std::function<size_t(std::string_view head)>& declared = {});
+// The most bytes a PLY file can take by its header (its element counts times the largest entry
+// each can have: a list its longest, an ASCII value 64 characters); 0 while `head` does not yet
+// hold the whole header. A bad header is an error naming `name`, as parse_ply would give.
+size_t ply_declared_bytes(std::string_view head, const std::string& name);
 // `bytes` as one gzip member at zlib's `level` (0-9, -1 its default): what a .ply.gz holds (tests,
 // benchmarks and fuzz seeds write them).
 std::string gzip(std::string_view bytes, int level = -1);

@@ -5,16 +5,18 @@
 // index, count and byte range it leaves unchecked is checked here before it is read.
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <cstring>
-#include <nlohmann/json.hpp>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "rll/core/error.h"
+#include "rll/core/memory_budget.h"
 #include "rll/core/paths.h"
-#include "rll/scene/interaction.h"
 #include "rll/io/load.h"
 #include "rll/io/text_scan.h"
+#include "rll/scene/interaction.h"
 #include "rll/scene/transform.h"
 
 namespace rll {
@@ -123,6 +125,106 @@ std::string shorten_uri_errors(const std::string& err, std::string_view json_tex
     out += '\n';
   }
   return out;
+}
+
+// The JSON type each field rll reads must have. tinygltf keeps the default of a field of the
+// wrong type ("roughnessFactor": "NaN" reads as 1) and rll's own reading of extensions did too:
+// the document is checked against this table first, and a wrong type is an error naming it.
+enum class JsonKind { Number, Numbers, Index, Bool, String };
+struct TypedField {
+  const char* array;  // a top-level array of objects, as a JSON pointer
+  const char* field;  // within each of its objects, as a JSON pointer
+  JsonKind kind;
+};
+constexpr TypedField kTypedFields[] = {
+    {"/materials", "/pbrMetallicRoughness/baseColorFactor", JsonKind::Numbers},
+    {"/materials", "/pbrMetallicRoughness/metallicFactor", JsonKind::Number},
+    {"/materials", "/pbrMetallicRoughness/roughnessFactor", JsonKind::Number},
+    {"/materials", "/emissiveFactor", JsonKind::Numbers},
+    {"/materials", "/alphaMode", JsonKind::String},
+    {"/materials", "/alphaCutoff", JsonKind::Number},
+    {"/materials", "/doubleSided", JsonKind::Bool},
+    {"/materials", "/extensions/KHR_materials_emissive_strength/emissiveStrength",
+     JsonKind::Number},
+    {"/materials", "/extensions/KHR_materials_ior/ior", JsonKind::Number},
+    {"/materials", "/extensions/KHR_materials_transmission/transmissionFactor", JsonKind::Number},
+    {"/materials", "/extensions/KHR_materials_volume/thicknessFactor", JsonKind::Number},
+    {"/materials", "/extensions/KHR_materials_volume/attenuationDistance", JsonKind::Number},
+    {"/materials", "/extensions/KHR_materials_volume/attenuationColor", JsonKind::Numbers},
+    {"/materials", "/extensions/KHR_materials_clearcoat/clearcoatFactor", JsonKind::Number},
+    {"/materials", "/extensions/KHR_materials_clearcoat/clearcoatRoughnessFactor",
+     JsonKind::Number},
+    {"/materials", "/extensions/KHR_materials_specular/specularFactor", JsonKind::Number},
+    {"/materials", "/extensions/KHR_materials_specular/specularColorFactor", JsonKind::Numbers},
+    {"/nodes", "/matrix", JsonKind::Numbers},
+    {"/nodes", "/translation", JsonKind::Numbers},
+    {"/nodes", "/rotation", JsonKind::Numbers},
+    {"/nodes", "/scale", JsonKind::Numbers},
+    {"/nodes", "/mesh", JsonKind::Index},
+    {"/nodes", "/camera", JsonKind::Index},
+    {"/cameras", "/perspective/yfov", JsonKind::Number},
+    {"/cameras", "/perspective/aspectRatio", JsonKind::Number},
+    {"/cameras", "/perspective/znear", JsonKind::Number},
+    {"/cameras", "/perspective/zfar", JsonKind::Number},
+    {"/extensions/KHR_lights_punctual/lights", "/color", JsonKind::Numbers},
+    {"/extensions/KHR_lights_punctual/lights", "/intensity", JsonKind::Number},
+    {"/extensions/KHR_lights_punctual/lights", "/range", JsonKind::Number},
+    {"/extensions/KHR_lights_punctual/lights", "/spot/innerConeAngle", JsonKind::Number},
+    {"/extensions/KHR_lights_punctual/lights", "/spot/outerConeAngle", JsonKind::Number},
+    {"/accessors", "/count", JsonKind::Index},
+    {"/accessors", "/byteOffset", JsonKind::Index},
+    {"/accessors", "/bufferView", JsonKind::Index},
+    {"/accessors", "/normalized", JsonKind::Bool},
+    {"/bufferViews", "/buffer", JsonKind::Index},
+    {"/bufferViews", "/byteOffset", JsonKind::Index},
+    {"/bufferViews", "/byteLength", JsonKind::Index},
+    {"/bufferViews", "/byteStride", JsonKind::Index},
+    {"/buffers", "/byteLength", JsonKind::Index},
+};
+
+// "materials[0].pbrMetallicRoughness.roughnessFactor" for messages.
+std::string field_path(const char* array, size_t index, const char* field) {
+  std::string s = fmt::format("{}[{}]{}", array + 1, index, field);
+  std::replace(s.begin(), s.end(), '/', '.');
+  return s;
+}
+
+void check_field_types(std::string_view json_text, const std::string& name) {
+  const nlohmann::json doc = nlohmann::json::parse(json_text, nullptr, false);
+  if (!doc.is_object()) return;  // tinygltf says what is wrong with it
+  for (const TypedField& f : kTypedFields) {
+    const nlohmann::json::json_pointer array_ptr(f.array), field_ptr(f.field);
+    if (!doc.contains(array_ptr) || !doc.at(array_ptr).is_array()) continue;
+    const auto& array = doc.at(array_ptr);
+    for (size_t i = 0; i < array.size(); ++i) {
+      if (!array[i].is_object() || !array[i].contains(field_ptr)) continue;
+      const auto& v = array[i].at(field_ptr);
+      bool ok = false;
+      const char* wanted = "";
+      switch (f.kind) {
+        case JsonKind::Number:
+          ok = v.is_number(), wanted = "a number";
+          break;
+        case JsonKind::Numbers:
+          ok = v.is_array() &&
+               std::all_of(v.begin(), v.end(), [](const auto& x) { return x.is_number(); });
+          wanted = "an array of numbers";
+          break;
+        case JsonKind::Index:
+          ok = v.is_number_unsigned(), wanted = "a non-negative integer";
+          break;
+        case JsonKind::Bool:
+          ok = v.is_boolean(), wanted = "true or false";
+          break;
+        case JsonKind::String:
+          ok = v.is_string(), wanted = "a string";
+          break;
+      }
+      if (!ok)
+        fail("{}: {} must be {}, not {} {}", name, field_path(f.array, i, f.field), wanted,
+             v.type_name(), printable(v.dump(), 40));
+    }
+  }
 }
 
 double number_or(const tinygltf::Value& obj, const char* key, double def) {
@@ -300,9 +402,11 @@ class GltfReader {
     if (component_count(a.type) != components)
       fail("{}: expected {} components per element", where, components);
     const size_t cs = component_size(a.componentType);
-    std::vector<float> out(a.count * size_t(components), 0.0f);
-    if (a.bufferView < 0) return out;  // all zeros, as the specification says
+    // The claimed count is checked against the buffer (or, for an accessor of zeros, the memory
+    // budget) before anything is allocated for it.
     const auto [data, stride] = element_range(a, where, cs * size_t(components));
+    std::vector<float> out(a.count * size_t(components), 0.0f);
+    if (!data) return out;  // all zeros, as the specification says
     for (size_t i = 0; i < a.count; ++i)
       for (int c = 0; c < components; ++c) {
         const unsigned char* p = data + i * stride + size_t(c) * cs;
@@ -321,10 +425,10 @@ class GltfReader {
         a.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
         a.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
       fail("{}: indices must be unsigned integers", where);
-    std::vector<uint32_t> out(a.count, 0);
-    if (a.bufferView < 0) return out;
     const size_t cs = component_size(a.componentType);
     const auto [data, stride] = element_range(a, where, cs);
+    std::vector<uint32_t> out(a.count, 0);
+    if (!data) return out;
     for (size_t i = 0; i < a.count; ++i) {
       const unsigned char* p = data + i * stride;
       if (cs == 1)
@@ -347,10 +451,17 @@ class GltfReader {
     return a;
   }
 
-  // The first element and the stride of an accessor, its whole range checked.
+  // The first element and the stride of an accessor, its whole range checked; null for an
+  // accessor without a buffer view (all zeros), whose count is checked against the memory
+  // budget instead (as 4-byte values, as it is read).
   std::pair<const unsigned char*, size_t> element_range(const tinygltf::Accessor& a,
                                                         const std::string& where,
                                                         size_t element) const {
+    if (a.bufferView < 0) {
+      check_memory_budget(double(a.count) * double(element / component_size(a.componentType)) * 4,
+                          fmt::format("{}: count {} without a buffer view", where, a.count));
+      return {nullptr, element};
+    }
     const auto [bytes, size] = view_bytes(a.bufferView, where);
     const auto& bv = m_model.bufferViews[size_t(a.bufferView)];
     size_t stride = element;
@@ -463,8 +574,11 @@ class GltfReader {
         for (size_t i = 1; i + 1 < idx.size(); ++i)
           mesh.triangles.push_back({idx[i], idx[i + 1], idx[0]});
       }
-      if (m_scene.mesh.triangle_count() + mesh.triangle_count() > m_policy.max_triangles)
-        fail("{}: the scene has more than {} triangles", m_name, m_policy.max_triangles);
+      // A mesh that many nodes share is built once per node: its copies count.
+      if (const std::string why = triangle_budget_problem(
+              double(m_scene.mesh.triangle_count() + mesh.triangle_count()), m_policy);
+          !why.empty())
+        fail("{}: {}", pw, why);
       transform_mesh(mesh, world, 0, 0);
       assign_materials(prim.material, mesh, pw);
       mesh.light.assign(mesh.triangle_count(), -1);
@@ -562,10 +676,24 @@ class GltfReader {
       fail("{}: KHR_materials_transmission transmissionFactor must be in [0, 1]", mw);
     float ior = 1.5f;
     if (const tinygltf::Value* e = extension(gm, "KHR_materials_ior")) {
+      // The extension allows ior >= 1, and 0, which makes the specular layer reflect fully
+      // (its F0 = ((ior - 1) / (ior + 1))^2 = 1): rll has no such layer, and warns.
       ior = to_float(number_or(*e, "ior", 1.5));
-      if (!std::isfinite(ior) || ior < 0)
-        fail("{}: KHR_materials_ior ior must be finite and >= 0", mw);
-      ior = std::max(1.0f, ior);
+      if (!std::isfinite(ior) || !(ior >= 1 || ior == 0))
+        fail("{}: KHR_materials_ior ior must be at least 1, or 0 (got {})", mw, ior);
+      if (ior == 0) {
+        warn(
+            fmt::format("{}: KHR_materials_ior ior 0 (a fully reflective specular layer) is not "
+                        "supported; rendered with ior 1.5",
+                        mw));
+        ior = 1.5f;
+      }
+    }
+    if (const tinygltf::Value* volume = extension(gm, "KHR_materials_volume")) {
+      const double thickness = number_or(*volume, "thicknessFactor", 0);
+      if (!(thickness >= 0) || !std::isfinite(thickness))
+        fail("{}: KHR_materials_volume thicknessFactor must be finite and >= 0 (got {})", mw,
+             thickness);
     }
     // A clearcoat (glTF gives it IOR 1.5) over a dielectric base is pbrt-v4's coated diffuse.
     const tinygltf::Value* clearcoat = extension(gm, "KHR_materials_clearcoat");
@@ -842,6 +970,7 @@ void parse_gltf(std::string_view bytes, const std::string& name, const fs::path&
       fail("{}: not a GLB: {} bytes are too short for its 12-byte header", name, bytes.size());
     if (!binary) fail("{}: not a GLB: it does not begin with 'glTF'", name);
   }
+  check_field_types(gltf_json_text(bytes, binary), name);
   bool ok = false;
   const std::string dir = base_dir.string();
   try {

@@ -443,8 +443,10 @@ class JsonSceneReader {
         if (sub < 0 || sub > 8)
           fail("{} must be in [0, 8] (got {})", child(ptr, "subdivisions"), sub);
         // A sphere of 8 subdivisions is a million triangles from a few bytes of JSON.
-        if (m_scene.mesh.triangle_count() > m_policy.max_triangles)
-          fail("{}: the scene has more than {} triangles", ptr, m_policy.max_triangles);
+        if (const std::string why = triangle_budget_problem(
+                double(m_scene.mesh.triangle_count()) + 20 * std::pow(4.0, sub), m_policy);
+            !why.empty())
+          fail("{}: {}", ptr, why);
         b.sphere(c, r, sub, shape_material(v, ptr),
                  optional_field(v, ptr, "inward", to_bool).value_or(false));
       } else {

@@ -105,6 +105,13 @@ std::string normalize_mtl(std::string_view text, const std::string& file,
         if (read_numbers(rest, &v, 1, file, lines.number(), kw) != 1)
           fail_line(file, lines.number(), fmt::format("{} needs one value", kw));
         if (kw == "Ns" && v < 0) fail_line(file, lines.number(), "Ns must not be negative");
+        // The MTL format: an optical density (Ni) from 0.001 to 10, a dissolve (d) and its
+        // complement (Tr) from 0 to 1. Ni in (0, 1] is a relative index rll replaces by 1.5.
+        if (kw == "Ni" && !(v > 0))
+          fail_line(file, lines.number(),
+                    fmt::format("Ni (an index of refraction) must be positive (got {})", v));
+        if ((kw == "d" || kw == "Tr") && !(v >= 0 && v <= 1))
+          fail_line(file, lines.number(), fmt::format("{} must be in [0, 1] (got {})", kw, v));
       } else if (kw == "illum") {
         std::string_view tok;
         long v;
@@ -468,8 +475,10 @@ void parse_obj(std::string_view text_view, const std::string& file, const fs::pa
   Mesh mesh = build_mesh(v, shapes, default_material, uses_default);
   mesh.light.assign(mesh.triangles.size(), -1);
   if (mesh.triangles.empty()) fail("{}: the file has no faces", file);
-  if (mesh.triangles.size() > policy.max_triangles)
-    fail("{}: the file has more than {} triangles", file, policy.max_triangles);
+  if (const std::string why = triangle_budget_problem(
+          double(scene.mesh.triangle_count() + mesh.triangles.size()), policy);
+      !why.empty())
+    fail("{}: {}", file, why);
 
   const uint32_t material_offset = uint32_t(scene.materials.size());
   std::map<fs::path, int> textures;

@@ -13,6 +13,7 @@
 #include <zlib.h>
 
 #include "rll/core/error.h"
+#include "rll/core/memory_budget.h"
 #include "rll/io/load.h"
 #include "rll/io/text_scan.h"
 #include "rll/scene/transform.h"
@@ -54,6 +55,23 @@ size_t type_size(PlyType t) {
   }
   return 0;
 }
+// The largest list length a count of type `t` can give.
+double max_count(PlyType t) {
+  switch (t) {
+    case PlyType::Int8:
+      return 127;
+    case PlyType::Uint8:
+      return 255;
+    case PlyType::Int16:
+      return 32767;
+    case PlyType::Uint16:
+      return 65535;
+    case PlyType::Int32:
+      return 2147483647.0;
+    default:
+      return 4294967295.0;
+  }
+}
 bool is_integer(PlyType t) {
   return t != PlyType::Float32 && t != PlyType::Float64;
 }
@@ -82,6 +100,28 @@ struct Layout {
 class PlyReader {
  public:
   PlyReader(std::string_view bytes, const std::string& name) : m_data(bytes), m_name(name) {}
+
+  // The most bytes the whole file can take by its header, which `bytes` must hold.
+  double declared_bytes() {
+    read_header();
+    // An ASCII value (with the space after it) is at most this long: "-1.2345678901234567e-308"
+    // is 24 characters.
+    constexpr double kAsciiValue = 64;
+    double total = double(m_body);
+    for (const Element& el : m_elements) {
+      double entry = m_encoding == Encoding::Ascii ? 2 : 0;  // a line end
+      for (const auto& p : el.properties) {
+        const double values = p.list ? 1 + max_count(p.count_type) : 1;
+        entry += m_encoding == Encoding::Ascii
+                     ? values * kAsciiValue
+                     : (p.list ? double(type_size(p.count_type)) +
+                                     (values - 1) * double(type_size(p.type))
+                               : double(type_size(p.type)));
+      }
+      total += double(el.count) * entry;
+    }
+    return total;
+  }
 
   Mesh read() {
     read_header();
@@ -552,6 +592,28 @@ Mesh parse_ply(std::string_view bytes, const std::string& name) {
   return PlyReader(bytes, name).read();
 }
 
+size_t ply_declared_bytes(std::string_view head, const std::string& name) {
+  // A header longer than this is not one: say so rather than inflate on to find its end.
+  constexpr size_t kMaxHeader = size_t(1) << 20;
+  // The header is whole once a line of "end_header" (and spaces) has ended.
+  bool whole = false;
+  for (size_t at = head.find("\nend_header"); at != std::string_view::npos && !whole;
+       at = head.find("\nend_header", at + 1)) {
+    const size_t nl = head.find('\n', at + 1);
+    if (nl == std::string_view::npos) break;
+    std::string_view rest = head.substr(at + 11, nl - at - 11), tok;
+    if (!rest.empty() && rest.back() == '\r') rest.remove_suffix(1);
+    whole = !next_token(rest, tok);
+  }
+  if (!whole) {
+    if (head.size() > kMaxHeader)
+      fail("{}: no 'end_header' line in the first {} bytes", name, kMaxHeader);
+    return 0;
+  }
+  const double bytes = PlyReader(head, name).declared_bytes();
+  return bytes >= double(SIZE_MAX) ? SIZE_MAX : size_t(bytes);
+}
+
 std::string gzip(std::string_view bytes, int level) {
   z_stream z{};
   // 16 + MAX_WBITS: a gzip header and trailer around the deflate stream.
@@ -573,7 +635,12 @@ bool is_gzip(std::string_view bytes) {
   return bytes.size() >= 2 && uint8_t(bytes[0]) == 0x1f && uint8_t(bytes[1]) == 0x8b;
 }
 
-std::string gunzip(std::string_view bytes, const std::string& name, size_t max_bytes) {
+std::string gunzip(std::string_view bytes, const std::string& name, size_t max_bytes,
+                   const std::function<size_t(std::string_view head)>& declared) {
+  const bool budget = max_bytes == 0;
+  if (budget) max_bytes = memory_budget_bytes();
+  // What the beginning of the output declares, once known, lowers the limit.
+  bool by_header = false, header_known = !declared;
   z_stream z{};
   // 16 + MAX_WBITS: a gzip header and trailer around the deflate stream.
   if (inflateInit2(&z, 16 + MAX_WBITS) != Z_OK) fail("{}: cannot start zlib", name);
@@ -593,7 +660,23 @@ std::string gunzip(std::string_view bytes, const std::string& name, size_t max_b
       z.avail_out = sizeof buf;
       rc = inflate(&z, Z_NO_FLUSH);
       out.append(buf, sizeof buf - z.avail_out);
-      if (out.size() > max_bytes) fail("{}: decompresses to more than {} bytes", name, max_bytes);
+      if (!header_known) {
+        if (const size_t d = declared(out)) {
+          header_known = true;
+          if (d < max_bytes) max_bytes = d, by_header = true;
+        }
+      }
+      if (out.size() > max_bytes) {
+        if (by_header)
+          fail(
+              "{}: decompresses to more than {} bytes, the most its header declares (its "
+              "element counts times their largest entries)",
+              name, max_bytes);
+        if (budget)
+          fail("{}: decompresses to more than {}, more than {}", name,
+               format_bytes(double(max_bytes)), memory_budget_phrase());
+        fail("{}: decompresses to more than {} bytes", name, max_bytes);
+      }
       if (rc == Z_STREAM_END) {
         // Concatenated gzip members are one file (RFC 1952); anything else after the end is not.
         if (z.avail_in == 0 && left == 0) break;
@@ -626,7 +709,9 @@ std::string gunzip(std::string_view bytes, const std::string& name, size_t max_b
 Mesh read_ply_file(const fs::path& path) {
   const std::string file = path.string();
   std::string bytes = read_text_file(path);
-  if (is_gzip(bytes)) bytes = gunzip(bytes, file);
+  if (is_gzip(bytes))
+    bytes = gunzip(bytes, file, 0,
+                   [&](std::string_view head) { return ply_declared_bytes(head, file); });
   return parse_ply(bytes, file);
 }
 

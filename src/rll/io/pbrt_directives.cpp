@@ -512,22 +512,33 @@ void PbrtReader::end_object() {
   all.triangles.resize(t0);
   all.material.resize(t0);
   all.light.resize(t0);
-  m_objects[m_object_name] = std::move(obj);
+  m_objects[m_object_name] = std::make_shared<const ObjectMesh>(std::move(obj));
   m_object = false;
 }
 
-void PbrtReader::instance(const Token& t, const ObjectMesh& obj) {
-  if (m_scene.mesh.triangle_count() + obj.mesh.triangle_count() > m_policy.max_triangles)
-    syntax(t, fmt::format("the scene has more than {} triangles", m_policy.max_triangles));
+void PbrtReader::instance(const Token& t, const std::shared_ptr<const ObjectMesh>& obj) {
+  // Each instance is a copy of the object's triangles: the copies are counted here and made at
+  // the end of the file.
+  const size_t count = obj->mesh.triangle_count();
+  if (const std::string why = triangle_budget_problem(double(triangles_so_far() + count), m_policy);
+      !why.empty())
+    syntax(t, fmt::format("ObjectInstance of {} triangles (instance {} of the file): {}", count,
+                          m_instances.size() + 1, why));
   const Affine x = to_affine(m_state.ctm);
   if (!(std::abs(x.det()) > 0) || !std::isfinite(x.det()))
     syntax(t, "ObjectInstance: the transform is singular");
-  const size_t t0 = m_scene.mesh.triangle_count(), v0 = m_scene.mesh.positions.size();
-  m_scene.mesh.append(obj.mesh, 0);
-  transform_mesh(m_scene.mesh, x, t0, v0);
+  m_instances.emplace_back(obj, x);
+  m_instanced_triangles += count;
 }
 
 void PbrtReader::finish() {
+  for (const auto& [obj, x] : m_instances) {
+    const size_t t0 = m_scene.mesh.triangle_count(), v0 = m_scene.mesh.positions.size();
+    m_scene.mesh.append(obj->mesh, 0);
+    transform_mesh(m_scene.mesh, x, t0, v0);
+  }
+  m_instances.clear();
+  m_instanced_triangles = 0;
   // pbrt-v4's imaging ratio scales the whole image linearly: rll scales every emitter instead.
   if (const float ratio = m_exposure_time * m_iso / 100; ratio != 1) {
     for (size_t i = m_first_material; i < m_scene.materials.size(); ++i)

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
@@ -318,7 +319,8 @@ class PbrtReader {
   void roughness(const Token& t, const Params& p, Material& m, const std::string& prefix,
                  float def);
   Rgb mean_value(const ImageTexture& tex) const;
-  float ior_of(const Params& p, const char* name, float def);
+  float ior_of(const Token& t, const std::string& material, const Params& p, const char* name,
+               float def);
 
   // The reflectance of a material: a colour, or an image texture (times its scale).
   void reflectance(const Token& t, const Params& p, const char* name, Material& m, Rgb def);
@@ -369,7 +371,9 @@ class PbrtReader {
 
   void end_object();
 
-  void instance(const Token& t, const ObjectMesh& obj);
+  void instance(const Token& t, const std::shared_ptr<const ObjectMesh>& obj);
+  // The scene's triangles so far, the instances still to be built included.
+  size_t triangles_so_far() const { return m_scene.mesh.triangle_count() + m_instanced_triangles; }
 
   // --- the end: camera, mirror, lights, warnings ---
 
@@ -409,7 +413,12 @@ class PbrtReader {
   bool m_object = false;
   std::string m_object_name;
   size_t m_object_triangle = 0, m_object_vertex = 0;
-  std::map<std::string, ObjectMesh> m_objects;
+  // Shared with the instances not yet built, so that a redefinition leaves them theirs.
+  std::map<std::string, std::shared_ptr<const ObjectMesh>> m_objects;
+  // Instances are built at the end of the file, once their triangles are counted: a file that
+  // instances more than the memory budget holds is refused before any copy is made.
+  std::vector<std::pair<std::shared_ptr<const ObjectMesh>, Affine>> m_instances;
+  size_t m_instanced_triangles = 0;
 
   bool m_has_camera = false;
   float m_camera_fov = 90;

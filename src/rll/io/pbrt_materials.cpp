@@ -232,13 +232,24 @@ Rgb PbrtReader::mean_value(const ImageTexture& tex) const {
 }
 
 // An index of refraction given as "float eta", a spectrum (named, such as "glass-BK7") or an
-// rgb (its green value).
-float PbrtReader::ior_of(const Params& p, const char* name, float def) {
+// rgb (its green value). pbrt-v4 checks none: it reads an eta of 0 as 1 and computes meaningless
+// Fresnel terms for a negative one, so rll refuses both (an index of refraction is positive).
+// An eta in (0, 1) is a relative index pbrt-v4 renders (the inside optically thinner than the
+// outside): the caller decides what rll does with it.
+float PbrtReader::ior_of(const Token& t, const std::string& material, const Params& p,
+                         const char* name, float def) {
   const Param* e = p.find(name);
   if (!e) return def;
-  if (e->type == "float") return float(p.one_number(*e));
-  if (auto c = p.get_spectrum(name)) return c->y;
-  return def;
+  float eta = def;
+  if (e->type == "float")
+    eta = float(p.one_number(*e));
+  else if (auto c = p.get_spectrum(name))
+    eta = c->y;
+  if (!std::isfinite(eta) || !(eta > 0))
+    syntax(t, fmt::format("Material \"{}\": \"{}\" must be a positive index of refraction (got "
+                          "{})",
+                          material, name, eta));
+  return eta;
 }
 
 int PbrtReader::make_material(const Token& t, const std::string& type, const Params& p) {
@@ -255,7 +266,7 @@ int PbrtReader::make_material(const Token& t, const std::string& type, const Par
     m.type = MaterialType::CoatedDiffuse;
     reflectance(t, p, "reflectance", m, Rgb(0.5f));
     roughness(t, p, m, "", 0);
-    m.ior = ior_of(p, "eta", 1.5f);
+    m.ior = ior_of(t, type, p, "eta", 1.5f);
     m.thickness = p.get_float("thickness", 0.01f);
     if (!(m.thickness > 0)) syntax(t, "Material \"coateddiffuse\": thickness must be positive");
     m.specular = Rgb(1);
@@ -304,7 +315,15 @@ int PbrtReader::make_material(const Token& t, const std::string& type, const Par
     m.type = type == "dielectric" ? MaterialType::Dielectric : MaterialType::ThinDielectric;
     m.albedo = Rgb(0);
     m.specular = Rgb(1);
-    m.ior = std::max(1.0f, ior_of(p, "eta", 1.5f));
+    m.ior = ior_of(t, type, p, "eta", 1.5f);
+    if (m.ior < 1) {
+      // rll's glass has its denser side inside (ior >= 1, as the JSON format requires).
+      warn("eta below 1", fmt::format("{}: Material \"{}\" \"eta\" {} is below 1, which pbrt-v4 "
+                                      "renders as an optically thinner inside; rll renders eta 1 "
+                                      "(the surface is invisible)",
+                                      where(t), type, m.ior));
+      m.ior = 1;
+    }
     if (type == "dielectric") {
       roughness(t, p, m, "", 0);
     } else {

@@ -96,8 +96,10 @@ void PbrtReader::add_mesh(const Token& t, Mesh mesh, bool quadric) {
       if (dot(n, g) < 0) std::swap(tri[1], tri[2]);
     }
   }
-  if (m_scene.mesh.triangle_count() + mesh.triangle_count() > m_policy.max_triangles)
-    syntax(t, fmt::format("the scene has more than {} triangles", m_policy.max_triangles));
+  if (const std::string why =
+          triangle_budget_problem(double(triangles_so_far() + mesh.triangle_count()), m_policy);
+      !why.empty())
+    syntax(t, why);
   mesh.material.assign(mesh.triangle_count(), shape_material());
   mesh.light.assign(mesh.triangle_count(), -1);
   m_scene.mesh.append(mesh, 0);
@@ -151,13 +153,11 @@ void PbrtReader::loop_subdivision(const Token& t, const Params& p, Mesh& mesh) {
     sub.triangles.push_back(tri);
   }
   // Each level multiplies the triangles by 4: refuse before allocating what would be refused.
-  size_t count = sub.triangles.size();
-  for (int l = 0; l < levels; ++l) {
-    count *= 4;
-    if (m_scene.mesh.triangle_count() + count > m_policy.max_triangles)
-      syntax(t, fmt::format("Shape \"loopsubdiv\": {} levels make more than {} triangles", levels,
-                            m_policy.max_triangles));
-  }
+  const double count = double(sub.triangles.size()) * std::pow(4.0, levels);
+  if (const std::string why = triangle_budget_problem(double(triangles_so_far()) + count, m_policy);
+      !why.empty())
+    syntax(t, fmt::format("Shape \"loopsubdiv\": {} levels make {:.0f} triangles of {}: {}", levels,
+                          count, sub.triangles.size(), why));
   try {
     loop_subdivide(sub, levels);
   } catch (const Error& e) {
@@ -228,8 +228,10 @@ void PbrtReader::bilinear_mesh(const Token& t, const Params& p, Mesh& mesh) {
     const float size = std::max({length(e1), length(e2), length(p11 - p00), 1e-30f});
     const bool planar = std::abs(dot(p11 - p00, cross(e1, e2))) <= 1e-5f * size * size * size;
     const int n = planar ? 1 : kBilinearGrid;
-    if (mesh.triangle_count() + size_t(2 * n * n) > m_policy.max_triangles)
-      syntax(t, fmt::format("the scene has more than {} triangles", m_policy.max_triangles));
+    if (const std::string why = triangle_budget_problem(
+            double(triangles_so_far() + mesh.triangle_count() + size_t(2 * n * n)), m_policy);
+        !why.empty())
+      syntax(t, fmt::format("Shape \"bilinearmesh\": {}", why));
     const uint32_t base = uint32_t(mesh.positions.size());
     auto bilerp = [](float u, float w, auto a, auto b, auto c, auto d) {
       return a * ((1 - u) * (1 - w)) + b * (u * (1 - w)) + c * ((1 - u) * w) + d * (u * w);
