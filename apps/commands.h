@@ -52,7 +52,8 @@ CLI::Validator number_in(double lo, double hi, bool positive = false);
 inline constexpr long long kMaxSpp = (1 << 30) - 1;
 inline constexpr long long kMaxPassSpp = 1024;  // passes double from it 20 times at most
 inline constexpr long long kMaxThreads = 4096;
-inline constexpr long long kMaxFrames = 1000000;
+// A render writes a file a frame: more than this is a mistake (a --spp in the wrong place?).
+inline constexpr long long kMaxFrames = 100000;
 inline constexpr double kMaxSeconds = 1e7;
 inline constexpr double kMaxExposure = 64;
 
@@ -67,9 +68,17 @@ std::vector<std::filesystem::path> scene_inputs(const std::string& spec);
 // Throws rll::Error naming both when `out` is one of `inputs`: no command writes over its input.
 void refuse_input(const std::filesystem::path& out, const std::string& flag,
                   const std::vector<std::filesystem::path>& inputs);
+// session.make_sampler(spec), its errors prefixed by the flag that gave the spec.
+std::unique_ptr<LightSampler> make_sampler_for(const RenderSession& session,
+                                               const std::string& spec, const char* flag);
+// Throws rll::Error naming both flags when two outputs (path, flag) are the same file; the
+// first `distinct` are known to differ from one another (the frames of a render).
+void refuse_same_outputs(const std::vector<std::pair<std::filesystem::path, std::string>>& outputs,
+                         size_t distinct = 0);
 
-// Checks an output file's extension (any case) before any work is done, creates its folder and
-// checks that a file can be created there.
+// Checks an output file's extension (any case) before any work is done, refuses what it must
+// never replace (rll/core/file_checks.h), creates its folder and checks that a file can be
+// created there.
 void prepare_output(const std::filesystem::path& p, const char* flag,
                     const std::vector<std::string>& extensions);
 // Creates an output folder (and its parents) and checks that a file can be created in it;

@@ -13,6 +13,8 @@
 
 #include "commands.h"
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
+#include "rll/lights/light_sampler.h"
 
 namespace rll::cli {
 namespace fs = std::filesystem;
@@ -139,6 +141,7 @@ std::vector<fs::path> scene_inputs(const std::string& spec) {
   std::vector<fs::path> inputs;
   if (spec.rfind("builtin:", 0) == 0) return inputs;
   std::error_code ec;
+  check_input_file(spec, "scene");
   if (!fs::is_regular_file(spec, ec)) return inputs;  // the loader reports a missing scene
   const fs::path root_dir = fs::path(spec).parent_path();
   std::set<fs::path> seen;
@@ -167,6 +170,9 @@ std::vector<fs::path> scene_inputs(const std::string& spec) {
         // Relative names resolve against the naming file's folder (pbrt: the first file's).
         for (const fs::path& base : {file.parent_path(), root_dir}) {
           const fs::path p = fs::path(c).is_absolute() ? fs::path(c) : base / c;
+          // A FIFO or a device named as a mesh or a texture would hang the reader or never end.
+          if (fs::exists(p, ec) && !fs::is_directory(p, ec))
+            check_input_file(p, fmt::format("{}: file", file.string()));
           if (fs::is_regular_file(p, ec)) {
             todo.push_back(p);
             break;
@@ -180,38 +186,32 @@ std::vector<fs::path> scene_inputs(const std::string& spec) {
 
 void refuse_input(const fs::path& out, const std::string& flag,
                   const std::vector<fs::path>& inputs) {
-  std::error_code ec;
-  for (const auto& in : inputs) {
-    // Writes replace the file's folder entry (write, then rename), so only the same entry, by
-    // whatever path, loses the input: other hard links keep their content.
-    if (out.filename() != in.filename()) continue;
-    if (fs::equivalent(out, in, ec))
+  // The file a write changes is the target of `out`'s links; a hard link of an input is the
+  // same file too (refused rather than reasoned about).
+  const fs::path target = write_target(out);
+  for (const auto& in : inputs)
+    if (same_file(target, in))
       fail("{} {} is the input file '{}': refusing to write over it (choose another output)", flag,
            out.string(), in.string());
+}
+
+std::unique_ptr<LightSampler> make_sampler_for(const RenderSession& session,
+                                               const std::string& spec, const char* flag) {
+  try {
+    return session.make_sampler(spec);
+  } catch (const Error& e) {
+    fail("{}: {}", flag, e.what());
   }
 }
 
-namespace {
-
-// Creates and removes a file in `dir`, so that a folder that cannot be written is reported
-// before the render rather than after it.
-void check_writable(const fs::path& dir, const std::string& what) {
-  const fs::path probe =
-      (dir.empty() ? fs::path(".") : dir) / fmt::format(".rll-write-test-{}", ::getpid());
-  std::FILE* f = std::fopen(probe.c_str(), "wb");
-  int err = f ? 0 : errno;
-  if (f) {
-    if (std::fputc('x', f) == EOF) err = errno;
-    if (std::fclose(f) != 0 && !err) err = errno;
-    std::error_code ec;
-    fs::remove(probe, ec);
-  }
-  if (err)
-    fail("{}: cannot write in folder '{}': {}", what, dir.empty() ? "." : dir.string(),
-         std::strerror(err));
+void refuse_same_outputs(const std::vector<std::pair<fs::path, std::string>>& outputs,
+                         size_t distinct) {
+  for (size_t j = std::max<size_t>(distinct, 1); j < outputs.size(); ++j)
+    for (size_t i = 0; i < j; ++i)
+      if (same_file(write_target(outputs[i].first), write_target(outputs[j].first)))
+        fail("{} {} and {} {} are the same file: give each output its own", outputs[i].second,
+             outputs[i].first.string(), outputs[j].second, outputs[j].first.string());
 }
-
-}  // namespace
 
 void prepare_output(const fs::path& p, const char* flag,
                     const std::vector<std::string>& extensions) {
@@ -219,14 +219,17 @@ void prepare_output(const fs::path& p, const char* flag,
   if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end())
     fail("{} {}: the file must end in {}", flag, p.string(), fmt::join(extensions, " or "));
   std::error_code ec;
-  if (fs::is_directory(p, ec)) fail("{} {}: is a folder, not a file", flag, p.string());
-  if (p.has_parent_path() && !fs::exists(p.parent_path()) &&
-      !fs::create_directories(p.parent_path(), ec))
-    fail("{} {}: cannot create folder '{}': {}", flag, p.string(), p.parent_path().string(),
+  // Devices, pipes, folders and read-only files are refused; a link is written through, so its
+  // target's folder is the one written in.
+  check_output_file(p, flag);
+  const fs::path target = write_target(p);
+  if (target.has_parent_path() && !fs::exists(target.parent_path()) &&
+      !fs::create_directories(target.parent_path(), ec))
+    fail("{} {}: cannot create folder '{}': {}", flag, p.string(), target.parent_path().string(),
          ec.message());
-  if (p.has_parent_path() && !fs::is_directory(p.parent_path(), ec))
-    fail("{} {}: '{}' is not a folder", flag, p.string(), p.parent_path().string());
-  check_writable(p.parent_path(), fmt::format("{} {}", flag, p.string()));
+  if (target.has_parent_path() && !fs::is_directory(target.parent_path(), ec))
+    fail("{} {}: '{}' is not a folder", flag, p.string(), target.parent_path().string());
+  check_folder_writable(target.parent_path(), fmt::format("{} {}", flag, p.string()));
 }
 
 void prepare_output_dir(const fs::path& dir, const char* flag) {
@@ -235,7 +238,7 @@ void prepare_output_dir(const fs::path& dir, const char* flag) {
     fail("{} {}: exists and is not a folder", flag, dir.string());
   if (!fs::is_directory(dir, ec) && !fs::create_directories(dir, ec))
     fail("{} {}: cannot create folder: {}", flag, dir.string(), ec.message());
-  check_writable(dir, fmt::format("{} {}", flag, dir.string()));
+  check_folder_writable(dir, fmt::format("{} {}", flag, dir.string()));
 }
 
 }  // namespace rll::cli

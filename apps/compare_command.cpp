@@ -13,6 +13,7 @@
 
 #include "commands.h"
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
 #include "rll/core/paths.h"
 #include "rll/core/parallel.h"
 #include "rll/core/sysinfo.h"
@@ -124,11 +125,13 @@ std::vector<std::string> check_flags(const CompareOptions& o) {
 // made, so with --set each is made once here (a cost only then: an oracle's may be high).
 void check_samplers(const CompareOptions& o, const RenderSession& session,
                     std::vector<std::string> needed) {
-  if (o.reference.empty()) needed.push_back(o.reference_request.sampler);
   const auto& known = light_sampler_names();
-  for (const auto& name : needed)
+  auto check = [&](const std::string& name, const char* flag) {
     if (std::find(known.begin(), known.end(), name) == known.end() || !o.session.set.empty())
-      session.make_sampler(name);  // throws rll::Error listing the valid names for an unknown one
+      make_sampler_for(session, name, flag);  // lists the valid names for an unknown one
+  };
+  for (const auto& name : needed) check(name, "--samplers");
+  if (o.reference.empty()) check(o.reference_request.sampler, "--reference-sampler");
   session.check_params_used();
 }
 
@@ -311,7 +314,10 @@ void prepare_folder(const CompareOptions& o, const std::vector<std::string>& sam
   std::vector<fs::path> inputs = scene_inputs(o.session.scene);
   if (!o.reference.empty()) inputs.push_back(o.reference);
   const std::vector<std::string> files = output_files(o, samplers);
-  for (const auto& f : files) refuse_input(out / f, "--out", inputs);
+  for (const auto& f : files) {
+    check_output_file(out / f, "--out");
+    refuse_input(out / f, "--out", inputs);
+  }
   std::error_code ec;
   if (fs::is_regular_file(out / "summary.json", ec)) {
     std::ifstream in(out / "summary.json");
@@ -325,7 +331,7 @@ void prepare_folder(const CompareOptions& o, const std::vector<std::string>& sam
         const bool ours = fs::path(name).filename() == name && name[0] != '.' &&
                           (ext == ".exr" || ext == ".png" || ext == ".html" || ext == ".json");
         bool is_input = false;
-        for (const auto& in : inputs) is_input = is_input || fs::equivalent(p, in, ec);
+        for (const auto& in : inputs) is_input = is_input || same_file(p, in);
         if (ours && !is_input && fs::is_regular_file(p, ec)) fs::remove(p, ec);
       }
   }
@@ -339,6 +345,7 @@ void run(const CompareOptions& o) {
   const std::vector<std::string> samplers = check_flags(o);
   prepare_output_dir(o.out, "--out");
   const fs::path out(o.out);
+  scene_inputs(o.session.scene);  // refuses a scene, or a file it names, that is no file
   RenderSession session(o.session);
   const Scene& scene = session.scene();
   check_samplers(o, session, samplers);

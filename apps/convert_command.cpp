@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
 #include "rll/core/paths.h"
 #include "rll/io/load.h"
 #include "rll/io/save.h"
@@ -44,17 +45,21 @@ void convert(const std::string& in, const std::string& out) {
   const std::vector<fs::path> inputs = scene_inputs(in);
   refuse_input(target, "convert", inputs);
   const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  std::error_code ec;
   for (const auto& input : inputs) {
     const fs::path folder = input.parent_path().empty() ? fs::path(".") : input.parent_path();
     if (is_side_file(input.filename().string(), target.stem().string(), ext) &&
-        fs::equivalent(folder, dir, ec))
+        same_file(folder, dir))
       fail(
           "convert {}: would write over the input file '{}', which the {} output writes "
           "beside it (choose another output name or folder)",
           out, input.string(), ext);
   }
   prepare_output(target, "convert", {".json", ".gltf", ".pbrt"});
+  // The files a .json output always writes beside it (the others depend on the scene and are
+  // checked as they are written).
+  if (ext == ".json")
+    for (const char* side : {".obj", ".mtl"})
+      check_output_file(fs::path(target).replace_extension(side), "convert");
   Scene scene = read_scene(in);
   for (const auto& w : scene.warnings) fmt::print(stderr, "rll: warning: {}\n", w);
   std::vector<std::string> lost;

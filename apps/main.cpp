@@ -24,7 +24,7 @@ void say(const char* text) {
 
 extern "C" void on_signal(int sig) {
   if (!g_working.load()) {
-    say("\nrll: interrupted before rendering began; nothing was written\n");
+    say("\nrll: interrupted; nothing was written\n");
     ::_exit(128 + sig);
   }
   int none = 0;

@@ -25,22 +25,33 @@ struct MergeOptions {
 };
 
 void merge(const MergeOptions& o) {
+  // Until the write begins a signal ends the merge at once: nothing was written.
+  install_interrupt_handler();
   const fs::path output = o.output;
   prepare_output(output, "merge", {".exr"});
-  const std::vector<fs::path> inputs(o.inputs.begin(), o.inputs.end());
+  std::vector<fs::path> inputs(o.inputs.begin(), o.inputs.end());
+  // A merge written over the image it is checked against would match it "to 0".
+  if (!o.check_against.empty()) inputs.emplace_back(o.check_against);
   refuse_input(output, "merge", inputs);
+  inputs.resize(o.inputs.size());
   MergeResult m = merge_shares(inputs);
   if (!m.missing.empty() && !o.allow_missing)
-    fail("merge: shares {} of {} are missing (a job failed?); render them, or merge what there "
-         "is with --allow-missing",
-         fmt::join(m.missing, ", "), m.info.tasks);
+    fail("merge: {} (a job failed?); render them, or merge what there is with --allow-missing",
+         missing_shares_text(m.missing, m.info.tasks));
   for (const std::string& w : m.warnings) fmt::print(stderr, "rll: warning: {}\n", w);
+  // From here a signal lets the write finish (its temporary is renamed or removed, never left).
+  begin_work();
   write_exr(output, m.file);
+  if (interrupted())
+    throw Interrupted(fmt::format("interrupted while writing the merge; {} is complete", output.string()));
   fmt::print(stderr, "merged {} of {} shares into {}: {} spp{}\n", m.info.held.size(), m.info.tasks,
              output.string(), m.min_count,
              m.max_count != m.min_count ? fmt::format(" (up to {} in some pixels)", m.max_count) : "");
   if (!o.check_against.empty()) {
     const Image ref = read_measured_image(o.check_against, MeasuredRole::reference);
+    if (ref.width() != m.file.image.width() || ref.height() != m.file.image.height())
+      fail("merge --check-against {}: it is {}x{}, the merged image is {}x{}", o.check_against,
+           ref.width(), ref.height(), m.file.image.width(), m.file.image.height());
     const double d = max_relative_difference(m.file.image, ref);
     if (!(d <= o.tolerance))
       fail("merge --check-against {}: the merged image differs from it by up to {:.3g} "

@@ -4,6 +4,8 @@
 
 #include "commands.h"
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
+#include "rll/core/image.h"
 #include "rll/core/parallel.h"
 #include "rll/eval/reference.h"
 #include "rll/render/progress.h"
@@ -35,23 +37,43 @@ void run(const ReferenceOptions& o) {
   ThreadLimit limit(o.threads);
   // The numbers were checked as they were parsed.
   parse_resolution(o.session.resolution);
+  const std::vector<fs::path> inputs = scene_inputs(o.session.scene);
+  const ReferenceCache cache(o.cache_dir.empty() ? default_cache_dir() : fs::path(o.cache_dir));
   if (!o.output.empty()) {
     prepare_output(o.output, "-o", {".exr", ".png"});
-    refuse_input(o.output, "-o", scene_inputs(o.session.scene));
-    if (const fs::path var = variance_path(o.output); !var.empty())
-      refuse_input(var, "-o", scene_inputs(o.session.scene));
+    std::vector<std::pair<fs::path, std::string>> outputs = {{o.output, "-o"}};
+    if (const fs::path var = variance_path(o.output); !var.empty()) {
+      check_output_file(var, "-o (its variance)");
+      outputs.emplace_back(var, "-o (its variance)");
+    }
+    refuse_same_outputs(outputs);
+    for (const auto& [path, flag] : outputs) {
+      refuse_input(path, flag, inputs);
+      // The cache's files are its own: a copy written over an entry would corrupt it for good.
+      const fs::path folder = write_target(path).parent_path();
+      if (same_file(folder.empty() ? fs::path(".") : folder, cache.dir()))
+        fail("{} {} is in the reference cache folder '{}', whose files are the cache's own: "
+             "write it elsewhere",
+             flag, path.string(), cache.dir().string());
+    }
   }
 
   RenderSession session(o.session);
-  session.make_sampler(o.request.sampler);  // an unknown name or parameter fails before rendering
+  // An unknown name or parameter fails before rendering.
+  make_sampler_for(session, o.request.sampler, "--sampler");
   session.check_params_used();
-  ReferenceCache cache(o.cache_dir.empty() ? default_cache_dir() : fs::path(o.cache_dir));
   begin_work();
   ObtainedReference ref = obtain_reference(session, cache, o.request, !o.quiet, interrupt_flag());
   if (!ref.complete) {
     fmt::print(stderr, "rll: interrupted after {} spp; the reference was not cached\n",
                ref.info.spp);
-    if (!o.output.empty()) write_image(o.output, ref.image, o.exposure);
+    if (o.output.empty()) return;
+    // As `rll render` does, an .exr says how many samples each pixel holds.
+    if (lower(fs::path(o.output).extension().string()) == ".exr")
+      write_exr(o.output, ExrFile{ref.image, {}, ref.counts});
+    else
+      write_image(o.output, ref.image, o.exposure);
+    fmt::print(stderr, "wrote {} (partial: {} spp)\n", o.output, ref.info.spp);
     return;
   }
   if (ref.from_cache)

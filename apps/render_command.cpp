@@ -7,8 +7,10 @@
 #include "commands.h"
 #include "rll/accel/accel.h"
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
 #include "rll/core/parallel.h"
 #include "rll/core/params.h"
+#include "rll/core/paths.h"
 #include "rll/core/sysinfo.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/lights/sampler_state.h"
@@ -69,10 +71,7 @@ std::string default_output(const std::string& scene) {
 }
 
 fs::path frame_path(const fs::path& p, int frame, int frames) {
-  if (frames <= 1) return p;
-  fs::path q = p;
-  q.replace_extension(fmt::format(".{:04d}{}", frame, p.extension().string()));
-  return q;
+  return numbered_path(p, frame, frames);
 }
 
 void run(const RenderOptions& o) {
@@ -101,28 +100,32 @@ void run(const RenderOptions& o) {
     fail("--task {}: the output must be an .exr, which keeps what a merge needs (got -o {})", o.task,
          output.string());
   prepare_output(output, "-o", {".exr", ".png"});
+  for (int f = 1; f < o.frames; ++f) check_output_file(frame_path(output, f, o.frames), "-o");
   const bool load_state = !o.state.empty() && o.state_mode != "save";
   const bool save_state = !o.state.empty() && o.state_mode != "load";
   if (!o.state.empty()) {
     std::error_code ec;
+    if (load_state) check_input_file(o.state, "--rll-state");
     if (o.state_mode == "load" && !fs::exists(o.state, ec))
       fail("--rll-state {}: not found (--rll-state-mode load reads a state and never writes one)",
            o.state);
     if (save_state) prepare_output(o.state, "--rll-state", {lower(fs::path(o.state).extension().string())});
-    if (fs::path(o.state) == output || (!o.stats.empty() && fs::path(o.state) == fs::path(o.stats)))
-      fail("--rll-state {}: the same file as another output", o.state);
   }
   if (!o.stats.empty()) prepare_output(o.stats, "--stats", {".json"});
-  const std::vector<fs::path> inputs = scene_inputs(o.session.scene);
-  for (int f = 0; f < o.frames && !inputs.empty(); ++f)
-    refuse_input(frame_path(output, f, o.frames), "-o", inputs);
-  if (!o.stats.empty()) refuse_input(o.stats, "--stats", inputs);
-  if (!o.state.empty() && !inputs.empty()) refuse_input(o.state, "--rll-state", inputs);
+  // Every output is a file of its own, and none is a file the render reads.
+  std::vector<std::pair<fs::path, std::string>> outputs;
+  for (int f = 0; f < o.frames; ++f) outputs.emplace_back(frame_path(output, f, o.frames), "-o");
+  if (!o.stats.empty()) outputs.emplace_back(o.stats, "--stats");
+  if (save_state) outputs.emplace_back(o.state, "--rll-state");
+  refuse_same_outputs(outputs, size_t(o.frames));  // frame names differ from one another
+  std::vector<fs::path> inputs = scene_inputs(o.session.scene);
+  if (load_state && !save_state) inputs.emplace_back(o.state);
+  for (const auto& [path, flag] : outputs) refuse_input(path, flag, inputs);
 
   RenderSession session(o.session);
   Scene& scene = session.scene();
   const IntegratorSettings& is = session.integrator();
-  auto sampler = session.make_sampler(o.sampler);
+  auto sampler = make_sampler_for(session, o.sampler, "--sampler");
   session.check_params_used();
   if (!o.state.empty()) check_sampler_has_state(*sampler, "--rll-state");
   // Shares and states belong to the scene as loaded, before an animation moves its lights.
@@ -256,7 +259,9 @@ void add_render_command(CLI::App& app) {
       ->capture_default_str()
       ->check(integer_in(1, kMaxSpp));
   cmd->add_option("--frames", o->frames,
-                  "Frames to render; animated scenes move between frames, learning persists")
+                  fmt::format("Frames to render, at most {} (a file each: NAME.0000.EXT, ...); "
+                              "animated scenes move between frames, learning persists",
+                              kMaxFrames))
       ->capture_default_str()
       ->check(integer_in(1, kMaxFrames));
   cmd->add_option("-o,--output", o->output,

@@ -202,6 +202,10 @@ TEST(HardeningCli, AnUnwritableOutputFolderFailsBeforeRendering) {
       {"reference", scene, "--res", "32x32", "--spp", "100000000", "--cache-dir",
        (dir / "cache").string(), "-o", (ro / "ref.exr").string()},
       {"convert", scene, (ro / "c.json").string()},
+      // The reference cache is an output too.
+      {"reference", scene, "--res", "32x32", "--spp", "100000000", "--cache-dir", ro.string()},
+      {"compare", scene, "--samplers", "power", "--spp", "1", "--res", "32x32", "--reference-spp",
+       "100000000", "--cache-dir", ro.string(), "--out", (dir / "cmp").string()},
   };
   for (auto args : commands) {
     SCOPED_TRACE(args[0]);

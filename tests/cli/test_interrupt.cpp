@@ -1,6 +1,7 @@
 // Ctrl-C (SIGINT), SIGTERM and SIGHUP stop a render at the next tile and still write the image
 // so far, with the exit code 128 + signal; the image is complete (written atomically), never a
-// partial file. A second signal does not cut the write short.
+// partial file. A second signal does not cut the write short. An interrupted `reference -o`
+// writes its sample counts; an interrupted merge leaves no temporary and says so.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -20,6 +21,7 @@ extern char** environ;
 
 using namespace rll;
 using namespace rll::test;
+namespace fs = std::filesystem;
 
 TEST(Interrupt, SigintWritesTheImageSoFar) {
   TempDir dir;
@@ -136,4 +138,77 @@ TEST(Interrupt, CompareExits130AfterWritingWhatItHas) {
   EXPECT_EQ(WEXITSTATUS(status), 130) << read_text(log);
   EXPECT_EQ(read_image(dir / "cmp" / "reference.exr").width(), 32);
   expect_mentions(read_text(log), {"interrupted during the run of 'power'", out});
+}
+
+namespace {
+
+// Waits until process `pid` catches signal `sig` (its handler is installed: /proc's SigCgt).
+bool wait_until_caught(pid_t pid, int sig) {
+  for (int i = 0; i < 2000; ++i) {
+    const std::string status = read_text(fmt::format("/proc/{}/status", pid));
+    const size_t at = status.find("SigCgt:");
+    if (at != std::string::npos) {
+      const uint64_t mask = std::stoull(status.substr(at + 7), nullptr, 16);
+      if (mask >> (sig - 1) & 1) return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return false;
+}
+
+int wait_for(pid_t pid) {
+  int status = 0;
+  EXPECT_EQ(::waitpid(pid, &status, 0), pid);
+  return status;
+}
+
+}  // namespace
+
+TEST(Interrupt, AReferenceWritesItsSampleCountsSoFar) {
+  TempDir dir;
+  const fs::path out = dir / "ref.exr";
+  const std::string log = (dir / "log").string();
+  const pid_t pid =
+      spawn_rll({"reference", "builtin:cornell-box", "--res", "32x32", "--spp", "100000000",
+                 "--quiet", "--cache-dir", (dir / "c").string(), "-o", out.string()},
+                log);
+  ASSERT_GT(pid, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  ASSERT_EQ(::kill(pid, SIGINT), 0);
+  const int status = wait_for(pid);
+  ASSERT_TRUE(WIFEXITED(status)) << read_text(log);
+  EXPECT_EQ(WEXITSTATUS(status), 130) << read_text(log);
+  const ExrFile exr = read_exr_file(out);
+  ASSERT_EQ(exr.counts.size(), exr.image.pixel_count()) << "no count channel: " << read_text(log);
+  for (uint32_t n : exr.counts) ASSERT_GT(n, 0u);
+}
+
+TEST(Interrupt, AMergeSaysSoAndLeavesNoTemporary) {
+  TempDir dir;
+  // Shares large enough that the merge runs a while (0.2 s or more).
+  std::vector<std::string> args = {"merge", (dir / "merged.exr").string()};
+  for (int i = 0; i < 2; ++i) {
+    const std::string share = (dir / fmt::format("share{}.exr", i)).string();
+    CommandResult r =
+        run_rll({"render", "builtin:cornell-box", "--res", "640x480", "--spp", "1", "--integrator",
+                 "direct", "--quiet", "--task", fmt::format("{}/2", i), "-o", share});
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    args.push_back(share);
+  }
+  for (int sig : {SIGTERM, SIGINT, SIGHUP}) {
+    SCOPED_TRACE(sig);
+    fs::remove(dir / "merged.exr");
+    const std::string log = (dir / "log").string();
+    const pid_t pid = spawn_rll(args, log);
+    ASSERT_GT(pid, 0);
+    const bool caught = wait_until_caught(pid, sig);
+    ASSERT_EQ(::kill(pid, sig), 0);
+    EXPECT_TRUE(caught) << "merge never installed a handler for the signal";
+    const int status = wait_for(pid);
+    ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal, saying nothing";
+    EXPECT_EQ(WEXITSTATUS(status), 128 + sig) << read_text(log);
+    expect_mentions(read_text(log), {"interrupted"});
+    for (const auto& e : fs::directory_iterator(dir.path()))
+      EXPECT_EQ(e.path().string().find(".tmp-"), std::string::npos) << "left: " << e.path();
+  }
 }

@@ -18,6 +18,7 @@
 #include <fstream>
 
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
 #include "rll/core/paths.h"
 
 namespace rll {
@@ -25,17 +26,23 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
-fs::path temp_sibling(const fs::path& path) {
-  static std::atomic<unsigned> counter{0};
-  fs::path tmp = path;
-  tmp += fmt::format(".tmp-{}-{}", ::getpid(), counter++);
-  return tmp;
+// The file that writing `path` replaces (its link's target, if it is a link), after the checks
+// every output gets; the temporaries that killed writes of it left behind are deleted.
+fs::path prepare_write(const fs::path& path) {
+  check_output_file(path, "output");
+  const fs::path target = write_target(path);
+  if (target.has_parent_path() && !fs::is_directory(target.parent_path()))
+    fail("cannot write '{}': folder '{}' does not exist", path.string(),
+         target.parent_path().string());
+  remove_stale_temporaries(target);
+  return target;
 }
 
 void commit(const fs::path& tmp, const fs::path& path) {
   std::error_code ec;
-  fs::rename(tmp, path, ec);
+  // `tmp` lies beside the target: the name to replace is the target's, not a link's.
+  const fs::path target = write_target(path);
+  fs::rename(tmp, target, ec);
   if (ec) {
     fs::remove(tmp, ec);
     fail("cannot write '{}': {}", path.string(), ec.message());
@@ -283,11 +290,10 @@ void write_exr_to(const fs::path& tmp, const fs::path& path, const Image& image,
   }
 }
 
-// Refuses what no reader can open: an empty image, a missing folder.
-void check_writable_image(const fs::path& path, const Image& image) {
+// Refuses what no reader can open: an empty image; then prepare_write's checks.
+fs::path check_writable_image(const fs::path& path, const Image& image) {
   if (image.width() <= 0 || image.height() <= 0) fail("cannot write '{}': empty image", path.string());
-  if (path.has_parent_path() && !fs::exists(path.parent_path()))
-    fail("cannot write '{}': folder '{}' does not exist", path.string(), path.parent_path().string());
+  return prepare_write(path);
 }
 
 }  // namespace
@@ -299,11 +305,10 @@ const std::string* ExrFile::attribute(const std::string& name) const {
 }
 
 void write_exr(const fs::path& path, const ExrFile& file) {
-  check_writable_image(path, file.image);
   if (!file.counts.empty() && file.counts.size() != file.image.pixel_count())
     fail("cannot write '{}': {} sample counts for {} pixels", path.string(), file.counts.size(),
          file.image.pixel_count());
-  const fs::path tmp = temp_sibling(path);
+  const fs::path tmp = temp_sibling(check_writable_image(path, file.image));
   write_exr_to(tmp, path, file.image, file.attributes, file.counts.empty() ? nullptr : &file.counts);
   commit(tmp, path);
 }
@@ -323,9 +328,7 @@ uint8_t to_srgb8(float v, float scale) {
 }
 
 void write_file_atomic(const fs::path& path, const std::string& bytes) {
-  if (path.has_parent_path() && !fs::exists(path.parent_path()))
-    fail("cannot write '{}': folder '{}' does not exist", path.string(), path.parent_path().string());
-  fs::path tmp = temp_sibling(path);
+  const fs::path tmp = temp_sibling(prepare_write(path));
   std::ofstream f(tmp, std::ios::binary);
   if (!f) fail("cannot write '{}': cannot create a file there", path.string());
   f.write(bytes.data(), std::streamsize(bytes.size()));
@@ -339,9 +342,9 @@ void write_file_atomic(const fs::path& path, const std::string& bytes) {
 }
 
 void write_image(const fs::path& path, const Image& image, float exposure_stops) {
-  check_writable_image(path, image);
+  const fs::path target = check_writable_image(path, image);
   std::string ext = lower_extension(path);
-  fs::path tmp = temp_sibling(path);
+  const fs::path tmp = temp_sibling(target);
   if (ext == ".exr") {
     write_exr_to(tmp, path, image, {}, nullptr);
   } else if (ext == ".png") {

@@ -28,6 +28,8 @@ class Params {
   // One of `choices`; an error listing them otherwise.
   std::string get_choice(const std::string& key, const std::string& fallback,
                          const std::vector<std::string>& choices) const;
+  // Whether a getter asked for `key`.
+  bool used(const std::string& key) const { return m_used.count(key) > 0; }
   // Throws rll::Error listing every key that no getter asked for.
   void check_all_used() const;
   // Marks as used every key that `other` (a copy with overrides) had asked for.

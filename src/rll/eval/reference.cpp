@@ -1,7 +1,6 @@
 #include "rll/eval/reference.h"
 
 #include <fmt/format.h>
-#include <signal.h>
 
 #include <bit>
 #include <cerrno>
@@ -11,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
 #include "rll/core/hash.h"
 #include "rll/core/rng.h"
 #include "rll/eval/metrics.h"
@@ -26,12 +26,27 @@ std::string entry_stem(const ReferenceKey& key, int spp, uint64_t seed) {
   return fmt::format("{}-{}spp-seed{}", key.hex(), spp, seed);
 }
 
-std::optional<nlohmann::json> read_json(const fs::path& p) {
-  std::ifstream f(p);
-  if (!f) return std::nullopt;
-  nlohmann::json j = nlohmann::json::parse(f, nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded() || !j.is_object()) return std::nullopt;
-  return j;
+// The header attribute of a cached image that says how many samples it holds, to be checked
+// against its sidecar's "spp".
+constexpr const char* kSppAttribute = "rll.reference.spp";
+
+// A sidecar's JSON object; nullopt, with `why` set, for one that is not a readable file of JSON.
+std::optional<nlohmann::json> read_json(const fs::path& p, std::string* why = nullptr) {
+  auto damaged = [&](std::string text) -> std::optional<nlohmann::json> {
+    if (why) *why = fmt::format("{}: {}", p.string(), text);
+    return std::nullopt;
+  };
+  const std::string kind = non_regular_kind(p);
+  if (!kind.empty()) return damaged(fmt::format("it is {}, not a file", kind));
+  std::ifstream f(p, std::ios::binary);
+  if (!f) return damaged(fmt::format("cannot open it: {}", std::strerror(errno)));
+  try {
+    nlohmann::json j = nlohmann::json::parse(f, nullptr, /*allow_exceptions=*/false);
+    if (j.is_discarded() || !j.is_object()) return damaged("it is not a JSON object");
+    return j;
+  } catch (const std::exception& e) {  // a read error of the stream
+    return damaged(fmt::format("cannot read it: {}", e.what()));
+  }
 }
 
 std::optional<ReferenceInfo> info_from_json(const nlohmann::json& j, const fs::path& exr) {
@@ -94,17 +109,32 @@ std::optional<ReferenceInfo> ReferenceCache::find(
   if (!fs::is_directory(m_dir, ec)) return std::nullopt;
   const std::string prefix = key.hex() + "-";
   std::optional<ReferenceInfo> best;
+  std::vector<fs::path> damaged;
   for (const auto& entry : fs::directory_iterator(m_dir, ec)) {
     const fs::path& p = entry.path();
     if (p.extension() != ".json" || p.filename().string().rfind(prefix, 0) != 0) continue;
     fs::path exr = p;
     exr.replace_extension(".exr");
     if (!fs::exists(exr, ec)) continue;
-    auto j = read_json(p);
-    if (!j || j->value("key", std::string()) != key.hex()) continue;
+    std::string why;
+    auto j = read_json(p, &why);
+    if (!j) {
+      // A sidecar that cannot be read would hide its entry, and block its name, for ever.
+      fmt::print(stderr, "rll: warning: the cached reference {} is damaged ({}); deleted\n",
+                 exr.string(), why);
+      damaged.push_back(p);
+      continue;
+    }
+    if (j->value("key", std::string()) != key.hex()) continue;
     auto info = info_from_json(*j, exr);
     if (!info || info->spp < min_spp || (seed_allowed && !seed_allowed(info->seed))) continue;
     if (!best || info->spp > best->spp) best = info;
+  }
+  for (const fs::path& p : damaged) {
+    ReferenceInfo info;
+    info.image = fs::path(p).replace_extension(".exr");
+    info.half = fs::path(p).replace_extension(".half.exr");
+    remove(info);
   }
   return best;
 }
@@ -113,29 +143,26 @@ void ReferenceCache::remove(const ReferenceInfo& info) const {
   std::error_code ec;
   fs::path json = info.image;
   json.replace_extension(".json");
-  fs::remove(json, ec);  // first: without it the entry is never found again
+  // First: without it the entry is never found again. A folder in its place is damage too.
+  if (fs::is_directory(fs::symlink_status(json, ec)))
+    fs::remove_all(json, ec);
+  else
+    fs::remove(json, ec);
   fs::remove(info.image, ec);
   if (!info.half.empty()) fs::remove(info.half, ec);
 }
 
 int ReferenceCache::remove_stale_temporaries() const {
+  return remove_stale_temporaries_in(m_dir);
+}
+
+void ReferenceCache::check_writable() const {
   std::error_code ec;
-  if (!fs::is_directory(m_dir, ec)) return 0;
-  int removed = 0;
-  for (const auto& entry : fs::directory_iterator(m_dir, ec)) {
-    // write_file_atomic's temporaries: NAME.tmp-PID-COUNTER.
-    const std::string name = entry.path().filename().string();
-    const size_t at = name.rfind(".tmp-");
-    if (at == std::string::npos) continue;
-    const size_t dash = name.find('-', at + 5);
-    if (dash == std::string::npos) continue;
-    char* end = nullptr;
-    const long pid = std::strtol(name.c_str() + at + 5, &end, 10);
-    if (end != name.c_str() + dash || pid <= 0) continue;
-    if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge
-    if (fs::remove(entry.path(), ec)) ++removed;
-  }
-  return removed;
+  fs::create_directories(m_dir, ec);
+  if (!fs::is_directory(m_dir))
+    fail("cannot create the reference cache folder '{}': {}", m_dir.string(),
+         ec ? ec.message() : "a file of that name is in the way");
+  check_folder_writable(m_dir, "the reference cache");
 }
 
 ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image,
@@ -166,7 +193,10 @@ ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image,
     remove(*old);
   }
 
-  write_image(info.image, image);
+  ExrFile file;
+  file.image = image;
+  file.attributes.emplace_back(kSppAttribute, std::to_string(info.spp));
+  write_exr(info.image, file);
   info.half.clear();
   if (first_half) {
     info.half = m_dir / (stem + ".half.exr");
@@ -191,10 +221,20 @@ ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image,
 
 namespace {
 
-// A cached image as it must be: readable, of the scene's size, finite everywhere.
-std::optional<Image> read_cached(const fs::path& path, int width, int height, std::string& why) {
+// A cached image as it must be: readable, of the scene's size, finite everywhere, and (when
+// `spp` is given) holding what its sidecar says. Images of entries stored before the header
+// said their sample count are taken at the sidecar's word.
+std::optional<Image> read_cached(const fs::path& path, int width, int height, std::string& why,
+                                 std::optional<int> spp = std::nullopt) {
   try {
-    Image image = read_image(path);
+    ExrFile exr = read_exr_file(path);
+    if (const std::string* held = spp ? exr.attribute(kSppAttribute) : nullptr;
+        held && *held != std::to_string(*spp)) {
+      why = fmt::format("{} holds {} spp, its sidecar {} says {}", path.string(), *held,
+                        fs::path(path).replace_extension(".json").filename().string(), *spp);
+      return std::nullopt;
+    }
+    Image image = std::move(exr.image);
     if (image.width() != width || image.height() != height) {
       why = fmt::format("{} is {}x{}, not {}x{}", path.string(), image.width(), image.height(),
                         width, height);
@@ -226,7 +266,7 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
     auto hit = cache.find(key, request.spp, request.seed_allowed);
     if (!hit) break;
     std::string why;
-    std::optional<Image> image = read_cached(hit->image, width, height, why);
+    std::optional<Image> image = read_cached(hit->image, width, height, why, hit->spp);
     std::optional<Image> half;
     if (image && !hit->half.empty() && !(half = read_cached(hit->half, width, height, why)))
       image.reset();
@@ -247,8 +287,11 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
     out.from_cache = true;
     return out;
   }
+  // A folder that cannot take the result is found before the render, not after it.
+  cache.check_writable();
   const int half_spp = (request.spp + 1) / 2;
   Image halves[2];
+  std::vector<uint32_t> counts[2];
   out.complete = true;
   out.info.seconds = 0;
   out.info.spp = 0;
@@ -263,6 +306,7 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
     const RenderProgress p = session.render(*sampler, film, rs, fmt::format("reference {}/2", h + 1),
                                             show_progress, cancel);
     halves[h] = film.resolve();
+    counts[h] = film.counts();
     out.info.spp += p.spp_done;
     out.info.seconds += p.seconds;
     out.complete = !p.cancelled && p.spp_done >= half_spp;
@@ -273,7 +317,16 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
   out.info.width = width;
   out.info.height = height;
   if (!out.complete) {
+    // What was rendered of both halves, each pixel the mean of its samples, with their count.
     out.image = std::move(halves[0]);
+    out.counts = std::move(counts[0]);
+    if (!counts[1].empty())
+      for (size_t i = 0; i < out.image.pixel_count(); ++i) {
+        const uint32_t n0 = out.counts[i], n1 = counts[1][i];
+        if (n1 == 0) continue;
+        out.image[i] = (out.image[i] * float(n0) + halves[1][i] * float(n1)) / float(n0 + n1);
+        out.counts[i] = n0 + n1;
+      }
     return out;
   }
   out.image = Image(width, height);

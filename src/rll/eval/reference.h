@@ -70,6 +70,9 @@ class ReferenceCache {
   // Deletes temporaries (`*.tmp-PID-N`) left by writes that were killed: those of processes that
   // no longer run. Returns how many were deleted.
   int remove_stale_temporaries() const;
+  // Creates the folder and checks that files can be written in it (before a render, rather than
+  // after); throws rll::Error naming it.
+  void check_writable() const;
 
  private:
   std::filesystem::path m_dir;
@@ -104,6 +107,8 @@ struct ObtainedReference {
   ReferenceInfo info;
   bool from_cache = false;
   bool complete = true;  // false: the render was cancelled; it was not stored
+  // When not complete: the samples behind each pixel of `image` (both halves' so far).
+  std::vector<uint32_t> counts;
 };
 
 // The cached reference for the session's scene and integrator with at least request.spp, or a

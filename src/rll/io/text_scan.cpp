@@ -7,10 +7,12 @@
 #include <sstream>
 
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
 
 namespace rll {
 
 std::string read_text_file(const std::filesystem::path& path) {
+  check_input_file(path, "input");  // a FIFO would hang the read, a folder fail it unnamed
   std::ifstream f(path, std::ios::binary);
   if (!f) fail("{}: cannot open the file", path.string());
   std::ostringstream s;

@@ -1,5 +1,7 @@
 #include "rll/render/session.h"
 
+#include <fmt/ranges.h>
+
 #include <algorithm>
 #include <charconv>
 
@@ -51,6 +53,7 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler(const std::string& spe
   if (colon == std::string::npos) return make_light_sampler(spec, m_scene, m_params, m_accel.get());
   const std::string name = spec.substr(0, colon);
   Params params = m_params;
+  std::vector<std::string> own;  // the keys as the spec gives them
   for (size_t start = colon + 1; start <= spec.size();) {
     size_t end = std::min(spec.find(':', start), spec.size());
     std::string kv = spec.substr(start, end - start);
@@ -60,10 +63,19 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler(const std::string& spe
     std::string key = kv.substr(0, eq);
     if (key.find('.') == std::string::npos) key = name + "." + key;
     params.set(key, kv.substr(eq + 1));
+    own.push_back(kv.substr(0, eq));
     start = end + 1;
   }
   auto sampler = make_light_sampler(name, m_scene, params, m_accel.get());
-  params.check_all_used();  // a variant's own keys must all be known
+  // A variant's own keys must all be known, and are reported as the spec wrote them (not as
+  // --set keys, which the user may never have given).
+  std::vector<std::string> unknown;
+  for (const auto& k : own)
+    if (!params.used(k.find('.') == std::string::npos ? name + "." + k : k)) unknown.push_back(k);
+  if (!unknown.empty())
+    fail("sampler '{}': {} has no parameter {} (see `rll samplers`)", spec, name,
+         fmt::format("'{}'", fmt::join(unknown, "', '")));
+  params.check_all_used();
   m_params.merge_used(params);
   return sampler;
 }

@@ -194,10 +194,18 @@ MergeResult merge_shares(const std::vector<fs::path>& inputs) {
   }
   out.file.attributes.emplace_back(kShareAttribute, to_json(out.info).dump());
   if (!out.missing.empty())
-    out.warnings.push_back(fmt::format("shares {} of {} are missing: the image is unbiased but "
-                                       "holds fewer samples than the full render",
-                                       list(out.missing), out.info.tasks));
+    out.warnings.push_back(fmt::format("{}: the image is unbiased but holds fewer samples than "
+                                       "the full render",
+                                       missing_shares_text(out.missing, out.info.tasks)));
   return out;
+}
+
+std::string missing_shares_text(const std::vector<int>& missing, int tasks) {
+  std::vector<std::string> flags;
+  for (int t : missing) flags.push_back(fmt::format("--task {}/{}", t, tasks));
+  return fmt::format("{} of the {} shares {} missing: {} {} ({})", missing.size(), tasks,
+                     missing.size() == 1 ? "is" : "are", missing.size() == 1 ? "share" : "shares",
+                     list(missing), fmt::join(flags, ", "));
 }
 
 double max_relative_difference(const Image& a, const Image& b) {

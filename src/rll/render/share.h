@@ -64,4 +64,8 @@ MergeResult merge_shares(const std::vector<std::filesystem::path>& inputs);
 // if the sizes differ.
 double max_relative_difference(const Image& a, const Image& b);
 
+// "1 of the 4 shares is missing: share 3 (--task 3/4)": which shares, by number and by the flag
+// that renders each.
+std::string missing_shares_text(const std::vector<int>& missing, int tasks);
+
 }  // namespace rll
