@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "rll/core/image.h"
@@ -82,10 +83,12 @@ struct ProbeScene {
 };
 
 // Equal within float rounding: the GPU fuses multiplies and adds and has its own sin, cos, acos.
+// GGX at low roughness amplifies those roundings (seen on an H100: a sampled pdf of 49.858 on
+// the CPU and 49.847 on the GPU, 2.2e-4 apart), so 1e-3 relative; a wrong formula is off by O(1).
 bool close(float a, float b) {
   if (a == b) return true;
   if (!std::isfinite(a) || !std::isfinite(b)) return false;
-  return std::abs(a - b) <= 2e-4f * std::max({1.0f, std::abs(a), std::abs(b)});
+  return std::abs(a - b) <= 1e-3f * std::max({1.0f, std::abs(a), std::abs(b)});
 }
 bool close(const Vec3& a, const Vec3& b) {
   return close(a.x, b.x) && close(a.y, b.y) && close(a.z, b.z);
@@ -96,9 +99,11 @@ TEST(GpuOneSource, ProbesMatchTheCpu) {
   const SceneView view = scene.view();
   std::vector<Hit> hits;
   Pcg32 rng(11);
-  for (uint32_t i = 0; i < 20000; ++i) {
+  // 20,000 probes over every material, then 100,000 more on the two coated quads (triangles 12
+  // to 15), whose walks are compared by their means (below).
+  for (uint32_t i = 0; i < 120000; ++i) {
     Hit h;
-    h.tri = i % uint32_t(scene.mesh.triangles.size());
+    h.tri = i < 20000 ? i % uint32_t(scene.mesh.triangles.size()) : 12 + i % 4;
     h.u = rng.next_float();
     h.v = rng.next_float() * (1 - h.u);
     h.t = 1;
@@ -113,7 +118,23 @@ TEST(GpuOneSource, ProbesMatchTheCpu) {
     throw;
   }
   ASSERT_EQ(gpu.size(), hits.size());
-  size_t sampled = 0, lit = 0, walk_mismatches = 0, walks = 0;
+  size_t sampled = 0, lit = 0, walk_mismatches = 0;
+  // The layered model's estimates on either device, compared as distributions (below).
+  // Both devices draw the same directions, so their estimates are compared in pairs: the mean
+  // of the differences (the walks' noise) against its standard error, and against the mean of
+  // the CPU's estimates (which a 5% bias would shift by 5%).
+  struct Paired {
+    double n = 0, sum_a = 0, sum_d = 0, sum_d2 = 0;
+    void add(double a, double b) {
+      n += 1, sum_a += a, sum_d += a - b, sum_d2 += (a - b) * (a - b);
+    }
+    double mean_a() const { return sum_a / n; }
+    double mean_d() const { return sum_d / n; }
+    double standard_error() const {
+      return std::sqrt((sum_d2 / n - mean_d() * mean_d()) / (n - 1));
+    }
+  };
+  Paired f_pair, pdf_pair, weight_pair;
   for (size_t i = 0; i < hits.size(); ++i) {
     const OneSourceResult c = onesource_probe(view, hits[i], i), &g = gpu[i];
     const MaterialData& m = scene.materials[scene.mesh.material[hits[i].tri]];
@@ -123,23 +144,37 @@ TEST(GpuOneSource, ProbesMatchTheCpu) {
     ASSERT_TRUE(close(c.li, g.li) && close(c.li_pdf, g.li_pdf) && close(c.pdf_li, g.pdf_li));
     ASSERT_TRUE(close(c.le, g.le) && close(c.solid_angle, g.solid_angle));
     lit += c.li_pdf > 0;
-    ASSERT_TRUE(close(c.pdf, g.pdf)) << c.pdf << " " << g.pdf;
-    const bool bsdf_equal = close(c.f, g.f) && c.sampled == g.sampled && close(c.wi, g.wi) &&
-                            close(c.f_sampled, g.f_sampled) && close(c.pdf_sampled, g.pdf_sampled);
+    const bool bsdf_equal = close(c.f, g.f) && close(c.pdf, g.pdf) && c.sampled == g.sampled &&
+                            close(c.wi, g.wi) && close(c.f_sampled, g.f_sampled) &&
+                            close(c.pdf_sampled, g.pdf_sampled);
     sampled += c.sampled;
     if (m.type == MaterialType::CoatedDiffuse) {
-      // The layered model's random walk branches on its floats (Russian roulette, total
-      // internal reflection): a rounding difference may send a walk elsewhere.
-      ++walks;
+      // The layered model's random walks (eval, sample and the pdf estimate alike) are seeded by
+      // the bits of the directions, and a rounding difference in a direction (the GPU fuses
+      // multiplies and adds) starts another walk: on an H100 2205 of 4000 probes differed. Each
+      // device's walks are unbiased estimates of the same functions, so their means must agree.
       walk_mismatches += !bsdf_equal;
+      f_pair.add(luminance(c.f), luminance(g.f));
+      pdf_pair.add(c.pdf, g.pdf);
+      weight_pair.add(c.sampled ? luminance(c.f_sampled) / c.pdf_sampled : 0,
+                      g.sampled ? luminance(g.f_sampled) / g.pdf_sampled : 0);
     } else {
-      ASSERT_TRUE(bsdf_equal) << c.f.x << " " << g.f.x << " " << c.pdf_sampled << " "
-                              << g.pdf_sampled;
+      ASSERT_TRUE(bsdf_equal) << c.f.x << " " << g.f.x << " " << c.pdf << " " << g.pdf << " "
+                              << c.pdf_sampled << " " << g.pdf_sampled;
     }
   }
   EXPECT_GT(sampled, hits.size() / 2);
   EXPECT_GT(lit, hits.size() / 4);
-  EXPECT_LE(walk_mismatches, walks / 100) << walk_mismatches << " of " << walks << " walks";
+  // Means within 4 standard errors of their difference; the bound must be tight enough to see a
+  // 5% bias of either device, or the comparison says nothing.
+  for (const auto& [name, pair] :
+       {std::pair{"f", f_pair}, {"pdf", pdf_pair}, {"sample weight", weight_pair}}) {
+    const double bound = 4 * pair.standard_error();
+    EXPECT_LE(std::abs(pair.mean_d()), bound)
+        << name << ": CPU mean " << pair.mean_a() << ", GPU mean " << pair.mean_a() - pair.mean_d()
+        << " over " << pair.n << " walks (" << walk_mismatches << " differ)";
+    EXPECT_LT(bound, 0.05 * pair.mean_a()) << name << ": the bound would not see a 5% bias";
+  }
 }
 
 }  // namespace

@@ -18,7 +18,12 @@ std::string version_text(int v) {
 }  // namespace
 
 void check(cudaError_t e, const char* what) {
-  if (e != cudaSuccess) fail("CUDA: {}: {}", what, cudaGetErrorString(e));
+  if (e == cudaSuccess) return;
+  // A failed call also sets the runtime's last error, which the next launch's check would report
+  // as its own (a failed cudaMalloc made the following kernel launch fail with "out of memory"):
+  // the error is reported here, once. Sticky errors (a trapped kernel) stay whatever is done.
+  cudaGetLastError();
+  fail("CUDA: {}: {}", what, cudaGetErrorString(e));
 }
 
 namespace detail {
