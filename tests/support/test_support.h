@@ -11,6 +11,7 @@
 #include "rll/core/error.h"
 
 #include "rll/core/image.h"
+#include "rll/core/memory_budget.h"
 #include "rll/core/rng.h"
 #include "rll/render/integrator.h"
 #include "rll/scene/scene.h"
@@ -109,5 +110,12 @@ Estimate difference_estimate(const Image& a, const Image& b);
 // probability 1e-4 together.
 void expect_images_agree(const Image& a, const Image& b, const std::string& what);
 std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx, int ny);
+
+// A small memory budget (core/memory_budget.h) for as long as it lives, so that readers' size
+// checks are tested without allocating much.
+struct BudgetScope {
+  explicit BudgetScope(size_t bytes) { set_memory_budget_bytes(bytes); }
+  ~BudgetScope() { set_memory_budget_bytes(0); }
+};
 
 }  // namespace rll::test

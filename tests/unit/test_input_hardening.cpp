@@ -149,12 +149,6 @@ TEST(SceneChecks, LightsWithoutGeometryOrSkyAreWarnedAbout) {
   EXPECT_NE(s.warnings[0].find("no geometry and no sky"), std::string::npos) << s.warnings[0];
 }
 
-// A small memory budget for one test.
-struct BudgetScope {
-  explicit BudgetScope(size_t bytes) { set_memory_budget_bytes(bytes); }
-  ~BudgetScope() { set_memory_budget_bytes(0); }
-};
-
 // A binary PLY header declaring `vertices` xyz float vertices and `faces` triangles (uchar count,
 // int indices), without its data.
 std::string ply_header(size_t vertices, size_t faces) {

@@ -17,6 +17,7 @@
 using namespace rll;
 using rll::test::error_of;
 using rll::test::expect_mentions;
+using rll::test::BudgetScope;
 using rll::test::TempDir;
 
 namespace {
@@ -459,12 +460,6 @@ TEST(PbrtErrors, ImpossibleIndicesOfRefractionAreRefused) {
   ASSERT_FALSE(s.materials.empty());
   EXPECT_EQ(s.materials.back().ior, 1.0f);
 }
-
-// A small memory budget for one test.
-struct BudgetScope {
-  explicit BudgetScope(size_t bytes) { set_memory_budget_bytes(bytes); }
-  ~BudgetScope() { set_memory_budget_bytes(0); }
-};
 
 TEST(PbrtErrors, SubdivisionAndInstancesAreCountedBeforeTheyAreBuilt) {
   // A level-6 tetrahedron (16384 triangles) instanced 1000 times is 16 M triangles: against a
