@@ -30,6 +30,13 @@ struct DeviceState {
 struct Accel::Impl : DeviceState {
   RTCScene scene = nullptr;
   RTCGeometry geometry = nullptr;
+  // Released here rather than in ~Accel, so that a constructor that fails half way (Embree out of
+  // memory) leaks nothing: the Impl is destroyed with the throw, the Accel never was.
+  ~Impl() {
+    if (geometry) rtcReleaseGeometry(geometry);
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
 };
 
 namespace {
@@ -125,11 +132,7 @@ Accel::Accel(const Mesh& mesh) : m_impl(std::make_unique<Impl>()) {
   check(m, "build");
 }
 
-Accel::~Accel() {
-  if (m_impl->geometry) rtcReleaseGeometry(m_impl->geometry);
-  if (m_impl->scene) rtcReleaseScene(m_impl->scene);
-  if (m_impl->device) rtcReleaseDevice(m_impl->device);
-}
+Accel::~Accel() = default;
 
 void Accel::update_vertices(const Mesh& mesh) {
   Impl& m = *m_impl;
