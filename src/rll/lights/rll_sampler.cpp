@@ -9,10 +9,10 @@
 #include "rll/core/binary_io.h"
 #include "rll/core/error.h"
 #include "rll/core/hash.h"
+#include "rll/core/memory_budget.h"
 #include "rll/core/parallel.h"
 #include "rll/core/params.h"
 #include "rll/core/sampling.h"
-#include "rll/core/sysinfo.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/lights/tree_sampler.h"
 #include "rll/scene/scene.h"
@@ -125,11 +125,10 @@ void check_memory(const RllSettings& s) {
   // machine cannot hold rather than grow towards the out-of-memory killer.
   const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_tiers())) +
                         double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t));
-  const size_t usable = usable_memory_bytes();
-  if (usable > 0 && needed > 0.8 * double(usable))
-    fail("{0}.capacity={1} with {0}.cut_size={2} needs {3:.1f} GiB for its cells, more than 80% of "
-         "the {4:.1f} GiB this process may use; lower {0}.capacity or {0}.cut_size",
-         s.name, s.capacity, s.cut.cut_size, needed / double(1ull << 30), double(usable) / double(1ull << 30));
+  if (needed > double(memory_budget_bytes()))
+    fail("{0}.capacity={1} with {0}.cut_size={2} needs {3} for its cells, more than {4}; lower "
+         "{0}.capacity or {0}.cut_size",
+         s.name, s.capacity, s.cut.cut_size, format_bytes(needed), memory_budget_phrase());
 }
 }  // namespace
 
