@@ -60,6 +60,8 @@ inline constexpr double kMaxExposure = 64;
 // The options of every command that renders a scene: the scene, --integrator, --max-depth,
 // --res, --points and --set.
 void add_session_options(CLI::App* cmd, SessionSettings& settings);
+// --wavefront (render and compare): SessionSettings::wavefront.
+void add_wavefront_option(CLI::App* cmd, SessionSettings& settings);
 
 // The files a scene reads: the scene file itself and, followed through text formats (JSON,
 // OBJ, MTL, glTF, pbrt), every existing file they name (meshes, material libraries, buffers,

@@ -101,6 +101,14 @@ void add_session_options(CLI::App* cmd, SessionSettings& s) {
       ->take_all();
 }
 
+void add_wavefront_option(CLI::App* cmd, SessionSettings& s) {
+  cmd->add_flag(
+      "--wavefront", s.wavefront,
+      "Render with the wavefront path tracer (paths advanced a bounce at a time by stages "
+      "over queues) instead of the megakernel (one path per call): the same estimator, "
+      "the same images within noise");
+}
+
 namespace {
 
 // Formats whose text names other files that a scene reads.
@@ -110,8 +118,8 @@ bool names_files(const std::string& ext) {
 
 bool is_file_reference(const std::string& token) {
   static const std::set<std::string> kExtensions = {
-      ".json", ".obj",  ".mtl", ".gltf", ".glb", ".bin", ".ply", ".pbrt", ".exr", ".png",
-      ".jpg",  ".jpeg", ".hdr", ".tga",  ".bmp", ".pfm", ".ppm", ".pgm",  ".tif", ".tiff", ".gz"};
+      ".json", ".obj", ".mtl", ".gltf", ".glb", ".bin", ".ply", ".pbrt", ".exr",  ".png", ".jpg",
+      ".jpeg", ".hdr", ".tga", ".bmp",  ".pfm", ".ppm", ".pgm", ".tif",  ".tiff", ".gz"};
   return kExtensions.count(lower(fs::path(token).extension().string())) > 0;
 }
 

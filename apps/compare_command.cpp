@@ -14,8 +14,8 @@
 #include "commands.h"
 #include "rll/core/error.h"
 #include "rll/core/file_checks.h"
-#include "rll/core/paths.h"
 #include "rll/core/parallel.h"
+#include "rll/core/paths.h"
 #include "rll/core/sysinfo.h"
 #include "rll/eval/compare.h"
 #include "rll/eval/metrics.h"
@@ -278,7 +278,8 @@ LogLogPlot convergence_plot(const Scene& scene, const std::vector<SamplerSummary
     PlotSeries series{summaries[i].name, series_colour(i), {}};
     for (const RunResult* r : summaries[i].runs) {
       std::vector<std::pair<double, double>> curve;
-      for (const auto& c : r->checkpoints) curve.emplace_back(c.seconds, checkpoint_metric(c, metric));
+      for (const auto& c : r->checkpoints)
+        curve.emplace_back(c.seconds, checkpoint_metric(c, metric));
       series.curves.push_back(std::move(curve));
     }
     plot.series.push_back(std::move(series));
@@ -457,9 +458,10 @@ void run(const CompareOptions& o) {
                                           format_duration(first.seconds)),
                               series_colour(i), &first_images.at(s.name), &errors.at(s.name),
                               fmt::format("repeat 1 of {}, seed {}", o.repeats, o.seed)});
-    report.samplers.push_back({s.name, s.describe.is_object() && s.describe.contains("parameters")
-                                           ? s.describe["parameters"].dump(2)
-                                           : std::string("(no parameters)"),
+    report.samplers.push_back({s.name,
+                               s.describe.is_object() && s.describe.contains("parameters")
+                                   ? s.describe["parameters"].dump(2)
+                                   : std::string("(no parameters)"),
                                s.setup_seconds.median, s.seconds.median});
   }
   report.table = table_cells(summaries);
@@ -475,6 +477,7 @@ void run(const CompareOptions& o) {
                      {"max_depth", session.integrator().max_depth},
                      {"strategy", strategy_name(session.integrator().strategy)}};
   j["budget"] = o.time > 0 ? nlohmann::json{{"time", o.time}} : nlohmann::json{{"spp", o.spp}};
+  j["renderer"] = session.renderer_name();
   j["frames"] = o.frames;
   j["repeats"] = o.repeats;
   j["seed"] = o.seed;
@@ -519,6 +522,7 @@ void add_compare_command(CLI::App& app) {
                          "measure them against a reference (writes summary.json, report.html, "
                          "convergence.png, side-by-side.png and every image as .exr into --out)");
   add_session_options(cmd, o->session);
+  add_wavefront_option(cmd, o->session);
   std::string all;
   for (const auto& n : light_sampler_names()) all += (all.empty() ? "" : ",") + n;
   o->samplers = all;

@@ -84,9 +84,10 @@ void run(const RenderOptions& o) {
   const RenderTask task = o.task.empty() ? RenderTask{} : parse_task(o.task, "--task");
   if (!o.task.empty()) {
     if (!o.spp_given)
-      fail("--task {}: give the samples per pixel of each share with --spp (the shares of a render "
-           "must all hold the same number)",
-           o.task);
+      fail(
+          "--task {}: give the samples per pixel of each share with --spp (the shares of a render "
+          "must all hold the same number)",
+          o.task);
     if (o.time > 0)
       fail("--task {}: a share renders a fixed range of samples; --time cannot be used with it",
            o.task);
@@ -97,8 +98,8 @@ void run(const RenderOptions& o) {
   fs::path output =
       o.output.empty() ? fs::path(default_output(o.session.scene)) : fs::path(o.output);
   if (!o.task.empty() && lower(output.extension().string()) != ".exr")
-    fail("--task {}: the output must be an .exr, which keeps what a merge needs (got -o {})", o.task,
-         output.string());
+    fail("--task {}: the output must be an .exr, which keeps what a merge needs (got -o {})",
+         o.task, output.string());
   prepare_output(output, "-o", {".exr", ".png"});
   for (int f = 1; f < o.frames; ++f) check_output_file(frame_path(output, f, o.frames), "-o");
   const bool load_state = !o.state.empty() && o.state_mode != "save";
@@ -109,7 +110,8 @@ void run(const RenderOptions& o) {
     if (o.state_mode == "load" && !fs::exists(o.state, ec))
       fail("--rll-state {}: not found (--rll-state-mode load reads a state and never writes one)",
            o.state);
-    if (save_state) prepare_output(o.state, "--rll-state", {lower(fs::path(o.state).extension().string())});
+    if (save_state)
+      prepare_output(o.state, "--rll-state", {lower(fs::path(o.state).extension().string())});
   }
   if (!o.stats.empty()) prepare_output(o.stats, "--stats", {".json"});
   // Every output is a file of its own, and none is a file the render reads.
@@ -137,7 +139,8 @@ void run(const RenderOptions& o) {
   if (load_state && fs::exists(o.state)) {
     load_sampler_state(o.state, *sampler, fingerprint);
     state_loaded = true;
-    if (!o.quiet) fmt::print(stderr, "rll: {} starts from the state learnt in {}\n", sampler->name(), o.state);
+    if (!o.quiet)
+      fmt::print(stderr, "rll: {} starts from the state learnt in {}\n", sampler->name(), o.state);
   }
 
   RenderSettings rs;
@@ -189,7 +192,8 @@ void run(const RenderOptions& o) {
 
   if (save_state) {
     save_sampler_state(o.state, *sampler, fingerprint);
-    if (!o.quiet) fmt::print(stderr, "rll: saved {}'s learnt state to {}\n", sampler->name(), o.state);
+    if (!o.quiet)
+      fmt::print(stderr, "rll: saved {}'s learnt state to {}\n", sampler->name(), o.state);
   }
 
   if (!o.stats.empty()) {
@@ -200,6 +204,7 @@ void run(const RenderOptions& o) {
                        {"max_depth", is.max_depth},
                        {"strategy", strategy_name(is.strategy)}};
     j["sampler"] = sampler->describe();
+    j["renderer"] = session.renderer_name();
     j["spp"] = total.spp_done;
     j["frames"] = frame_stats;
     j["seconds"] = total.seconds;
@@ -230,6 +235,7 @@ void add_render_command(CLI::App& app) {
   auto o = std::make_shared<RenderOptions>();
   auto* cmd = app.add_subcommand("render", "Render a scene to an image");
   add_session_options(cmd, o->session);
+  add_wavefront_option(cmd, o->session);
   cmd->add_option("--sampler", o->sampler,
                   fmt::format("Light sampler: {}", fmt::join(light_sampler_names(), ", ")))
       ->capture_default_str();

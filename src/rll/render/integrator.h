@@ -8,16 +8,13 @@
 #include "rll/accel/accel.h"
 #include "rll/core/rng.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/render/path_vertex.h"
 #include "rll/scene/scene.h"
 #include "rll/scene/scene_view.h"
 
 namespace rll {
 
 class Params;
-
-enum class IntegratorType { Direct, Path };
-// Which estimators of direct light the path integrator combines (tests compare them).
-enum class LightStrategy { Mis, Nee, Bsdf };
 
 struct IntegratorSettings {
   IntegratorType type = IntegratorType::Path;
@@ -51,13 +48,13 @@ class Integrator {
   // Radiance along a camera ray; `stream` supplies the per-sample random numbers.
   Rgb li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters) const;
   const IntegratorSettings& settings() const { return m_settings; }
+  const PathConstants& constants() const { return m_constants; }
 
  private:
-  struct Vertex;
   // One next-event sample at a vertex: returns its contribution (MIS-weighted for `path`),
   // already divided by the light pmf, before the path throughput.
-  Rgb sample_light(const Vertex& v, const Rgb& beta, SampleStream& stream, RayCounters& counters,
-                   bool mis) const;
+  Rgb sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
+                   const Rgb& beta, SampleStream& stream, RayCounters& counters) const;
 
   const Scene& m_scene;
   const Accel& m_accel;
@@ -65,7 +62,11 @@ class Integrator {
   IntegratorSettings m_settings;
   bool m_learns, m_prepares;
   SceneData m_data;  // the hot data the functions below read, as flat views
-  SceneView m_view;
+  PathConstants m_constants;
 };
+
+// The integrator's settings and the scene's views as every path vertex reads them.
+PathConstants make_path_constants(const Scene& scene, const SceneView& view,
+                                  const IntegratorSettings& settings);
 
 }  // namespace rll

@@ -16,20 +16,38 @@ double seconds_since(Clock::time_point t0) {
 }
 }  // namespace
 
-RenderProgress render(const Scene& scene, const Integrator& integrator, LightSampler& sampler,
-                      Film& film, const RenderSettings& settings, const std::atomic<bool>* cancel,
-                      const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
+bool PassStop::operator()() const {
+  if (m_stop.load(std::memory_order_relaxed)) return true;
+  if ((m_cancel && m_cancel->load(std::memory_order_relaxed)) ||
+      (m_time_limit > 0 && seconds_since(m_t0) >= m_time_limit)) {
+    m_stop.store(true);
+    return true;
+  }
+  return false;
+}
+
+Ray camera_ray(const Scene& scene, int x, int y, SampleStream& stream) {
+  Vec2 jitter = stream.next2();
+  // The lens sample is drawn only for a thin lens, so that pinhole images keep their sample
+  // streams (and stay bit-identical).
+  return scene.camera.has_lens()
+             ? scene.camera.generate_ray(x + jitter.x, y + jitter.y, stream.next2())
+             : scene.camera.generate_ray(x + jitter.x, y + jitter.y);
+}
+
+RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_pass, Film& film,
+                          const RenderSettings& settings, const std::atomic<bool>* cancel,
+                          const std::function<void(const RenderProgress&, const Film&)>& after_pass,
+                          const PassWork& work) {
   if (settings.spp < 1) fail("--spp must be at least 1 (got {})", settings.spp);
   if (settings.pass_spp < 1) fail("pass size must be at least 1 sample per pixel");
   if (settings.first_sample + uint64_t(settings.spp) > (uint64_t(1) << 32) &&
       settings.spp != kUnlimitedSpp)
-    fail("samples {} to {} of a pixel are past the 2^32 the sample points hold", settings.first_sample,
-         settings.first_sample + uint64_t(settings.spp));
+    fail("samples {} to {} of a pixel are past the 2^32 the sample points hold",
+         settings.first_sample, settings.first_sample + uint64_t(settings.spp));
   const int max_pass = std::max(settings.pass_spp, settings.max_pass_spp);
   if (film.width() != scene.width || film.height() != scene.height)
     fail("film size does not match the scene");
-  const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
-  const int tiles_x = (w + ts - 1) / ts, tiles_y = (h + ts - 1) / ts;
   const uint64_t frame_seed =
       mix64(settings.seed + 0x51ed270b27f3e5a1ull * uint64_t(settings.frame));
 
@@ -38,52 +56,20 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
   progress.time_limit = settings.time_limit;
   progress.spp_done = int(film.min_count());
   auto t0 = Clock::now();
-  std::atomic<bool> stop{false};
-  std::mutex merge_mutex;
+  const PassStop stop(cancel, settings.time_limit, t0);
 
-  while (progress.spp_done < settings.spp && !stop.load()) {
+  while (progress.spp_done < settings.spp && !stop.stopped()) {
     const int first = progress.spp_done;
     const int size = std::min(max_pass, settings.pass_spp << std::min(20, progress.passes / 2));
     const int count = std::min(size, settings.spp - first);
-    parallel_for_each(size_t(tiles_x) * tiles_y, [&](size_t tile) {
-      if (stop.load(std::memory_order_relaxed)) return;
-      if ((cancel && cancel->load(std::memory_order_relaxed)) ||
-          (settings.time_limit > 0 && seconds_since(t0) >= settings.time_limit)) {
-        stop.store(true);
-        return;
-      }
-      RayCounters rays;
-      uint64_t nonfinite = 0;
-      const int x0 = int(tile % tiles_x) * ts, y0 = int(tile / tiles_x) * ts;
-      for (int y = y0; y < std::min(h, y0 + ts); ++y)
-        for (int x = x0; x < std::min(w, x0 + ts); ++x)
-          for (int s = first; s < first + count; ++s) {
-            SampleStream stream(frame_seed, uint64_t(y) * w + x, settings.first_sample + uint64_t(s),
-                                settings.points);
-            Vec2 jitter = stream.next2();
-            // The lens sample is drawn only for a thin lens, so that pinhole images keep their
-            // sample streams (and stay bit-identical).
-            Ray ray = scene.camera.has_lens()
-                          ? scene.camera.generate_ray(x + jitter.x, y + jitter.y, stream.next2())
-                          : scene.camera.generate_ray(x + jitter.x, y + jitter.y);
-            Rgb L = integrator.li(ray, stream, rays);
-            if (!is_finite(L)) {
-              ++nonfinite;
-              L = Rgb(0);
-            }
-            film.add(x, y, L);
-          }
-      std::lock_guard lock(merge_mutex);
-      progress.rays += rays;
-      progress.nonfinite += nonfinite;
-    });
+    work(first, count, frame_seed, stop, progress.rays, progress.nonfinite);
     // A stopped pass leaves some pixels with fewer samples; the film's counts keep it unbiased.
     progress.passes += 1;
     progress.spp_done = int(film.min_count());
     progress.samples = progress.rays.camera;
     progress.seconds = seconds_since(t0);
-    sampler.end_pass();
-    if (stop.load()) {
+    end_pass();
+    if (stop.stopped()) {
       progress.cancelled = cancel && cancel->load();
       progress.out_of_time = !progress.cancelled;
     }
@@ -100,6 +86,40 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
       progress.out_of_time ||
       (settings.time_limit > 0 && progress.spp_done < settings.spp && !progress.cancelled);
   return progress;
+}
+
+RenderProgress render(const Scene& scene, const Integrator& integrator, LightSampler& sampler,
+                      Film& film, const RenderSettings& settings, const std::atomic<bool>* cancel,
+                      const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
+  const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
+  const int tiles_x = (w + ts - 1) / ts, tiles_y = (h + ts - 1) / ts;
+  std::mutex merge_mutex;
+  auto pass = [&](int first, int count, uint64_t frame_seed, const PassStop& stop,
+                  RayCounters& pass_rays, uint64_t& pass_nonfinite) {
+    parallel_for_each(size_t(tiles_x) * tiles_y, [&](size_t tile) {
+      if (stop()) return;
+      RayCounters rays;
+      uint64_t nonfinite = 0;
+      const int x0 = int(tile % tiles_x) * ts, y0 = int(tile / tiles_x) * ts;
+      for (int y = y0; y < std::min(h, y0 + ts); ++y)
+        for (int x = x0; x < std::min(w, x0 + ts); ++x)
+          for (int s = first; s < first + count; ++s) {
+            SampleStream stream(frame_seed, uint64_t(y) * w + x,
+                                settings.first_sample + uint64_t(s), settings.points);
+            Rgb L = integrator.li(camera_ray(scene, x, y, stream), stream, rays);
+            if (!is_finite(L)) {
+              ++nonfinite;
+              L = Rgb(0);
+            }
+            film.add(x, y, L);
+          }
+      std::lock_guard lock(merge_mutex);
+      pass_rays += rays;
+      pass_nonfinite += nonfinite;
+    });
+  };
+  return run_passes(
+      scene, [&] { sampler.end_pass(); }, film, settings, cancel, after_pass, pass);
 }
 
 }  // namespace rll

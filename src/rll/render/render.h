@@ -4,6 +4,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 
@@ -45,6 +46,42 @@ struct RenderProgress {
   bool cancelled = false;  // stopped by the cancel flag
   bool out_of_time = false;
 };
+
+// Whether a pass should stop taking samples: the cancel flag is set or the time budget is spent.
+// Once true it stays true for the rest of the render; safe to ask from many threads.
+class PassStop {
+ public:
+  PassStop(const std::atomic<bool>* cancel, double time_limit,
+           const std::chrono::steady_clock::time_point& t0)
+      : m_cancel(cancel), m_time_limit(time_limit), m_t0(t0) {}
+  bool operator()() const;
+  bool stopped() const { return m_stop.load(); }
+
+ private:
+  const std::atomic<bool>* m_cancel;
+  double m_time_limit;
+  const std::chrono::steady_clock::time_point&
+      m_t0;  // moves on while the caller's time is excluded
+  mutable std::atomic<bool> m_stop{false};
+};
+
+// What one pass of a renderer does: takes samples [first, first + count) of every pixel into the
+// film, each as the seeded stream of (frame_seed, pixel, settings.first_sample + sample) gives
+// them, checking `stop` often enough to end soon after it turns true, and adds up its rays and
+// dropped non-finite samples.
+using PassWork = std::function<void(int first, int count, uint64_t frame_seed, const PassStop& stop,
+                                    RayCounters& rays, uint64_t& nonfinite)>;
+
+// The pass loop of every renderer (the megakernel's render() below, the wavefront's): pass sizes,
+// the spp and time budgets, cancel, `end_pass` (the sampler's) between passes, `after_pass` and
+// progress.
+RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_pass, Film& film,
+                          const RenderSettings& settings, const std::atomic<bool>* cancel,
+                          const std::function<void(const RenderProgress&, const Film&)>& after_pass,
+                          const PassWork& work);
+
+// The camera ray of a sample whose stream is at its start (it draws the camera's dimensions).
+Ray camera_ray(const Scene& scene, int x, int y, SampleStream& stream);
 
 // Renders into `film` (which may already hold samples of this frame). `after_pass` is called
 // after every pass with the film, between passes, and may not touch the sampler; the time it

@@ -8,6 +8,7 @@
 #include "rll/core/error.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/render/progress.h"
+#include "rll/wavefront/wavefront.h"
 
 namespace rll {
 
@@ -97,11 +98,15 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   ProgressBar bar(label, show_progress);
   RenderSettings rs = settings;
   rs.points = m_points;
-  RenderProgress p = rll::render(m_scene, integrator, sampler, film, rs, cancel,
-                                 [&](const RenderProgress& pr, const Film& f) {
-                                   bar.update(pr);
-                                   if (after_pass) after_pass(pr, f);
-                                 });
+  auto run = [&](const RenderSettings& r, const AfterPass& after) {
+    return m_settings.wavefront
+               ? render_wavefront(m_scene, *m_accel, sampler, m_integrator, film, r, cancel, after)
+               : rll::render(m_scene, integrator, sampler, film, r, cancel, after);
+  };
+  RenderProgress p = run(rs, [&](const RenderProgress& pr, const Film& f) {
+    bar.update(pr);
+    if (after_pass) after_pass(pr, f);
+  });
   if (p.spp_done == 0 && !p.cancelled) {
     // The budget ran out before a whole pass: finish one sample per pixel without a time limit,
     // reporting the two parts as one render.
@@ -119,12 +124,11 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
     };
     rs.spp = 1;
     rs.time_limit = 0;
-    p = combined(rll::render(m_scene, integrator, sampler, film, rs, cancel,
-                             [&](const RenderProgress& pr, const Film& f) {
-                               const RenderProgress q = combined(pr);
-                               bar.update(q);
-                               if (after_pass) after_pass(q, f);
-                             }));
+    p = combined(run(rs, [&](const RenderProgress& pr, const Film& f) {
+      const RenderProgress q = combined(pr);
+      bar.update(q);
+      if (after_pass) after_pass(q, f);
+    }));
   }
   bar.finish();
   return p;

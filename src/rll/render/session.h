@@ -11,9 +11,9 @@
 
 #include "rll/accel/accel.h"
 #include "rll/core/params.h"
+#include "rll/io/load.h"
 #include "rll/render/integrator.h"
 #include "rll/render/render.h"
-#include "rll/io/load.h"
 #include "rll/scene/scene.h"
 
 namespace rll {
@@ -25,6 +25,7 @@ struct SessionSettings {
   int max_depth = 5;
   std::vector<std::string> set;  // key=value parameters for samplers and the integrator
   std::string points = "sobol";  // --points: sobol or independent
+  bool wavefront = false;        // --wavefront: render with rll/wavefront instead of the megakernel
 };
 
 // Film size limits of --res: a larger film would exhaust the memory of most machines.
@@ -46,6 +47,8 @@ class RenderSession {
   const IntegratorSettings& integrator() const { return m_integrator; }
   PointSet points() const { return m_points; }
   const SessionSettings& settings() const { return m_settings; }
+  // The renderer that render() runs: "wavefront" or "megakernel" (--stats and reports say it).
+  const char* renderer_name() const { return m_settings.wavefront ? "wavefront" : "megakernel"; }
 
   // A fresh sampler (no learnt state) by name, its parameters from --set. A variant may carry
   // its own parameters after colons, keys prefixed with the sampler's name unless they hold a

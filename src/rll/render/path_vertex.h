@@ -1,0 +1,254 @@
+// The work of one path vertex as RLL_HD functions over the scene's views and plain structs: the
+// megakernel (Integrator::li) and the wavefront renderer (rll/wavefront) call the same ones, in the
+// same order, so that they draw the same numbers and agree to the bit per path.
+#pragma once
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+
+#include "rll/core/device.h"
+#include "rll/core/hash.h"
+#include "rll/core/sampling.h"
+#include "rll/lights/light_sampler.h"
+#include "rll/scene/bsdf.h"
+#include "rll/scene/interaction.h"
+#include "rll/scene/scene_view.h"
+
+namespace rll {
+
+enum class IntegratorType { Direct, Path };
+// Which estimators of direct light the path integrator combines (tests compare them).
+enum class LightStrategy { Mis, Nee, Bsdf };
+
+// Each decision of a path has a fixed dimension of the sample: the pixel position takes the first
+// two, then every vertex the next kVertexDims, so that with Sobol' points a decision is stratified
+// over a pixel's samples whatever the earlier vertices drew (pairs drawn together are adjacent).
+inline constexpr uint32_t kCameraDims = 2;
+enum VertexDim : uint32_t {
+  kLightChoice,
+  kLightPoint,
+  kLightPoint2,
+  kLobe,
+  kDirection,
+  kDirection2,
+  kPrepare,
+  kRoulette,
+  kVertexDims
+};
+RLL_HD inline uint32_t vertex_dimension(int depth, VertexDim d) {
+  return kCameraDims + uint32_t(depth) * kVertexDims + d;
+}
+
+// What every vertex of every path of a render reads: the scene's views and the integrator's
+// settings, flattened.
+struct PathConstants {
+  SceneView scene;
+  Vec3 scene_center;  // of the scene's bounds: shadow rays to directional lights end past them
+  float scene_radius = 1;
+  float pixel_angle = 1;
+  LightStrategy strategy = LightStrategy::Mis;
+  int max_depth = 5;  // 1 for `direct`
+  int rr_depth = 3;
+};
+
+// What a path carries from one vertex to the next.
+struct PathState {
+  Rgb L{0}, beta{1};
+  // Footprint: R_k = R_{k-1} + t / sqrt(p_prev |cos|), with the camera's p_prev = 1/pixel_angle^2.
+  float footprint = 0, prev_dir_pdf = 1;
+  LightContext prev_ctx;
+  float prev_bsdf_pdf = 0;
+  bool prev_delta = false;  // the last bounce was a Dirac lobe: no light sampling competed
+};
+
+RLL_HD inline PathState start_path(const PathConstants& c) {
+  PathState s;
+  s.prev_dir_pdf = 1 / (c.pixel_angle * c.pixel_angle);
+  return s;
+}
+
+// Past the last vertex a hit only matters if it is an emitter (MIS of the BSDF ray).
+RLL_HD inline bool hit_matters(const PathConstants& c, const Hit& hit, int depth) {
+  return depth < c.max_depth || c.scene.mesh.light[hit.tri] >= 0;
+}
+
+// Emission found at a hit, before its MIS weight. `needs_light_pmf`: the caller asks the light
+// sampler for pmf(prev_ctx, light) and passes it to add_emission; otherwise any pmf will do.
+struct HitEmission {
+  Rgb Le{0};
+  bool counts = false;
+  bool needs_light_pmf = false;
+};
+
+RLL_HD inline HitEmission hit_emission(const PathConstants& c, const PathState& s,
+                                       const SurfaceHit& sh, const Vec3& wo, int depth) {
+  HitEmission e;
+  if (sh.light < 0) return e;
+  e.Le = emitted_radiance(c.scene.lights[sh.light], wo);
+  if (is_black(e.Le)) return e;
+  if (depth == 0 || c.strategy == LightStrategy::Bsdf || s.prev_delta) {
+    e.counts = true;
+  } else if (c.strategy == LightStrategy::Mis) {
+    e.counts = true;
+    e.needs_light_pmf = true;
+  }
+  return e;
+}
+
+// Adds the emission to the path's radiance, MIS-weighted against light sampling at the previous
+// vertex where it competed (`light_pmf`: the sampler's pmf of the light there).
+RLL_HD inline void add_emission(const PathConstants& c, PathState& s, const SurfaceHit& sh,
+                                const HitEmission& e, float light_pmf) {
+  if (!e.counts) return;
+  if (!e.needs_light_pmf) {
+    s.L += s.beta * e.Le;
+    return;
+  }
+  float light_pdf = light_pmf * pdf_li(c.scene.lights[sh.light], s.prev_ctx.p, sh.p);
+  s.L += s.beta * e.Le * power_heuristic(s.prev_bsdf_pdf, light_pdf);
+}
+
+// The BSDF's own numbers, drawn at the vertex's dimensions (their values depend on the dimension
+// only) so that the walk of a stochastic BSDF (CoatedDiffuse) can be seeded from them.
+struct BsdfNumbers {
+  float u_lobe = 0;
+  Vec2 u_dir;
+};
+
+RLL_HD inline Bsdf make_vertex_bsdf(const PathConstants& c, const SurfaceHit& sh, const Vec3& wo,
+                                    const BsdfNumbers& u, int depth) {
+  const uint64_t seed =
+      mix64(std::bit_cast<uint32_t>(u.u_lobe) | uint64_t(std::bit_cast<uint32_t>(u.u_dir.x))
+                                                    << 32) ^
+      mix64(std::bit_cast<uint32_t>(u.u_dir.y) + 0x9e3779b97f4a7c15ull * uint64_t(depth + 1));
+  return Bsdf(c.scene.materials[sh.material], albedo_at(c.scene, sh), sh.ns, sh.ng, wo,
+              roughness_at(c.scene, sh), seed);
+}
+
+// Widens the footprint by the segment to this hit and returns the light sampler's context there.
+RLL_HD inline LightContext make_vertex_context(const PathConstants& c, PathState& s,
+                                               const SurfaceHit& sh, const Hit& hit, const Vec3& wo,
+                                               const Bsdf& bsdf) {
+  float cos_in = std::max(1e-2f, absdot(wo, sh.ng));
+  s.footprint += hit.t / std::sqrt(s.prev_dir_pdf * cos_in);
+  LightContext ctx;
+  ctx.p = sh.p;
+  ctx.n = bsdf.geometric_normal();
+  ctx.ns = bsdf.shading_normal();
+  ctx.wo = wo;
+  ctx.glossy = c.scene.materials[sh.material].type != MaterialType::Diffuse;
+  ctx.footprint = s.footprint;
+  if (bsdf.has_transmission()) {
+    // Light reaches a transmissive surface from both sides: no normal, so that no sampler
+    // culls the lights behind it.
+    ctx.n = Vec3(0);
+    ctx.ns = Vec3(0);
+  }
+  return ctx;
+}
+
+// A BSDF of Dirac lobes only (smooth glass, a thin pane) gets no light sample, as in pbrt-v4:
+// no shadow ray, no sampler record; the BSDF ray's light hit counts in full instead.
+RLL_HD inline bool samples_light(const PathConstants& c, const Bsdf& bsdf) {
+  return c.strategy != LightStrategy::Bsdf && !bsdf.is_delta();
+}
+
+// A next-event sample after the light was chosen and a point on it drawn, before the shadow ray.
+struct NeeSetup {
+  Rgb unoccluded{0};  // f cos Le / pdf(y | light), as if nothing were in the way
+  Vec3 wi;
+  float light_pdf = 0;  // solid-angle pdf of the point given the light
+  bool light_delta = false;
+  bool counts_shadow_ray = false;  // the megakernel's ray counter counts it
+  bool traces = false;             // the shadow ray must be traced (unoccluded is not black)
+  Ray shadow;
+};
+
+RLL_HD inline NeeSetup nee_setup(const PathConstants& c, const LightContext& ctx, const Bsdf& bsdf,
+                                 const Vec3& wo, uint32_t light_index, Vec2 u_pos) {
+  NeeSetup n;
+  const Light& light = c.scene.lights[light_index];
+  n.light_delta = light.is_delta();
+  LightLiSample ls = sample_li(light, ctx.p, u_pos);
+  n.light_pdf = ls.pdf;
+  n.wi = ls.wi;
+  if (!(ls.pdf > 0)) return n;
+  Rgb f = bsdf.eval(wo, ls.wi) * absdot(ls.wi, bsdf.shading_normal());
+  if (is_black(f)) return n;
+  n.unoccluded = f * ls.L / ls.pdf;
+  if (std::isfinite(ls.dist)) {
+    Vec3 ny = light.type == LightType::Triangle ? light.n : Vec3(0);
+    n.shadow = spawn_ray_to(ctx.p, bsdf.geometric_normal(), ls.point, ny);
+  } else {  // a directional light: test the scene's bounding sphere only, never the sky dome
+    n.shadow = spawn_ray(ctx.p, bsdf.geometric_normal(), ls.wi,
+                         length(ctx.p - c.scene_center) + 1.01f * c.scene_radius);
+  }
+  n.counts_shadow_ray = true;
+  n.traces = !is_black(n.unoccluded);
+  return n;
+}
+
+// The next-event sample after the shadow ray's verdict: its contribution (MIS-weighted when
+// `mis`), already divided by the light pmf, before the path throughput, and what a learning
+// sampler records of it.
+struct NeeResult {
+  Rgb value{0};
+  NeeRecord record;
+};
+
+RLL_HD inline NeeResult nee_finish(const NeeSetup& n, bool occluded, const Bsdf& bsdf,
+                                   const Vec3& wo, const Rgb& beta, float light_pmf, bool mis) {
+  Rgb contribution(0);
+  if (n.traces && !occluded) contribution = n.unoccluded;
+  float w = 1;
+  if (mis && !n.light_delta && !is_black(contribution)) {
+    float bsdf_pdf = bsdf.pdf(wo, n.wi);
+    w = power_heuristic(light_pmf * n.light_pdf, bsdf_pdf);
+  }
+  NeeResult r;
+  r.record.estimate = luminance(contribution);
+  r.record.unoccluded = luminance(n.unoccluded);
+  r.record.mis_weight = w;
+  r.record.max_rgb = max_component(beta * contribution) * w;
+  r.value = is_black(contribution) ? contribution : contribution * (w / light_pmf);
+  return r;
+}
+
+// The last vertex's BSDF ray only finds emission, which light sampling alone leaves out (except
+// through Dirac lobes, which light sampling never sees): false where the path ends before it.
+RLL_HD inline bool continues_after_light(const PathConstants& c, const Bsdf& bsdf, int depth) {
+  const bool last = depth + 1 >= c.max_depth;
+  return !(last && c.strategy == LightStrategy::Nee && !bsdf.has_delta());
+}
+
+// Samples the BSDF, updates the throughput and what the next vertex needs of this one; false
+// where the path ends. `roulette` tells whether Russian roulette is played next (survive()).
+RLL_HD inline bool sample_bounce(const PathConstants& c, PathState& s, const Bsdf& bsdf,
+                                 const LightContext& ctx, const SurfaceHit& sh, const Vec3& wo,
+                                 const BsdfNumbers& u, int depth, Ray& next, bool& roulette) {
+  const bool last = depth + 1 >= c.max_depth;
+  BsdfSample bs;
+  if (!bsdf.sample(wo, u.u_lobe, u.u_dir, bs)) return false;
+  if (last && c.strategy == LightStrategy::Nee && !bs.delta) return false;
+  s.beta *= bs.f * (absdot(bs.wi, bsdf.shading_normal()) / bs.pdf);
+  if (is_black(s.beta) || !is_finite(s.beta)) return false;
+  s.prev_ctx = ctx;
+  s.prev_bsdf_pdf = bs.pdf;
+  s.prev_delta = bs.delta;
+  // A Dirac lobe does not widen the footprint: carry the previous density on.
+  if (!bs.delta) s.prev_dir_pdf = bs.pdf;
+  roulette = !last && depth + 1 >= c.rr_depth;
+  next = spawn_ray(sh.p, sh.ng, bs.wi);
+  return true;
+}
+
+// Russian roulette with the number drawn at the vertex's kRoulette dimension.
+RLL_HD inline bool survive(PathState& s, float u) {
+  float q = std::max(0.05f, 1 - max_component(s.beta));
+  if (u < q) return false;
+  s.beta /= 1 - q;
+  return true;
+}
+
+}  // namespace rll
