@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "rll/render/session.h"
+#include "rll/session/session.h"
 
 namespace rll::cli {
 

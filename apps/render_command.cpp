@@ -15,7 +15,7 @@
 #include "rll/lights/light_sampler.h"
 #include "rll/lights/sampler_state.h"
 #include "rll/render/progress.h"
-#include "rll/render/session.h"
+#include "rll/session/session.h"
 #include "rll/render/share.h"
 
 namespace rll::cli {

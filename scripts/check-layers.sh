@@ -17,7 +17,9 @@ declare -A layer=(
   [lights]=4
   [render]=5
   [wavefront]=6
-  [cuda]=7 [eval]=7
+  [cuda]=7
+  [session]=8
+  [eval]=9
 )
 status=0
 declare -A count=()

@@ -11,7 +11,7 @@
 #include "rll/core/rng.h"
 #include "rll/lights/tree_sampler.h"
 #include "rll/lighttree/light_tree.h"
-#include "rll/render/session.h"
+#include "rll/session/session.h"
 #include "rll/scene/builder.h"
 #include "rll/scene/builtin.h"
 #include "support/sampler_contexts.h"

@@ -3,7 +3,7 @@
 #include <fstream>
 
 #include "rll/eval/reference.h"
-#include "rll/render/session.h"
+#include "rll/session/session.h"
 #include "rll/io/load.h"
 #include "support/test_support.h"
 

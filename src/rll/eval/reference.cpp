@@ -14,7 +14,7 @@
 #include "rll/core/hash.h"
 #include "rll/core/rng.h"
 #include "rll/eval/metrics.h"
-#include "rll/render/session.h"
+#include "rll/session/session.h"
 
 namespace rll {
 namespace fs = std::filesystem;

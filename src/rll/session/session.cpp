@@ -1,4 +1,4 @@
-#include "rll/render/session.h"
+#include "rll/session/session.h"
 
 #include <fmt/ranges.h>
 
