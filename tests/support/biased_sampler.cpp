@@ -23,6 +23,11 @@ double BiasedSampler::group_branch(const LightContext& ctx) const {
 }
 
 SampledLight BiasedSampler::sample(const LightContext& ctx, double u) const {
+  if (m_mode == Pmf::Understated) {
+    SampledLight s = m_inner.sample(ctx, u);
+    if (s.pmf > 0) s.pmf = pmf(ctx, s.light);
+    return s;
+  }
   const double b = group_branch(ctx);
   SampledLight s;
   if (u < 1 - b || b <= 0) {
@@ -49,6 +54,7 @@ SampledLight BiasedSampler::sample(const LightContext& ctx, double u) const {
 float BiasedSampler::pmf(const LightContext& ctx, uint32_t light) const {
   const float p = m_inner.pmf(ctx, light);
   if (m_mode == Pmf::Wrapped) return p;
+  if (m_mode == Pmf::Understated) return in_group(light) ? float(p / m_factor) : p;
   const double w = in_group(light) ? m_factor : 1.0;
   return float(double(p) * w * (1 - group_branch(ctx)));
 }

@@ -15,13 +15,17 @@ namespace rll::test {
 // b = 1 - 1/Z (p_A: p restricted to A), so one u maps to a light without rejection and u's
 // stratification carries over (each light gets at most one more interval of u than under p).
 // With `Pmf::Consistent`, pmf() answers q: sample() and pmf() agree and only a check against
-// the truth can see the error. With `Pmf::Wrapped`, pmf() answers p: what a sampler with a bug
-// in its sampling but not in its pmf looks like, and a render with it is biased (the group's
-// next-event contribution by about `factor`). It learns nothing: train the wrapped sampler first
+// the truth can see the error (a render with it is unbiased). With `Pmf::Wrapped`, pmf() answers
+// p: a sampler with a bug in its sampling but not in its pmf; a render's next-event estimate is
+// off by (1 + 0.05 C/L) / (1 + 0.05 P) - 1 where the group has a share P of the probability and C
+// of the light L, which is small where the wrapped sampler is good (P near C). With
+// `Pmf::Understated`, sample() draws from p but pmf() answers p / factor for the group's lights
+// (pmfs no longer sum to one): the group's next-event light is `factor` times too bright, the
+// image bias a region-wise render test must see. It learns nothing: train the wrapped sampler first
 // (the group's samples carry no cluster for a learner's record()).
 class BiasedSampler final : public LightSampler {
  public:
-  enum class Pmf { Consistent, Wrapped };
+  enum class Pmf { Consistent, Wrapped, Understated };
   // `group`: light indices (any order, no repeats). The wrapped sampler must outlive this one.
   BiasedSampler(LightSampler& inner, std::vector<uint32_t> group, double factor, Pmf mode);
   std::string name() const override { return "biased-" + m_inner.name(); }
