@@ -131,7 +131,11 @@ Estimate expect_furnace_value(const Image& img, double expected, const std::stri
   std::cout << what << ": mean " << e.mean << " +- " << e.stderr_ << "\n";
   // 1e-4 for float round-off along long paths (the estimator's own error can be near zero: the
   // only randomness is which way each path goes at Fresnel and whether it survives roulette).
-  EXPECT_NEAR(e.mean, expected, 4.5 * e.stderr_ + 1e-4) << what << ": mean " << e.mean << " +- " << e.stderr_;
+  EXPECT_NEAR(e.mean, expected, 4.5 * e.stderr_ + 1e-4)
+      << what << ": mean " << e.mean << " +- " << e.stderr_;
+  // Power: the whole-image bound sees an image 5% off; the regions' figure is printed.
+  EXPECT_LT(4.5 * e.stderr_ + 1e-4, 0.05 * expected) << what << ": the bound cannot see a 5% bias";
+  int regions_seeing = 0;
   const int n = 4;
   for (int ry = 0; ry < n; ++ry)
     for (int rx = 0; rx < n; ++rx) {
@@ -142,7 +146,11 @@ Estimate expect_furnace_value(const Image& img, double expected, const std::stri
       Estimate r = block_estimate(region, 16);
       EXPECT_NEAR(r.mean, expected, 4.5 * r.stderr_ + 1e-4)
           << what << " region (" << rx << ", " << ry << "): " << r.mean << " +- " << r.stderr_;
+      regions_seeing += 4.5 * r.stderr_ + 1e-4 < 0.05 * expected;
     }
+  std::cout << "[ power    ] " << what << ": sees a bias of "
+            << 100 * (4.5 * e.stderr_ + 1e-4) / expected << "% of the image; " << regions_seeing
+            << " of 16 regions see a 5% bias in them\n";
   return e;
 }
 
@@ -155,7 +163,8 @@ RenderRequest glass_furnace_request(uint64_t seed, int spp = 256) {
 
 TEST(GlassFurnace, SmoothDielectricRendersTheEnvironment) {
   Scene s = glass_furnace(glass_material(MaterialType::Dielectric, 0));
-  Estimate e = expect_furnace_value(render_scene(s, glass_furnace_request(31, 2048)), 1.0, "smooth");
+  Estimate e =
+      expect_furnace_value(render_scene(s, glass_furnace_request(31, 2048)), 1.0, "smooth");
   EXPECT_LT(4.5 * e.stderr_, 0.005);  // tight enough to see a 0.5% loss or gain
 }
 

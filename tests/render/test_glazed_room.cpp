@@ -12,6 +12,7 @@
 
 #include "rll/lights/light_sampler.h"
 #include "rll/scene/builtin.h"
+#include "support/power.h"
 #include "support/test_support.h"
 
 using namespace rll;
@@ -28,7 +29,8 @@ const Scene& glazed_room() {
 }
 
 const Image& tree_reference() {
-  static const Image image = render_scene(glazed_room(), request("tree", "path", kDepth, "mis", kSpp, 1));
+  static const Image image =
+      render_scene(glazed_room(), request("tree", "path", kDepth, "mis", kSpp, 1));
   return image;
 }
 
@@ -44,6 +46,7 @@ TEST_P(GlazedRoom, AgreesWithTree) {
   Image img = render_scene(glazed_room(), r);
   EXPECT_GT(image_mean(ref), 0.01);
   expect_images_agree(img, ref, name + " vs tree");
+  expect_bound_sees(img, ref, name + " vs tree", 0.05);  // sees 2-2.5% with every sampler
   // The bound must be tight enough to catch a bias of 10% of the image mean.
   Estimate d = difference_estimate(img, ref);
   EXPECT_LT(4.5 * d.stderr_, 0.10 * image_mean(ref)) << name << ": test too noisy to mean anything";

@@ -11,6 +11,7 @@
 #include "rll/core/params.h"
 #include "rll/lights/oracle_sampler.h"
 #include "rll/scene/builtin.h"
+#include "support/power.h"
 #include "support/sampler_contexts.h"
 #include "support/test_support.h"
 
@@ -19,10 +20,12 @@ using namespace rll::test;
 
 namespace {
 
-Scene room(int w, int h) { return small_builtin_scene("cornell-boxes-room", w, h); }
+Scene room(int w, int h) {
+  return small_builtin_scene("cornell-boxes-room", w, h);
+}
 
-void expect_same_mean(const Scene& scene, IntegratorType type, int spp, const std::string& a, const std::string& b,
-                      std::vector<std::string> set_b = {}) {
+void expect_same_mean(const Scene& scene, IntegratorType type, int spp, const std::string& a,
+                      const std::string& b, std::vector<std::string> set_b = {}) {
   RenderRequest ra;
   ra.sampler = a;
   ra.integrator.type = type;
@@ -36,10 +39,12 @@ void expect_same_mean(const Scene& scene, IntegratorType type, int spp, const st
   Image ia = render_scene(scene, ra), ib = render_scene(scene, rb);
   Estimate d = difference_estimate(ib, ia);
   EXPECT_LE(std::abs(d.mean), 4.5 * d.stderr_)
-      << b << " vs " << a << ": mean difference " << d.mean << " +- " << d.stderr_ << " (means " << image_mean(ib)
-      << ", " << image_mean(ia) << ")";
+      << b << " vs " << a << ": mean difference " << d.mean << " +- " << d.stderr_ << " (means "
+      << image_mean(ib) << ", " << image_mean(ia) << ")";
   // The bound must be tight enough to catch a bias of 8% of the image mean.
   EXPECT_LT(4.5 * d.stderr_, 0.08 * image_mean(ia)) << "test too noisy to mean anything";
+  // Sees 1-2% (rll, oracle): the 5% the issue asks for.
+  expect_bound_sees(ib, ia, b + " vs " + a, 0.05);
 }
 
 }  // namespace
@@ -48,9 +53,13 @@ void expect_same_mean(const Scene& scene, IntegratorType type, int spp, const st
 // (each lamp inside a box has a pmf near 1e-7 next to the sky dome), so independent power
 // renders at test budgets undershoot their mean by ~40% and no confidence bound holds; power
 // and RLL are compared on tamer scenes in test_sampler_agreement.cpp.
-TEST(RllUnbiased, CornellBoxesRoomDirect) { expect_same_mean(room(32, 24), IntegratorType::Direct, 1024, "tree", "rll"); }
+TEST(RllUnbiased, CornellBoxesRoomDirect) {
+  expect_same_mean(room(32, 24), IntegratorType::Direct, 1024, "tree", "rll");
+}
 
-TEST(RllUnbiased, CornellBoxesRoomPath) { expect_same_mean(room(24, 18), IntegratorType::Path, 768, "tree", "rll"); }
+TEST(RllUnbiased, CornellBoxesRoomPath) {
+  expect_same_mean(room(24, 18), IntegratorType::Path, 768, "tree", "rll");
+}
 
 TEST(RllUnbiased, UniformWithinAndFullPdfReward) {
   expect_same_mean(room(32, 24), IntegratorType::Direct, 1024, "tree", "rll",
@@ -58,7 +67,8 @@ TEST(RllUnbiased, UniformWithinAndFullPdfReward) {
 }
 
 TEST(OracleUnbiased, CornellBoxesRoomDirect) {
-  expect_same_mean(room(32, 24), IntegratorType::Direct, 1024, "tree", "oracle", {"oracle.points=4", "oracle.rays=2"});
+  expect_same_mean(room(32, 24), IntegratorType::Direct, 1024, "tree", "oracle",
+                   {"oracle.points=4", "oracle.rays=2"});
 }
 
 namespace {

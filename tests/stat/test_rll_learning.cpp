@@ -9,8 +9,8 @@
 #include <map>
 
 #include "rll/accel/accel.h"
-#include "rll/core/parallel.h"
 #include "rll/core/binary_io.h"
+#include "rll/core/parallel.h"
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
 #include "rll/lights/rll_sampler.h"
@@ -19,6 +19,7 @@
 #include "rll/render/render.h"
 #include "rll/scene/builder.h"
 #include "rll/scene/builtin.h"
+#include "support/power.h"
 #include "support/sampler_contexts.h"
 #include "support/test_support.h"
 
@@ -147,8 +148,8 @@ TEST(RllLearning, OccludedLampFallsToTheDefensiveFloor) {
           passes, median, p90, max_ratio);
       // Measured at the fixed seed (Sobol' points, MIS direct, v2 learning): 90th percentile
       // below 0.001 after 4, 8, 16 passes, the worst cell 0.83, 0.61, 0.43 (a cell at the edge of
-      // the lamp's box); a sampler that did not learn stays near 1. The worst single cell rests on a handful of rewards, so it gets a looser
-      // bound than the 90th percentile.
+      // the lamp's box); a sampler that did not learn stays near 1. The worst single cell rests on
+      // a handful of rewards, so it gets a looser bound than the 90th percentile.
       const float limit = passes == 4 ? 0.7f : passes == 8 ? 0.35f : 0.25f;
       EXPECT_LT(p90, limit) << passes << " passes";
       EXPECT_LT(max_ratio, std::min(0.9f, 2 * limit)) << passes << " passes";
@@ -195,8 +196,8 @@ TEST(RllLearning, GuidedDescentLearnsTheOccludedLamp) {
   }
   ASSERT_GT(checked, 15);
   std::sort(ratios.begin(), ratios.end());
-  std::printf("guided: hidden lamp's probability / the tree's: median %.3f, max %.3f\n", ratios[ratios.size() / 2],
-              ratios.back());
+  std::printf("guided: hidden lamp's probability / the tree's: median %.3f, max %.3f\n",
+              ratios[ratios.size() / 2], ratios.back());
   // The plain tree (every factor 1) gives exactly 1 here.
   EXPECT_LT(ratios[ratios.size() / 2], 0.25f);
   EXPECT_LT(ratios[ratios.size() * 9 / 10], 0.5f);
@@ -204,13 +205,16 @@ TEST(RllLearning, GuidedDescentLearnsTheOccludedLamp) {
 
 namespace {
 // Trains rll with `settings` on two_lamps() and checks that every learnt floor cell has its coarse
-// cell's shares, and that they give the hidden lamp (node_b) nothing where the tree rates it highly.
-void check_pooled_hidden_lamp(const Scene& scene, uint32_t node_b, const std::vector<std::string>& settings) {
+// cell's shares, and that they give the hidden lamp (node_b) nothing where the tree rates it
+// highly.
+void check_pooled_hidden_lamp(const Scene& scene, uint32_t node_b,
+                              const std::vector<std::string>& settings) {
   const LightTree& tree = *scene.light_tree;
   Trained t = train(scene, 8, 1, settings);
   const nlohmann::json d = t.sampler->describe();
   const uint64_t cells = d["cells_used"].get<uint64_t>(), pooled = d["pool_cells"].get<uint64_t>();
-  std::printf("%llu cells pooled into %llu coarse cells\n", (unsigned long long)cells, (unsigned long long)pooled);
+  std::printf("%llu cells pooled into %llu coarse cells\n", (unsigned long long)cells,
+              (unsigned long long)pooled);
   EXPECT_GT(pooled, 0u);
   EXPECT_LT(pooled, cells) << "a coarse cell holds the cells of a region twice as wide";
   int checked = 0;
@@ -226,10 +230,11 @@ void check_pooled_hidden_lamp(const Scene& scene, uint32_t node_b, const std::ve
     ++checked;
   }
   ASSERT_GT(checked, 20);
-  ASSERT_GT(shares_b.size(), 5u) << "the test needs cells where the tree rates the hidden lamp highly";
+  ASSERT_GT(shares_b.size(), 5u)
+      << "the test needs cells where the tree rates the hidden lamp highly";
   std::sort(shares_b.begin(), shares_b.end());
-  std::printf("coarse share of the hidden lamp: median %.4f, max %.4f\n", shares_b[shares_b.size() / 2],
-              shares_b.back());
+  std::printf("coarse share of the hidden lamp: median %.4f, max %.4f\n",
+              shares_b[shares_b.size() / 2], shares_b.back());
   // Every reward of lamp B on the floor is zero, so the coarse cells give it nothing.
   EXPECT_LT(shares_b.back(), 0.01f);
 }
@@ -248,7 +253,8 @@ TEST(RllLearning, PooledCoarseCellsLearnTheOccludedLamp) {
   for (const char* guess : {"share", "ratio"}) {
     SCOPED_TRACE(guess);
     check_pooled_hidden_lamp(scene, node_b, {"rll.pool=1", std::string("rll.pool_guess=") + guess});
-    check_pooled_hidden_lamp(scene, node_b, {"rll.pool=1", "rll.pool_up=1", std::string("rll.pool_guess=") + guess});
+    check_pooled_hidden_lamp(
+        scene, node_b, {"rll.pool=1", "rll.pool_up=1", std::string("rll.pool_guess=") + guess});
   }
   // Without pooling there are no coarse cells.
   Trained alone = train(scene, 2, 1, {"rll.pool=0"});
@@ -366,7 +372,8 @@ TEST(RllLearning, RewardsOfANewCellReachTheClustersOfTheirLights) {
   std::vector<double> coarse_shares = rll.cuts().learnt_shares(coarse.cell);
   double coarse_first = 0;
   for (size_t k = 0; k < coarse_shares.size(); ++k)
-    if (scene.light_tree->node(rll.cuts().nodes(coarse.cell)[k]).end <= half) coarse_first += coarse_shares[k];
+    if (scene.light_tree->node(rll.cuts().nodes(coarse.cell)[k]).end <= half)
+      coarse_first += coarse_shares[k];
   EXPECT_GT(coarse_first, 0.95);
 }
 
@@ -404,8 +411,10 @@ TEST(RllLearning, FullTableEvictsAndStaysCorrect) {
   b.sampler = "rll";
   b.set = {"rll.capacity=40"};
   b.seed = 7;
-  Estimate diff = difference_estimate(render_scene(scene, b), render_scene(scene, a));
+  const Image ib = render_scene(scene, b), ia = render_scene(scene, a);
+  Estimate diff = difference_estimate(ib, ia);
   EXPECT_LE(std::abs(diff.mean), 4.5 * diff.stderr_) << diff.mean << " +- " << diff.stderr_;
+  expect_bound_sees(ib, ia, "rll with a full table vs tree", 0.05);  // sees 1.5%
 }
 
 TEST(RllLearning, AnimatedFramesRefitAndStayUnbiased) {
@@ -456,8 +465,10 @@ TEST(RllLearning, AnimatedFramesRefitAndStayUnbiased) {
   t.sampler = "tree";
   t.integrator = is;
   t.spp = 512;
-  Estimate diff = difference_estimate(film.resolve(), render_scene(scene, t));
+  const Image last = film.resolve(), ref = render_scene(scene, t);
+  Estimate diff = difference_estimate(last, ref);
   EXPECT_LE(std::abs(diff.mean), 4.5 * diff.stderr_) << diff.mean << " +- " << diff.stderr_;
+  expect_bound_sees(last, ref, "rll's last animated frame vs tree", 0.05);  // sees 1.5%
 }
 
 TEST(RllLearning, PoolSharesFollowTheLampsThatSwitchOff) {
@@ -501,7 +512,8 @@ TEST(RllLearning, PoolSharesFollowTheLampsThatSwitchOff) {
     const std::vector<float>& mine = after.at(key);
     double sum = 0;
     for (size_t k = 0; k < shares.size(); ++k) {
-      EXPECT_NEAR(mine[k], shares[k], 1e-6f * (1 + shares[k])) << "cell " << key << ", cluster " << k;
+      EXPECT_NEAR(mine[k], shares[k], 1e-6f * (1 + shares[k]))
+          << "cell " << key << ", cluster " << k;
       sum += mine[k];
     }
     EXPECT_NEAR(sum, 1.0, 1e-4);

@@ -1,4 +1,5 @@
 #include "support/test_support.h"
+#include "support/power.h"
 
 #include <fmt/format.h>
 #include <sys/wait.h>
@@ -91,6 +92,10 @@ Scene small_builtin_scene(const std::string& name, int width, int height) {
 }
 
 Image render_scene(const Scene& given, const RenderRequest& req) {
+  return render_scene_wrapped(given, req, {});
+}
+
+Image render_scene_wrapped(const Scene& given, const RenderRequest& req, const SamplerWrap& wrap) {
   // A scene without a tree renders as a render session would render it: with one.
   std::optional<Scene> treed;
   if (!given.light_tree) build_light_tree(treed.emplace(given));
@@ -98,15 +103,17 @@ Image render_scene(const Scene& given, const RenderRequest& req) {
   ThreadLimit limit(req.threads);
   Params params = Params::parse(req.set);
   Accel accel(scene.mesh);
-  auto sampler = make_light_sampler(req.sampler, scene, params, &accel);
+  auto named = make_light_sampler(req.sampler, scene, params, &accel);
   params.check_all_used();
-  Integrator integrator(scene, accel, *sampler, req.integrator);
+  auto wrapped = wrap ? wrap(*named, scene) : nullptr;
+  LightSampler& sampler = wrapped ? *wrapped : *named;
+  Integrator integrator(scene, accel, sampler, req.integrator);
   Film film(scene.width, scene.height);
   RenderSettings rs;
   rs.spp = req.spp;
   rs.seed = req.seed;
   rs.points = req.points;
-  render(scene, integrator, *sampler, film, rs);
+  render(scene, integrator, sampler, film, rs);
   return film.resolve();
 }
 
@@ -202,6 +209,47 @@ void expect_images_agree(const Image& a, const Image& b, const std::string& what
     EXPECT_LE(std::abs(regions[i].mean), 4.5 * regions[i].stderr_)
         << what << ", region " << i << ": difference " << regions[i].mean << " +- "
         << regions[i].stderr_;
+  bound_power(a, b, what);
+}
+
+namespace {
+Image brighter(Image a, double bias) {
+  for (Rgb& p : a.pixels()) p = p * float(1 + bias);
+  return a;
+}
+bool rejects(const Estimate& d) {
+  return std::abs(d.mean) > 4.5 * d.stderr_;
+}
+// The smallest bias (in steps of 0.5%, up to 100%) that the whole-image bound sees both ways: a
+// made that much brighter and that much darker are both rejected against b. A bias proportional to
+// the image, as a wrong sampler's or integrator's is, also adds the image's own structure to the
+// per-pixel differences, so this is larger than 4.5 standard errors of the unbiased difference.
+double smallest_seen_bias(const Image& a, const Image& b) {
+  for (int k = 1; k <= 200; ++k) {
+    const double s = 0.005 * k;
+    if (rejects(difference_estimate(brighter(a, s), b)) &&
+        rejects(difference_estimate(brighter(a, -s), b)))
+      return s;
+  }
+  return 1e9;
+}
+}  // namespace
+
+std::string bound_power(const Image& a, const Image& b, const std::string& what, int nx, int ny) {
+  int regions = 0;
+  for (const Estimate& r : region_differences(brighter(a, 0.05), b, nx, ny)) regions += rejects(r);
+  const std::string figure =
+      fmt::format("sees a bias of {:.1f}% of the image; {} of {} regions see a 5% bias in them",
+                  100 * smallest_seen_bias(a, b), regions, nx * ny);
+  std::printf("[ power    ] %s: %s\n", what.c_str(), figure.c_str());
+  ::testing::Test::RecordProperty(what + " power", figure);
+  return figure;
+}
+
+void expect_bound_sees(const Image& a, const Image& b, const std::string& what, double bias) {
+  const std::string figure = bound_power(a, b, what);
+  EXPECT_LE(smallest_seen_bias(a, b), bias + 1e-9)
+      << what << ": the bound cannot see a bias of " << 100 * bias << "% (" << figure << ")";
 }
 
 RenderRequest request(const std::string& sampler, const std::string& integrator, int max_depth,
