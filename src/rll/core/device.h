@@ -129,6 +129,22 @@ RLL_HD inline uint32_t atomic_load(const uint32_t* p) {
 #endif
 }
 
+RLL_HD inline void atomic_store(uint32_t* p, uint32_t v) {
+#if RLL_DEVICE_CODE
+  *reinterpret_cast<volatile unsigned int*>(p) = v;
+#else
+  std::atomic_ref<uint32_t>(*p).store(v, std::memory_order_relaxed);
+#endif
+}
+
+// Orders this thread's plain writes before its following atomics as other threads see them: a
+// value published by an atomic_cas (the CPU's is acq_rel and needs nothing; CUDA's is relaxed).
+RLL_HD inline void publish_fence() {
+#if RLL_DEVICE_CODE
+  __threadfence();
+#endif
+}
+
 // Reals summed exactly and in any order: a value is scaled by 2^kFixedPointBits and rounded to a
 // 64-bit integer (a signed sum in two's complement). 2^24 keeps 7 decimal digits below 1 and sums
 // up to 5e11 without overflow.

@@ -53,50 +53,59 @@ const char* point_set_name(PointSet p);
 PointSet parse_point_set(const std::string& name, const char* flag);
 
 // Per-sample stream: the numbers of sample `sample_index` of one pixel, dimension by dimension.
-// Every value is a function of (seed, pixel, sample index, dimension) only.
+// Every value is a function of (seed, pixel, sample index, dimension) only. RLL_HD: it holds the
+// view of the Sobol' tables it reads, the host's or a device copy.
 class SampleStream {
  public:
   SampleStream() = default;
+  // With the host's Sobol' tables (built on first use by a Sobol' stream).
   SampleStream(uint64_t seed, uint64_t pixel, uint64_t sample_index,
                PointSet points = PointSet::Independent)
+      : SampleStream(points == PointSet::Sobol ? host_sobol_view() : SobolView{}, seed, pixel,
+                     sample_index, points) {}
+  // With the tables `sobol` points to (read by Sobol' streams only).
+  RLL_HD SampleStream(const SobolView& sobol, uint64_t seed, uint64_t pixel, uint64_t sample_index,
+                      PointSet points)
       : m_key(mix64(mix64(seed ^ 0x9e3779b97f4a7c15ull) ^ mix64(pixel + 0x632be59bd9b4e019ull) ^
                     mix64(sample_index * 0xd1342543de82ef95ull + 1))),
         m_index(uint32_t(sample_index)),
         m_dim(0),
-        m_points(points) {
+        m_points(points),
+        m_sobol(sobol) {
     if (points == PointSet::Sobol) {
       m_scramble =
           mix64(mix64(seed ^ 0x2545f4914f6cdd1dull) ^ mix64(pixel + 0x632be59bd9b4e019ull));
       m_shuffled = sobol_shuffled_index(m_index, 0, m_scramble);
     }
   }
-  float next() { return u32_to_unit_float(next_u32()); }
+  RLL_HD float next() { return u32_to_unit_float(next_u32()); }
   // 53 bits, for choices among millions of items (a float has only 24): with Sobol' points the
   // 32 stratified bits are topped up with independent low bits.
-  double next_double() {
+  RLL_HD double next_double() {
     if (m_points == PointSet::Independent)
       return double(mix64(m_key + 0x9e3779b97f4a7c15ull * ++m_dim) >> 11) * 0x1p-53;
     const uint64_t hi = next_u32();
     const uint64_t lo = mix64(m_key ^ (0xa0761d6478bd642full * m_dim)) >> 43;  // 21 bits
     return double((hi << 21) | lo) * 0x1p-53;
   }
-  Vec2 next2() {
+  RLL_HD Vec2 next2() {
     float a = next();
     return {a, next()};
   }
-  uint32_t dimension() const { return m_dim; }
+  RLL_HD uint32_t dimension() const { return m_dim; }
   // Continue at dimension `dim`: integrators give each decision a fixed dimension, so that a
   // decision uses the same Sobol' dimension in every sample whatever the path did before.
-  void seek(uint32_t dim) { m_dim = dim; }
-  PointSet points() const { return m_points; }
+  RLL_HD void seek(uint32_t dim) { m_dim = dim; }
+  RLL_HD PointSet points() const { return m_points; }
 
  private:
-  [[gnu::always_inline]] uint32_t next_u32() {
+  [[gnu::always_inline]] RLL_HD uint32_t next_u32() {
     if (m_points == PointSet::Independent)
       return uint32_t(mix64(m_key + 0x9e3779b97f4a7c15ull * ++m_dim) >> 32);
     const uint32_t dim = m_dim++;
-    if (dim < kSobolDimensions) return scrambled_sobol_u32_shuffled(m_shuffled, dim, m_scramble);
-    return scrambled_sobol_u32(m_index, dim, m_scramble);
+    if (dim < kSobolDimensions)
+      return scrambled_sobol_u32_shuffled(m_sobol, m_shuffled, dim, m_scramble);
+    return scrambled_sobol_u32(m_sobol, m_index, dim, m_scramble);
   }
   uint64_t m_key = 0;       // (seed, pixel, sample): independent numbers
   uint64_t m_scramble = 0;  // (seed, pixel): the pixel's Owen scramble (Sobol' points only)
@@ -104,6 +113,7 @@ class SampleStream {
   uint32_t m_shuffled = 0;  // m_index shuffled for the first block of Sobol' dimensions
   uint32_t m_dim = 0;
   PointSet m_points = PointSet::Independent;
+  SobolView m_sobol;
 };
 
 }  // namespace rll

@@ -1,5 +1,5 @@
-// Sampling warps from the unit square (RLL_HD: kernels call them) and small discrete
-// distributions (host only).
+// Sampling warps from the unit square and discrete distributions (built on the host, sampled by
+// RLL_HD functions over their flat view, which kernels call).
 #pragma once
 
 #include <span>
@@ -59,6 +59,46 @@ RLL_HD inline float power_heuristic(float f_pdf, float g_pdf) {
   return f + g > 0 ? f / (f + g) : 0;
 }
 
+// What sampling a DiscreteDistribution reads: its tables, owning nothing (DESIGN 6).
+struct DistributionView {
+  View<const float> pmf;
+  View<const double> cdf;      // cdf[i] = sum of pmf[0..i], last == 1
+  View<const uint32_t> guide;  // size()+1 cutpoints: first index whose cdf exceeds k/size()
+  double total = 0;
+  RLL_HD bool empty() const { return total <= 0; }
+};
+
+// The index whose CDF interval holds u (first entry whose cdf exceeds u; entries with zero pmf are
+// never returned because their cdf equals their predecessor's), and u rescaled to a fresh uniform
+// value in [0,1) for reuse. d must not be empty.
+// The guide table narrows the search to the entries between two cutpoints, usually one or two;
+// then a branchless upper bound over them (its halving steps compile to conditional moves, which
+// the branch predictor cannot miss). The result is the plain inverse-CDF index.
+RLL_HD inline size_t sample_discrete(const DistributionView& d, double u,
+                                     double* u_remapped = nullptr) {
+  const double* base = d.cdf.data;
+  size_t n = d.cdf.size;
+  if (!d.guide.empty()) {
+    const size_t g = d.guide.size - 1;
+    const size_t k = std::min(size_t(u * double(g)), g - 1);
+    base += d.guide[k];
+    n = size_t(d.guide[k + 1] - d.guide[k]) + 1;
+  }
+  for (; n > 1;) {
+    const size_t half = n / 2;
+    base = base[half] <= u ? base + half : base;
+    n -= half;
+  }
+  size_t i = std::min<size_t>(size_t(base - d.cdf.data) + (*base <= u), d.cdf.size - 1);
+  while (d.pmf[i] == 0 && i > 0) --i;  // guard against u rounding onto a zero-width tail
+  if (u_remapped) {
+    double lo = i == 0 ? 0.0 : d.cdf[i - 1];
+    double width = d.cdf[i] - lo;
+    *u_remapped = width > 0 ? clamp((u - lo) / width, 0.0, 0x1.fffffffffffffp-1) : 0.0;
+  }
+  return i;
+}
+
 // A piecewise-constant discrete distribution sampled by CDF inversion (binary search).
 class DiscreteDistribution {
  public:
@@ -69,7 +109,13 @@ class DiscreteDistribution {
   double total() const { return m_total; }
   float pmf(size_t i) const { return m_pmf[i]; }
   // Returns the index and rescales u to a fresh uniform value in [0,1) for reuse.
-  size_t sample(double u, double* u_remapped = nullptr) const;
+  size_t sample(double u, double* u_remapped = nullptr) const {
+    return sample_discrete(view(), u, u_remapped);
+  }
+  // Valid while the distribution lives and is not reassigned.
+  DistributionView view() const {
+    return {view_of(m_pmf), view_of(m_cdf), view_of(m_guide), m_total};
+  }
 
  private:
   std::vector<float> m_pmf;

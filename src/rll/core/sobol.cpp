@@ -45,12 +45,14 @@ const SobolMatrices& sobol_matrices() {
   return *matrices;
 }
 
+}  // namespace
+
 // Per dimension and byte of the index, the XOR of the columns of that byte's set bits, for all
 // 256 byte values: a point is then four table reads, whatever the index (a shuffled index has
 // about 16 set bits, which the bit-by-bit loop paid for one by one).
-std::vector<uint32_t> make_byte_tables() {
+SobolTables::SobolTables() : m_tables(size_t(kSobolDimensions) * 4 * 256) {
   const SobolMatrices& matrices = sobol_matrices();
-  std::vector<uint32_t> t(size_t(kSobolDimensions) * 4 * 256);
+  std::vector<uint32_t>& t = m_tables;
   for (uint32_t d = 0; d < kSobolDimensions; ++d)
     for (uint32_t b = 0; b < 4; ++b) {
       uint32_t* row = &t[(size_t(d) * 4 + b) * 256];
@@ -59,21 +61,16 @@ std::vector<uint32_t> make_byte_tables() {
         row[x] = row[x & (x - 1)] ^
                  detail::reverse_bits(matrices.columns[d][8 * b + std::countr_zero(x)]);
     }
-  return t;
 }
 
-}  // namespace
-
-namespace detail {
-const uint32_t* sobol_byte_tables() {
-  static const std::vector<uint32_t> tables = make_byte_tables();  // 4 MiB, built on first use
-  return tables.data();
+const SobolTables& host_sobol_tables() {
+  static const SobolTables tables;  // 4 MiB, built on first use
+  return tables;
 }
-}  // namespace detail
 
 uint32_t sobol_u32(uint32_t index, uint32_t dim) {
   assert(dim < kSobolDimensions);
-  return detail::reverse_bits(detail::sobol_u32_reversed(index, dim));
+  return detail::reverse_bits(sobol_u32_reversed(host_sobol_view(), index, dim));
 }
 
 uint32_t sobol_u32_reference(uint32_t index, uint32_t dim) {

@@ -3,7 +3,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
+#include "rll/core/device.h"
 #include "rll/core/hash.h"
 
 namespace rll {
@@ -11,18 +13,37 @@ namespace rll {
 // Dimensions with their own Joe & Kuo (2008) direction numbers; later ones are padded.
 inline constexpr uint32_t kSobolDimensions = 1024;
 
-namespace detail {
-// Per dimension, four tables of 256 entries: the index's bytes' contributions to the point, with
-// the point's bits reversed (the scramble works on reversed values, so that is what it reads).
-const uint32_t* sobol_byte_tables();
+// The byte tables of the Sobol' points as kernels read them (DESIGN 6): per dimension, four tables
+// of 256 entries, the index's bytes' contributions to the point with the point's bits reversed
+// (the scramble works on reversed values, so that is what it reads). Owns nothing.
+struct SobolView {
+  const uint32_t* tables = nullptr;  // kSobolDimensions * 1024 entries
+};
+
+// The owner of a set of byte tables (4 MiB), built on the host from Joe & Kuo's direction numbers;
+// a device renderer copies them to the device and points a SobolView there.
+class SobolTables {
+ public:
+  SobolTables();
+  SobolView view() const { return {m_tables.data()}; }
+  size_t size() const { return m_tables.size(); }
+
+ private:
+  std::vector<uint32_t> m_tables;
+};
+
+// The host's tables, built once on first use.
+const SobolTables& host_sobol_tables();
+inline SobolView host_sobol_view() {
+  return host_sobol_tables().view();
+}
+
 // Coordinate `dim` (< kSobolDimensions) of Sobol' point `index` with its 32 bits reversed.
-inline uint32_t sobol_u32_reversed(uint32_t index, uint32_t dim) {
-  static const uint32_t* const tables = sobol_byte_tables();
-  const uint32_t* t = tables + size_t(dim) * 1024;
+RLL_HD inline uint32_t sobol_u32_reversed(const SobolView& sobol, uint32_t index, uint32_t dim) {
+  const uint32_t* t = sobol.tables + size_t(dim) * 1024;
   return t[index & 255] ^ t[256 + ((index >> 8) & 255)] ^ t[512 + ((index >> 16) & 255)] ^
          t[768 + (index >> 24)];
 }
-}  // namespace detail
 
 // Coordinate `dim` (< kSobolDimensions) of Sobol' point `index`, as 32-bit fixed point
 // (unscrambled).
@@ -33,7 +54,10 @@ uint32_t sobol_u32_reference(uint32_t index, uint32_t dim);
 namespace detail {
 
 // Reverses the order of the 32 bits of `v`.
-inline uint32_t reverse_bits(uint32_t v) {
+RLL_HD inline uint32_t reverse_bits(uint32_t v) {
+#if RLL_DEVICE_CODE
+  return __brev(v);
+#else
 #if defined(__has_builtin)
 #if __has_builtin(__builtin_bitreverse32)
   return __builtin_bitreverse32(v);
@@ -43,6 +67,7 @@ inline uint32_t reverse_bits(uint32_t v) {
   v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
   v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
   return __builtin_bswap32(v);
+#endif
 }
 
 // Laine–Karras style permutation keyed by a well-mixed 64-bit `key`: every step (add, multiply
@@ -51,7 +76,7 @@ inline uint32_t reverse_bits(uint32_t v) {
 // uniform scramble. Burley (2020)'s version (an add then four fixed xor-multiplies) correlates
 // the scrambles of values one bit apart (z = 110 on 50,000 seeds per bit pair); multiplying by a
 // key-dependent odd number first removes that (worst z = 3.7 over ~1,400 bit pairs).
-inline uint32_t owen_permute_reversed(uint32_t x, uint64_t key) {
+RLL_HD inline uint32_t owen_permute_reversed(uint32_t x, uint64_t key) {
   x += uint32_t(key);
   x *= uint32_t(key >> 32) | 1u;
   x ^= x * 0x6c50b47cu;
@@ -60,7 +85,7 @@ inline uint32_t owen_permute_reversed(uint32_t x, uint64_t key) {
 }
 
 // The nested uniform scramble of `v` keyed by a well-mixed 64-bit `key`.
-inline uint32_t owen_scramble_keyed(uint32_t v, uint64_t key) {
+RLL_HD inline uint32_t owen_scramble_keyed(uint32_t v, uint64_t key) {
   return reverse_bits(owen_permute_reversed(reverse_bits(v), key));
 }
 
@@ -69,20 +94,21 @@ inline uint32_t owen_scramble_keyed(uint32_t v, uint64_t key) {
 // Nested uniform (Owen) scramble of a 32-bit fixed-point coordinate, hash-based (Laine–Karras style
 // permutation applied to the bit-reversed value, as in Burley 2020 "Practical hash-based Owen
 // scrambling"), keyed by `seed`. A bijection on uint32 for every seed that preserves (t,m,s)-nets.
-inline uint32_t owen_scramble(uint32_t v, uint32_t seed) {
+RLL_HD inline uint32_t owen_scramble(uint32_t v, uint32_t seed) {
   // Hashed here so that nearby seeds (0, 1, 2...) give unrelated scrambles.
   return detail::owen_scramble_keyed(v, mix64(seed ^ 0x6a09e667f3bcc909ull));
 }
 
 // The index shuffle of a block of kSobolDimensions dimensions (see scrambled_sobol_u32).
-inline uint32_t sobol_shuffled_index(uint32_t index, uint32_t block, uint64_t seed) {
+RLL_HD inline uint32_t sobol_shuffled_index(uint32_t index, uint32_t block, uint64_t seed) {
   return detail::owen_scramble_keyed(index, mix64(seed ^ (0xbb67ae8584caa73bull * block)));
 }
 // Coordinate `dim` of the point whose index was already shuffled for dim's block.
-inline uint32_t scrambled_sobol_u32_shuffled(uint32_t shuffled_index, uint32_t dim, uint64_t seed) {
+RLL_HD inline uint32_t scrambled_sobol_u32_shuffled(const SobolView& sobol, uint32_t shuffled_index,
+                                                    uint32_t dim, uint64_t seed) {
   const uint64_t key = mix64(seed + 0x9e3779b97f4a7c15ull * (uint64_t(dim) + 1));
   return detail::reverse_bits(detail::owen_permute_reversed(
-      detail::sobol_u32_reversed(shuffled_index, dim % kSobolDimensions), key));
+      sobol_u32_reversed(sobol, shuffled_index, dim % kSobolDimensions), key));
 }
 
 // The point generator the renderer uses: coordinate `dim` (any value) of point `index` of an
@@ -91,16 +117,21 @@ inline uint32_t scrambled_sobol_u32_shuffled(uint32_t shuffled_index, uint32_t d
 // `dim` reuses table dimension dim % kSobolDimensions, and each block of kSobolDimensions
 // dimensions shuffles the index by its own nested uniform scramble keyed by (seed, block), so
 // that each padded dimension is still stratified on its own and a block is a Sobol' sequence.
-inline uint32_t scrambled_sobol_u32(uint32_t index, uint32_t dim, uint64_t seed) {
+RLL_HD inline uint32_t scrambled_sobol_u32(const SobolView& sobol, uint32_t index, uint32_t dim,
+                                           uint64_t seed) {
   // The shuffle is shared by the whole block, unlike the value scramble, so that the block's
   // dimensions keep their joint stratification (2D pairs in particular); each block is shuffled
   // independently.
-  return scrambled_sobol_u32_shuffled(sobol_shuffled_index(index, dim / kSobolDimensions, seed),
-                                      dim, seed);
+  return scrambled_sobol_u32_shuffled(
+      sobol, sobol_shuffled_index(index, dim / kSobolDimensions, seed), dim, seed);
+}
+// The same with the host's tables.
+inline uint32_t scrambled_sobol_u32(uint32_t index, uint32_t dim, uint64_t seed) {
+  return scrambled_sobol_u32(host_sobol_view(), index, dim, seed);
 }
 
 // A 32-bit fixed-point coordinate as a double in [0,1): exact.
-inline double sobol_to_double(uint32_t v) {
+RLL_HD inline double sobol_to_double(uint32_t v) {
   return double(v) * 0x1p-32;
 }
 

@@ -2,6 +2,7 @@
 #include "rll/core/error.h"
 #include "rll/cuda/cuda.h"
 #include "rll/cuda/onesource_check.h"
+#include "rll/cuda/sampler_check.h"
 #include "rll/cuda/trace.h"
 
 namespace rll::cuda {
@@ -48,6 +49,13 @@ namespace rll {
 
 // cuda/onesource_check.h: the probes of the hot functions need a GPU.
 std::vector<OneSourceResult> onesource_probe_gpu(const SceneView&, const std::vector<Hit>&) {
+  cuda::require_gpu();
+  return {};
+}
+
+// cuda/sampler_check.h: the same for the light samplers' dispatch.
+std::vector<SamplerProbeResult> sampler_probe_gpu(const SamplerView&,
+                                                  const std::vector<SamplerProbe>&) {
   cuda::require_gpu();
   return {};
 }

@@ -19,7 +19,8 @@ constexpr double kUniformShare = 0.01;
 // prior = (1 - power_share - uniform) * weight + power_share * power + uniform / count, with
 // power(k) and weight(k) given by the caller.
 template <typename Power, typename Weight>
-void mix_prior(size_t K, double power_share, const Power& power, const Weight& weight, std::vector<double>& out) {
+void mix_prior(size_t K, double power_share, const Power& power, const Weight& weight,
+               std::vector<double>& out) {
   double psum = 0, wsum = 0;
   size_t with_power = 0;
   for (size_t k = 0; k < K; ++k) {
@@ -43,7 +44,8 @@ void mix_prior(size_t K, double power_share, const Power& power, const Weight& w
 }
 }  // namespace
 
-std::vector<uint32_t> refine_cut(const LightTree& tree, int size, double (*priority)(const LightTree&, uint32_t)) {
+std::vector<uint32_t> refine_cut(const LightTree& tree, int size,
+                                 double (*priority)(const LightTree&, uint32_t)) {
   // Max-heap by priority; ties by node id for determinism.
   auto cmp = [&](uint32_t a, uint32_t b) {
     const double pa = priority(tree, a), pb = priority(tree, b);
@@ -63,12 +65,14 @@ std::vector<uint32_t> refine_cut(const LightTree& tree, int size, double (*prior
     heap.push(tree.node(n).child + 1);
   }
   for (; !heap.empty(); heap.pop()) done.push_back(heap.top());
-  std::sort(done.begin(), done.end(), [&](uint32_t a, uint32_t b) { return tree.node(a).begin < tree.node(b).begin; });
+  std::sort(done.begin(), done.end(),
+            [&](uint32_t a, uint32_t b) { return tree.node(a).begin < tree.node(b).begin; });
   return done;
 }
 
 std::vector<uint32_t> initial_cut(const LightTree& tree, int cut_size) {
-  return refine_cut(tree, cut_size, [](const LightTree& t, uint32_t n) { return double(t.node(n).light_count()); });
+  return refine_cut(tree, cut_size,
+                    [](const LightTree& t, uint32_t n) { return double(t.node(n).light_count()); });
 }
 
 double reward_scale(const Scene& scene) {
@@ -76,9 +80,15 @@ double reward_scale(const Scene& scene) {
   for (const auto& l : scene.lights) {
     double lum = luminance(l.radiance);
     switch (l.type) {
-      case LightType::Triangle: s = std::max(s, kPi * lum * (l.two_sided ? 2 : 1)); break;
-      case LightType::Point: s = std::max(s, 4 * kPi * lum / double(scene.radius * scene.radius)); break;
-      case LightType::Directional: s = std::max(s, kPi * lum); break;
+      case LightType::Triangle:
+        s = std::max(s, kPi * lum * (l.two_sided ? 2 : 1));
+        break;
+      case LightType::Point:
+        s = std::max(s, 4 * kPi * lum / double(scene.radius * scene.radius));
+        break;
+      case LightType::Directional:
+        s = std::max(s, kPi * lum);
+        break;
     }
   }
   return s > 0 ? s : 1.0;
@@ -122,7 +132,8 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   m_weight.assign(n, 0.0f);
   m_cdf.assign(n, 0.0f);
   if (s.guided) {
-    if (s.splits > 0) fail("rll.splits needs rll.sampling=table (the guided descent keeps its cut)");
+    if (s.splits > 0)
+      fail("rll.splits needs rll.sampling=table (the guided descent keeps its cut)");
     m_gl.assign(n, 1.0f);
     m_gr.assign(n, 1.0f);
   }
@@ -139,18 +150,42 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   m_inv_unit.assign(cells, 1 / m_scale);
   m_sum = std::make_unique<ExactSum[]>(n);
   m_sq = std::make_unique<ExactSum[]>(n);
-  m_count = std::make_unique<std::atomic<uint32_t>[]>(n);
-  for (size_t i = 0; i < n; ++i) m_count[i].store(0, std::memory_order_relaxed);
+  m_count = std::make_unique<uint32_t[]>(n);
+}
+
+CutStoreView CutStore::view() {
+  const size_t n = m_size.size() * size_t(m_m);
+  CutStoreView v;
+  v.m = uint32_t(m_m);
+  v.size = view_of(m_size);
+  v.node = view_of(m_node);
+  v.end = view_of(m_end);
+  v.cdf = view_of(m_cdf);
+  v.gl = view_of(m_gl);
+  v.gr = view_of(m_gr);
+  v.eps = view_of(m_eps);
+  v.initial = view_of(m_initial);
+  v.initial_ends = view_of(m_initial_ends);
+  v.anchor = view_of(m_anchor);
+  v.inv_unit = view_of(m_inv_unit);
+  v.sum = {m_sum.get(), n};
+  v.sq = {m_sq.get(), n};
+  v.count = {m_count.get(), n};
+  return v;
 }
 
 size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, int pool_tiers) {
   const size_t per_cluster_floats = guided ? 7 : pool_tiers > 0 ? 6 + 3 * size_t(pool_tiers) : 5;
-  const size_t per_cell = size_t(cut_size) * (2 * sizeof(uint32_t) + per_cluster_floats * sizeof(float) + 2 * sizeof(ExactSum) + sizeof(uint32_t)) +
-                          sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t) + sizeof(double) + sizeof(CellAnchor);
+  const size_t per_cell =
+      size_t(cut_size) * (2 * sizeof(uint32_t) + per_cluster_floats * sizeof(float) +
+                          2 * sizeof(ExactSum) + sizeof(uint32_t)) +
+      sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t) + sizeof(double) + sizeof(CellAnchor);
   return size_t(cells) * per_cell;
 }
 
-size_t CutStore::bytes() const { return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided, m_s.pool_tiers()); }
+size_t CutStore::bytes() const {
+  return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided, m_s.pool_tiers());
+}
 
 float CutStore::weight_of(uint32_t cell, uint32_t node) const {
   if (m_s.prior == ClusterWeight::Power) return m_tree.node(node).bounds.power;
@@ -158,7 +193,9 @@ float CutStore::weight_of(uint32_t cell, uint32_t node) const {
   return m_tree.importance(node, m_anchor[cell].p, m_anchor[cell].n);
 }
 
-double CutStore::power_floor() const { return m_s.prior == ClusterWeight::Power ? 1.0 - kUniformShare : kPowerShare; }
+double CutStore::power_floor() const {
+  return m_s.prior == ClusterWeight::Power ? 1.0 - kUniformShare : kPowerShare;
+}
 
 void CutStore::prior(const Cut& cut, std::vector<double>& out) const {
   if (m_s.prior == ClusterWeight::Uniform) {  // Fermat's: no floor, every cluster alike
@@ -166,11 +203,13 @@ void CutStore::prior(const Cut& cut, std::vector<double>& out) const {
     return;
   }
   mix_prior(
-      cut.nodes.size(), power_floor(), [&](size_t k) { return double(m_tree.node(cut.nodes[k]).bounds.power); },
+      cut.nodes.size(), power_floor(),
+      [&](size_t k) { return double(m_tree.node(cut.nodes[k]).bounds.power); },
       [&](size_t k) { return double(cut.weight[k]); }, out);
 }
 
-void CutStore::values(const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const {
+void CutStore::values(const Cut& cut, const std::vector<double>& pri,
+                      std::vector<float>& out) const {
   const size_t K = cut.nodes.size();
   const bool moment = m_s.target == LearnTarget::Moment;
   out.resize(K);
@@ -200,12 +239,14 @@ void CutStore::values(const Cut& cut, const std::vector<double>& pri, std::vecto
     if (cut.q[k] < 0) out[k] = m_s.q_init >= 0 ? m_s.q_init : float(total * pri[k]);
 }
 
-void CutStore::values(uint32_t cell, const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const {
+void CutStore::values(uint32_t cell, const Cut& cut, const std::vector<double>& pri,
+                      std::vector<float>& out) const {
   values(cut, pri, out);
   if (m_has_pool.empty() || !m_has_pool[cell]) return;
   const size_t K = cut.nodes.size();
-  shrink_toward(K, [&](size_t k) { return cut.q[k] >= 0; }, cut.n.data(), &m_pool[size_t(cell) * m_m],
-                m_s.pool_weight, out.data());
+  shrink_toward(
+      K, [&](size_t k) { return cut.q[k] >= 0; }, cut.n.data(), &m_pool[size_t(cell) * m_m],
+      m_s.pool_weight, out.data());
 }
 
 void CutStore::add_pass_rewards(uint32_t cell, double* sum, double* sq, uint64_t* count) const {
@@ -214,7 +255,7 @@ void CutStore::add_pass_rewards(uint32_t cell, double* sum, double* sq, uint64_t
   thread_local std::vector<double> pri;
   if (m_s.pool_ratio) cell_prior(cell, pri);
   for (size_t k = 0; k < m_initial.size(); ++k) {
-    const uint32_t n = m_count[base + k].load(std::memory_order_relaxed);
+    const uint32_t n = m_count[base + k];
     if (n == 0) continue;
     const double u = m_s.pool_ratio ? unit / pri[k] : unit;
     count[k] += n;
@@ -258,7 +299,9 @@ std::vector<double> CutStore::learnt_shares(uint32_t cell) const {
 
 void CutStore::load(uint32_t cell, Cut& cut) const {
   const size_t base = size_t(cell) * m_m, K = m_size[cell];
-  auto take = [&](const auto& from, auto& to) { to.assign(from.begin() + long(base), from.begin() + long(base + K)); };
+  auto take = [&](const auto& from, auto& to) {
+    to.assign(from.begin() + long(base), from.begin() + long(base + K));
+  };
   take(m_node, cut.nodes);
   take(m_q, cut.q);
   take(m_m2, cut.m2);
@@ -293,7 +336,8 @@ void CutStore::store(uint32_t cell, const Cut& cut) {
     m_n[base + k] = cut.n[k];
     m_weight[base + k] = cut.weight[k];
   }
-  for (size_t k = 0; k < K; ++k) m_cdf[base + k] = float(std::min(1.0, double(m_cdf[base + k]) / acc));
+  for (size_t k = 0; k < K; ++k)
+    m_cdf[base + k] = float(std::min(1.0, double(m_cdf[base + k]) / acc));
   m_cdf[base + K - 1] = 1.0f;
   if (m_s.guided) bake_guide(cell, cut, pri, val, v_sum > 0 ? m_eps[cell] : 1.0);
 }
@@ -342,11 +386,12 @@ void CutStore::clear(uint32_t cell) {
   for (int k = 0; k < m_m; ++k) {
     m_sum[base + k].reset();
     m_sq[base + k].reset();
-    m_count[base + k].store(0, std::memory_order_relaxed);
+    m_count[base + k] = 0;
   }
 }
 
-void CutStore::assign(uint32_t cell, const std::vector<uint32_t>& nodes, const std::vector<float>& q) {
+void CutStore::assign(uint32_t cell, const std::vector<uint32_t>& nodes,
+                      const std::vector<float>& q) {
   Cut cut;
   cut.nodes = nodes;
   cut.q = q;
@@ -375,7 +420,7 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
   const size_t base = size_t(cell) * m_m;
   uint64_t n_total = 0;
   const size_t K_now = active(cell) ? m_size[cell] : m_initial.size();
-  for (size_t k = 0; k < K_now; ++k) n_total += m_count[base + k].load(std::memory_order_relaxed);
+  for (size_t k = 0; k < K_now; ++k) n_total += m_count[base + k];
   if (active(cell) && n_total == 0) return st;  // nothing new: the cut and CDF stand
   if (active(cell)) {
     load(cell, cut);
@@ -405,9 +450,10 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
     const double unit = 1 / m_inv_unit[cell];
     double largest = 0;
     for (size_t k = 0; k < K; ++k) {
-      uint32_t n = m_count[base + k].load(std::memory_order_relaxed);
+      uint32_t n = m_count[base + k];
       if (n == 0) continue;
-      const RewardMoments r(n, m_sum[base + k].value() * unit, m_sq[base + k].value() * unit * unit);
+      const RewardMoments r(n, m_sum[base + k].value() * unit,
+                            m_sq[base + k].value() * unit * unit);
       // The prior estimate of a cluster never visited: its effective value, without variance.
       double old_q = cut.q[k] >= 0 ? cut.q[k] : val[k];
       double old_m2 = cut.q[k] >= 0 ? cut.m2[k] : double(val[k]) * val[k];
@@ -416,13 +462,14 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
         cut.q[k] = float(bk * old_q + (1 - bk) * r.mean);
         cut.m2[k] = float(bk * old_m2 + (1 - bk) * r.mean2);
       } else {
-        double w = cut.q[k] >= 0 ? std::min(double(cut.n[k]), 1.0 / m_s.alpha) : double(m_s.prior_samples);
+        double w =
+            cut.q[k] >= 0 ? std::min(double(cut.n[k]), 1.0 / m_s.alpha) : double(m_s.prior_samples);
         shrinkage_fold(cut.q[k], cut.m2[k], cut.n[k], w, old_q, old_m2, n, r, 1.0 / m_s.alpha);
       }
       largest = std::max(largest, std::sqrt(double(cut.m2[k])));
       m_sum[base + k].reset();
       m_sq[base + k].reset();
-      m_count[base + k].store(0, std::memory_order_relaxed);
+      m_count[base + k] = 0;
     }
     // The next pass's unit: the largest learnt sqrt(M2).
     if (largest > 0 && std::isfinite(largest)) m_inv_unit[cell] = 1 / largest;
@@ -433,15 +480,18 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
     thread_local std::vector<float> score;
     score.resize(K);
     for (size_t k = 0; k < K; ++k)
-      score[k] = !moment ? val[k]
-                 : cut.q[k] >= 0 ? float(std::sqrt(std::max(0.0, double(cut.m2[k]) - double(cut.q[k]) * cut.q[k])))
-                                 : val[k];
+      score[k] =
+          !moment ? val[k]
+          : cut.q[k] >= 0
+              ? float(std::sqrt(std::max(0.0, double(cut.m2[k]) - double(cut.q[k]) * cut.q[k])))
+              : val[k];
     SplitCollapse sc(m_tree, m_m, m_s.threshold);
     auto prior_weight = [&](uint32_t node) { return weight_of(cell, node); };
     auto share = [&](uint32_t node) {
       if (m_s.split == ClusterWeight::Uniform) return 1.0f;  // half and half
-      return m_s.split == ClusterWeight::Power ? m_tree.node(node).bounds.power
-                                               : m_tree.importance(node, m_anchor[cell].p, m_anchor[cell].n);
+      return m_s.split == ClusterWeight::Power
+                 ? m_tree.node(node).bounds.power
+                 : m_tree.importance(node, m_anchor[cell].p, m_anchor[cell].n);
     };
     for (int i = 0; i < m_s.splits; ++i) {
       int r = sc.step(cut, val, score, prior_weight, share);
@@ -507,9 +557,9 @@ void CutStore::load_cell(uint32_t cell, BinaryReader& r) {
     if (last != 1.0f) damaged("its CDF does not end at 1");
   }
   const CellAnchor& a = m_anchor[cell];
-  if (!(m_eps[cell] >= 0 && m_eps[cell] <= 1) || !(m_seen[cell] >= 0) || !std::isfinite(m_seen[cell]) ||
-      !(m_inv_unit[cell] > 0) || !std::isfinite(m_inv_unit[cell]) || m_learnt[cell] > 1 ||
-      !std::isfinite(a.p.x + a.p.y + a.p.z + a.n.x + a.n.y + a.n.z))
+  if (!(m_eps[cell] >= 0 && m_eps[cell] <= 1) || !(m_seen[cell] >= 0) ||
+      !std::isfinite(m_seen[cell]) || !(m_inv_unit[cell] > 0) || !std::isfinite(m_inv_unit[cell]) ||
+      m_learnt[cell] > 1 || !std::isfinite(a.p.x + a.p.y + a.p.z + a.n.x + a.n.y + a.n.z))
     damaged("a cell value is out of range");
   m_size[cell] = K;
   if (m_s.guided && K > 0) {

@@ -39,8 +39,8 @@ struct CutSettings {
   int initial_size = 128;  // clusters of a new cell's cut (the shared initial cut), <= M
   float alpha = 0.02f;     // floor of the per-reward learning rate
   float threshold = 2;     // T: split l_max and collapse p_min if score(l_max) > T value(p_min)
-  int splits = 0;          // split-collapse steps per cell and pass (0: the cut stays as it started)
-  float epsilon = 0.1f;    // weight of the defensive prior once a cell is trusted
+  int splits = 0;        // split-collapse steps per cell and pass (0: the cut stays as it started)
+  float epsilon = 0.1f;  // weight of the defensive prior once a cell is trusted
   LearnTarget target = LearnTarget::Moment;
   ClusterWeight prior = ClusterWeight::Importance;
   // True: the CDF is (1-e) V/sum V + e prior (the defensive prior per cell, folded in). False:
@@ -95,7 +95,8 @@ struct Cut {
 // Refinement of the tree from the root, always splitting the node with the largest
 // `priority(node)` (ties: the lower node id), until `size` nodes or only leaves; sorted by light
 // range.
-std::vector<uint32_t> refine_cut(const LightTree& tree, int size, double (*priority)(const LightTree&, uint32_t));
+std::vector<uint32_t> refine_cut(const LightTree& tree, int size,
+                                 double (*priority)(const LightTree&, uint32_t));
 // The shared initial cut: refine_cut by light count.
 std::vector<uint32_t> initial_cut(const LightTree& tree, int size);
 
@@ -103,14 +104,15 @@ std::vector<uint32_t> initial_cut(const LightTree& tree, int size);
 // mean and second moment (E[r^2] >= E[r]^2 also where squares fell below the sums' resolution).
 struct RewardMoments {
   double mean, mean2;
-  RewardMoments(double n, double sum, double sq) : mean(sum / n), mean2(std::max(sq / n, mean * mean)) {}
+  RewardMoments(double n, double sum, double sq)
+      : mean(sum / n), mean2(std::max(sq / n, mean * mean)) {}
 };
 
 // The shrinkage rule (LearningRule::Shrinkage) for one cluster: values old_q and old_m2, held
 // with the weight of w rewards, and n new rewards of moments r give the weighted means; the
 // weight becomes w + n, at most cap (1 / alpha).
-inline void shrinkage_fold(float& q, float& m2, float& weight, double w, double old_q, double old_m2, double n,
-                           const RewardMoments& r, double cap) {
+inline void shrinkage_fold(float& q, float& m2, float& weight, double w, double old_q,
+                           double old_m2, double n, const RewardMoments& r, double cap) {
   q = float((w * old_q + n * r.mean) / (w + n));
   m2 = float((w * old_m2 + n * r.mean2) / (w + n));
   weight = float(std::min(w + n, cap));
@@ -123,7 +125,8 @@ inline void shrinkage_fold(float& q, float& m2, float& weight, double w, double 
 // (n v + c guess) / (n + c), an unvisited one the guess (also for c = 0). Unchanged where no
 // visited value is positive.
 template <class Visited>
-void shrink_toward(size_t K, Visited visited, const float* n, const float* shares, double c, float* values) {
+void shrink_toward(size_t K, Visited visited, const float* n, const float* shares, double c,
+                   float* values) {
   double v_sum = 0, s_sum = 0;
   for (size_t k = 0; k < K; ++k)
     if (visited(k)) {
@@ -146,9 +149,25 @@ double reward_scale(const Scene& scene);
 // Guided descent: for an inner node above a cut whose clusters [k0, k1) lie under it (`ends` the
 // cut's range ends), the cluster j after which its two children meet: ends[j] is the first
 // child's end, so clusters [k0, j] lie under the first child and [j + 1, k1) under the second.
-inline uint32_t children_boundary(const LightTree& tree, const LightTreeNode& node, const uint32_t* ends,
-                                  uint32_t k0, uint32_t k1) {
-  return uint32_t(std::lower_bound(ends + k0, ends + k1, tree.node(node.child).end) - ends);
+RLL_HD inline uint32_t children_boundary(const LightTreeView& tree, const LightTreeNode& node,
+                                         const uint32_t* ends, uint32_t k0, uint32_t k1) {
+  // The first of ends[k0, k1) not below the first child's end (std::lower_bound, on either device).
+  const uint32_t target = tree.node(node.child).end;
+  uint32_t lo = k0, n = k1 - k0;
+  while (n > 0) {
+    const uint32_t half = n / 2;
+    if (ends[lo + half] < target) {
+      lo += half + 1;
+      n -= half + 1;
+    } else {
+      n = half;
+    }
+  }
+  return lo;
+}
+inline uint32_t children_boundary(const LightTree& tree, const LightTreeNode& node,
+                                  const uint32_t* ends, uint32_t k0, uint32_t k1) {
+  return children_boundary(tree.view(), node, ends, k0, k1);
 }
 
 // True if the nodes partition [0, light_count) into contiguous ranges in order.
@@ -160,13 +179,14 @@ bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes);
 // cell's variance (the standard deviation of its reward) or its value. Both are kept in step.
 class SplitCollapse {
  public:
-  SplitCollapse(const LightTree& tree, int max_size, float threshold) : m_tree(tree), m_max(max_size), m_t(threshold) {}
+  SplitCollapse(const LightTree& tree, int max_size, float threshold)
+      : m_tree(tree), m_max(max_size), m_t(threshold) {}
   // One step: returns 1 for a split with a collapse, 2 for a pure split (K < M), 0 if nothing
   // changed. `weight_of(node)` is the prior weight of a node entering the cut; `share_of(node)`
   // splits a cluster's values between its children.
   template <typename WeightOf, typename ShareOf>
-  int step(Cut& cut, std::vector<float>& value, std::vector<float>& score, const WeightOf& weight_of,
-           const ShareOf& share_of) const;
+  int step(Cut& cut, std::vector<float>& value, std::vector<float>& score,
+           const WeightOf& weight_of, const ShareOf& share_of) const;
 
  private:
   const LightTree& m_tree;
@@ -181,7 +201,8 @@ inline int SplitCollapse::step(Cut& cut, std::vector<float>& value, std::vector<
   // l_max: the splittable cluster (more than one light) with the largest score.
   long best = -1;
   for (size_t k = 0; k < K; ++k)
-    if (!m_tree.node(cut.nodes[k]).is_leaf() && (best < 0 || score[k] > score[best])) best = long(k);
+    if (!m_tree.node(cut.nodes[k]).is_leaf() && (best < 0 || score[k] > score[best]))
+      best = long(k);
   if (best < 0 || !(score[best] > 0)) return 0;
   // p_min: among parents whose two children are both in the cut (the minimum over all nodes
   // above the cut is always attained at such a parent), the one with the smallest value, not
@@ -252,21 +273,51 @@ inline int SplitCollapse::step(Cut& cut, std::vector<float>& value, std::vector<
 // values or 2^31 ordinary ones fit in a pass. Resolution and range together span 2^76 (1e23).
 struct ExactSum {
   static constexpr double kMax = 0x1p36;
-  std::atomic<int64_t> hi{0}, lo{0};
-  void add(double x) {  // x: the value in units of scale, >= 0
-    x = std::min(x, kMax);
+  // Signed 64-bit words in two's complement, added with core/device.h's atomic_add (DESIGN 6).
+  uint64_t hi = 0, lo = 0;
+  RLL_HD void add(double x) {  // x: the value in units of scale, >= 0
+    x = std::min(x, double(kMax));
     double h = std::floor(x * 0x1p8);
-    hi.fetch_add(int64_t(h), std::memory_order_relaxed);
-    lo.fetch_add(int64_t((x * 0x1p8 - h) * 0x1p32 + 0.5), std::memory_order_relaxed);
+    atomic_add(&hi, uint64_t(int64_t(h)));
+    atomic_add(&lo, uint64_t(int64_t((x * 0x1p8 - h) * 0x1p32 + 0.5)));
   }
   double value() const {
-    return double(hi.load(std::memory_order_relaxed)) * 0x1p-8 + double(lo.load(std::memory_order_relaxed)) * 0x1p-40;
+    return double(int64_t(atomic_load(&hi))) * 0x1p-8 + double(int64_t(atomic_load(&lo))) * 0x1p-40;
   }
-  void reset() {
-    hi.store(0, std::memory_order_relaxed);
-    lo.store(0, std::memory_order_relaxed);
-  }
+  void reset() { hi = lo = 0; }  // between passes
 };
+
+// What sampling from a CutStore and recording rewards read and write (DESIGN 6): per cell, the
+// cut (clusters' nodes and light ranges, m of them at most) and its baked CDF, the shared
+// initial cut, the anchor, the unit of the sums, and the exact sums and counts of this pass.
+struct CutStoreView {
+  static constexpr double kMaxRootOfSquare = 0x1p18;  // squares saturate at 2^36 too
+  uint32_t m = 0;             // clusters per cell at most: the stride of the per-cluster arrays
+  View<const uint32_t> size;  // K per cell; 0: no cut yet
+  View<const uint32_t> node, end;
+  View<const float> cdf;
+  View<const float> gl, gr;  // guided descent only (empty otherwise): CutStore::guide_left/right
+  View<const float> eps;     // per cell: the defensive weight during this pass
+  View<const uint32_t> initial, initial_ends;
+  View<CellAnchor> anchor;
+  View<const double> inv_unit;  // per cell: 1 / the unit of its sums during this pass
+  View<ExactSum> sum, sq;       // per cluster: rewards and their squares
+  View<uint32_t> count;         // per cluster: rewards this pass
+
+  RLL_HD bool active(uint32_t cell) const { return size[cell] > 0; }
+};
+
+// Adds one reward to cluster k of `cell` (see CutStore::record).
+RLL_HD inline void cut_record(const CutStoreView& v, uint32_t cell, uint32_t k, float reward) {
+  const size_t i = size_t(cell) * v.m + k;
+  const double x = double(reward) * v.inv_unit[cell];
+  if (x > 0) {  // (a zero reward, an occluded sample, only counts)
+    v.sum[i].add(x);
+    const double c = std::min(x, double(CutStoreView::kMaxRootOfSquare));
+    v.sq[i].add(c * c);
+  }
+  atomic_add(&v.count[i], 1u);
+}
 
 class CutStore {
  public:
@@ -317,15 +368,10 @@ class CutStore {
   // is its own largest learnt sqrt(M2) (the brightest light's largest irradiance until it has
   // one), fixed during a pass: rewards from 2^-40 to 2^36 of it and squares from 2^-20 to 2^18
   // are resolved, whatever other lights of the scene emit.
-  void record(uint32_t cell, uint32_t k, float reward) {
-    const size_t i = size_t(cell) * m_m + k;
-    const double x = double(reward) * m_inv_unit[cell];
-    if (x > 0) {  // (a zero reward, an occluded sample, only counts)
-      m_sum[i].add(x);
-      m_sq[i].add(std::min(x, kMaxRootOfSquare) * std::min(x, kMaxRootOfSquare));
-    }
-    m_count[i].fetch_add(1, std::memory_order_relaxed);
-  }
+  void record(uint32_t cell, uint32_t k, float reward) { cut_record(view(), cell, k, reward); }
+  // The arrays for sampling and cut_record; valid while the store lives (between passes, until
+  // end_pass, clear, assign or load_cell change a cell's cut).
+  CutStoreView view();
 
   struct PassStats {
     uint32_t splits = 0, collapses = 0;
@@ -366,7 +412,7 @@ class CutStore {
   void load_cell(uint32_t cell, BinaryReader& r);
 
  private:
-  static constexpr double kMaxRootOfSquare = 0x1p18;  // squares saturate at 2^36 too
+  static constexpr double kMaxRootOfSquare = CutStoreView::kMaxRootOfSquare;
   void load(uint32_t cell, Cut& cut) const;
   void store(uint32_t cell, const Cut& cut);
   float weight_of(uint32_t cell, uint32_t node) const;
@@ -376,10 +422,11 @@ class CutStore {
   // The effective target value of every cluster: sqrt(M2) or Q where visited, else the prior's
   // share of what the visited clusters say the cell's total is.
   void values(const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const;
-  void values(uint32_t cell, const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const;
+  void values(uint32_t cell, const Cut& cut, const std::vector<double>& pri,
+              std::vector<float>& out) const;
   // Guided descent: bakes guide_left/right of a cell from its cut's values and prior.
-  void bake_guide(uint32_t cell, const Cut& cut, const std::vector<double>& pri, const std::vector<float>& val,
-                  double eps);
+  void bake_guide(uint32_t cell, const Cut& cut, const std::vector<double>& pri,
+                  const std::vector<float>& val, double eps);
 
   const LightTree& m_tree;
   CutSettings m_s;
@@ -397,11 +444,11 @@ class CutStore {
   std::vector<float> m_seen;      // per cell: rewards received so far
   std::vector<float> m_eps;       // per cell: defensive weight, frozen during a pass
   std::vector<CellAnchor> m_anchor;
-  std::vector<float> m_pool;        // pooling: per cluster, the coarse cell's share
-  std::vector<uint8_t> m_has_pool;  // pooling: per cell, m_pool holds shares
-  std::vector<double> m_inv_unit;  // per cell: 1 / the unit of its sums during this pass
-  std::unique_ptr<ExactSum[]> m_sum, m_sq;            // per cluster: rewards and their squares
-  std::unique_ptr<std::atomic<uint32_t>[]> m_count;  // per cluster: rewards this pass
+  std::vector<float> m_pool;                // pooling: per cluster, the coarse cell's share
+  std::vector<uint8_t> m_has_pool;          // pooling: per cell, m_pool holds shares
+  std::vector<double> m_inv_unit;           // per cell: 1 / the unit of its sums during this pass
+  std::unique_ptr<ExactSum[]> m_sum, m_sq;  // per cluster: rewards and their squares
+  std::unique_ptr<uint32_t[]> m_count;      // per cluster: rewards this pass
 };
 
 }  // namespace rll

@@ -8,7 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "rll/core/math.h"
+#include "rll/lights/light_context.h"
+#include "rll/lights/sampler_view.h"
 
 namespace rll {
 
@@ -18,46 +19,6 @@ class LightTree;
 class Accel;
 class BinaryWriter;
 class BinaryReader;
-
-inline constexpr uint32_t kNoCell = ~0u;
-
-// What a light sampler knows of a shading point.
-struct LightContext {
-  Vec3 p;
-  Vec3 n;   // geometric normal on the side the path arrived from (zero: no surface)
-  Vec3 ns;  // shading normal, same side as n
-  Vec3 wo;  // direction towards where the path came from (zero: unknown)
-  bool glossy = false;  // the surface's BSDF is not Lambertian: its response depends on wo
-  float footprint = 0;     // ray footprint radius at this vertex, world units
-  uint32_t cell = kNoCell;  // per-point sampler state (an RLL cell), set by prepare()
-};
-
-struct SampledLight {
-  uint32_t light = 0;
-  float pmf = 0;  // 0: nothing was sampled
-  // Filled by samplers that choose a cluster first (rll, oracle), for their own record():
-  uint32_t cluster = 0;     // index of the cluster in the cell's cut
-  float cluster_pmf = 0;    // probability of that cluster
-  float cluster_importance = 0;  // rll's guided descent: the tree's importance of the cluster at the point
-};
-
-// What the integrator reports of one next-event sample to a learning sampler. Each learner makes
-// its own reward of these: rll the cluster's contribution (estimate / P(l | cluster)), Fermat's
-// RLL the largest channel of the full weighted contribution over the full pdf, Wang et al. a
-// second moment.
-struct NeeRecord {
-  // Luminance of f * Le * G * V / pdf(y | light): the sample's contribution before dividing by
-  // the light's pmf, without the path throughput or the MIS weight.
-  float estimate = 0;
-  // The same without the shadow ray's verdict (V = 1): zero when the light cannot contribute
-  // here at all (behind the surface, outside its emission cone, a black BSDF).
-  float unoccluded = 0;
-  // MIS weight of the light sample against the BSDF's (1 without MIS).
-  float mis_weight = 1;
-  // Largest RGB component of throughput * f * Le * G * V * mis_weight / pdf(y | light) (divide
-  // by the light's pmf for the full pdf).
-  float max_rgb = 0;
-};
 
 class LightSampler {
  public:
@@ -98,6 +59,11 @@ class LightSampler {
   virtual void save_state(BinaryWriter& w) const { (void)w; }
   virtual void load_state(BinaryReader& r) { (void)r; }
 
+  // This sampler as data for sample_light / light_pmf (sampler_view.h), valid while the sampler
+  // lives and between changes to it (end_pass, lights_changed, load_state); kind None where it
+  // has no device version (a device renderer refuses it).
+  virtual SamplerView sampler_view() const { return {}; }
+
   // Name, parameters and statistics for --stats and reports.
   virtual nlohmann::json describe() const { return {{"name", name()}}; }
 };
@@ -109,6 +75,7 @@ const std::vector<std::string>& light_sampler_names();
 // throws rll::Error listing valid names on an unknown name. The oracle traces rays before
 // rendering and needs `accel`.
 std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const Scene& scene,
-                                                 const Params& params, const Accel* accel = nullptr);
+                                                 const Params& params,
+                                                 const Accel* accel = nullptr);
 
 }  // namespace rll

@@ -13,8 +13,8 @@
 #include "rll/core/parallel.h"
 #include "rll/core/params.h"
 #include "rll/core/sampling.h"
-#include "rll/lighttree/light_tree.h"
 #include "rll/lights/tree_sampler.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/scene/scene.h"
 
 namespace rll {
@@ -25,18 +25,22 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   // The initial cut follows the cut size unless the base starts smaller.
   const bool initial_is_whole = s.cut.initial_size == s.cut.cut_size;
   s.cut.cut_size = int(p.get_int(key("cut_size"), s.cut.cut_size));
-  s.cut.initial_size = int(p.get_int(key("initial_cut"), initial_is_whole ? s.cut.cut_size : s.cut.initial_size));
+  s.cut.initial_size =
+      int(p.get_int(key("initial_cut"), initial_is_whole ? s.cut.cut_size : s.cut.initial_size));
   auto choice = [&](const char* k, int current, std::vector<std::string> names) {
-    return int(std::find(names.begin(), names.end(), p.get_choice(key(k), names[size_t(current)], names)) -
-               names.begin());
+    return int(
+        std::find(names.begin(), names.end(), p.get_choice(key(k), names[size_t(current)], names)) -
+        names.begin());
   };
   s.cut.target = LearnTarget(choice("target", int(s.cut.target), {"moment", "mean"}));
   s.cut.alpha = p.get_float(key("alpha"), s.cut.alpha);
   s.cut.threshold = p.get_float(key("T"), s.cut.threshold);
   s.cut.splits = int(p.get_int(key("splits"), s.cut.splits));
   s.cut.epsilon = p.get_float(key("epsilon"), s.cut.epsilon);
-  s.cut.prior = ClusterWeight(choice("prior", int(s.cut.prior), {"importance", "power", "uniform"}));
-  s.cut.split = ClusterWeight(choice("split_by", int(s.cut.split), {"importance", "power", "uniform"}));
+  s.cut.prior =
+      ClusterWeight(choice("prior", int(s.cut.prior), {"importance", "power", "uniform"}));
+  s.cut.split =
+      ClusterWeight(choice("split_by", int(s.cut.split), {"importance", "power", "uniform"}));
   s.cut.q_init = p.get_float(key("q_init"), s.cut.q_init);
   s.within = WithinCluster(choice("within", int(s.within), {"uniform", "power", "tree", "hybrid"}));
   s.descend_above = uint32_t(p.get_int_in(key("descend_above"), s.descend_above, 1, 1l << 30));
@@ -56,7 +60,8 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   s.cut.trust = p.get_float(key("trust"), s.cut.trust);
   s.cut.pool_levels = int(p.get_int_in(key("pool"), s.cut.pool_levels, 0, 8));
   s.cut.pool_weight = p.get_float(key("pool_weight"), s.cut.pool_weight);
-  if (!(s.cut.pool_weight >= 0) || !std::isfinite(s.cut.pool_weight)) bad("pool_weight", "must be >= 0");
+  if (!(s.cut.pool_weight >= 0) || !std::isfinite(s.cut.pool_weight))
+    bad("pool_weight", "must be >= 0");
   s.cut.pool_ratio = choice("pool_guess", s.cut.pool_ratio ? 1 : 0, {"share", "ratio"}) == 1;
   s.cut.pool_up = int(p.get_int_in(key("pool_up"), s.cut.pool_up, 0, 8));
   s.cold_uniform = choice("cold", s.cold_uniform ? 1 : 0, {"tree", "uniform"}) == 1;
@@ -64,7 +69,8 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   s.reset_every = uint32_t(p.get_int_in(key("reset_every"), s.reset_every, 0, 1l << 30));
   s.cut.guided = choice("sampling", s.cut.guided ? 1 : 0, {"table", "guided"}) == 1;
   if (s.cut.guided) {
-    if (s.defensive != Defensive::Cell) bad("sampling", "guided needs defensive=cell (its factors hold the defensive term)");
+    if (s.defensive != Defensive::Cell)
+      bad("sampling", "guided needs defensive=cell (its factors hold the defensive term)");
     if (s.reward != RewardKind::Cluster) bad("sampling", "guided needs reward=cluster");
     if (s.cold_uniform) bad("sampling", "guided needs cold=tree");
   }
@@ -72,7 +78,8 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   // Pooling needs the cut every cell shares: with growing cuts or the guided descent it is off
   // unless asked for (then an error).
   if (s.cut.pool_levels > 0 && (s.cut.splits > 0 || s.cut.guided)) {
-    if (p.has(key("pool"))) bad("pool", "needs splits=0 and sampling=table (a cut every cell shares)");
+    if (p.has(key("pool")))
+      bad("pool", "needs splits=0 and sampling=table (a cut every cell shares)");
     s.cut.pool_levels = 0;
   }
   if (s.cut.pool_levels == 0) {
@@ -123,12 +130,14 @@ namespace {
 void check_memory(const RllSettings& s) {
   // The cell table, the cuts and the point sums, allocated up front: refuse a configuration the
   // machine cannot hold rather than grow towards the out-of-memory killer.
-  const double needed = double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_tiers())) +
-                        double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t));
+  const double needed =
+      double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_tiers())) +
+      double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t));
   if (needed > double(memory_budget_bytes()))
-    fail("{0}.capacity={1} with {0}.cut_size={2} needs {3} for its cells, more than {4}; lower "
-         "{0}.capacity or {0}.cut_size",
-         s.name, s.capacity, s.cut.cut_size, format_bytes(needed), memory_budget_phrase());
+    fail(
+        "{0}.capacity={1} with {0}.cut_size={2} needs {3} for its cells, more than {4}; lower "
+        "{0}.capacity or {0}.cut_size",
+        s.name, s.capacity, s.cut.cut_size, format_bytes(needed), memory_budget_phrase());
 }
 }  // namespace
 
@@ -137,15 +146,15 @@ RllLightSampler::RllLightSampler(const Scene& scene, const RllSettings& s)
   check_memory(s);
   m_table = std::make_unique<CellTable>(s.capacity);
   // Guided: the rewards are ratios to the tree's importance, of the order of a reflectance.
-  m_cuts = std::make_unique<CutStore>(m_tree, s.capacity, s.cut, s.cut.guided ? 1.0 : reward_scale(scene));
-  m_last_used = std::make_unique<std::atomic<uint32_t>[]>(s.capacity);
-  for (uint32_t c = 0; c < s.capacity; ++c) m_last_used[c].store(0, std::memory_order_relaxed);
-  m_points = std::make_unique<std::atomic<int64_t>[]>(size_t(s.capacity) * kPointWords);
-  for (size_t i = 0; i < size_t(s.capacity) * kPointWords; ++i) m_points[i].store(0, std::memory_order_relaxed);
+  m_cuts = std::make_unique<CutStore>(m_tree, s.capacity, s.cut,
+                                      s.cut.guided ? 1.0 : reward_scale(scene));
+  m_last_used.assign(s.capacity, 0);
+  m_points.assign(size_t(s.capacity) * kPointWords, 0);
   m_origin = scene.bounds.lo;
   m_extent = std::max(1e-20f, length(scene.bounds.hi - scene.bounds.lo));
   refresh_light_powers(scene);
   m_keyer.set_pass(0, 0);
+  refresh_view();
 }
 
 void RllLightSampler::refresh_light_powers(const Scene& scene) {
@@ -154,286 +163,56 @@ void RllLightSampler::refresh_light_powers(const Scene& scene) {
     m_power_prefix[i + 1] = m_power_prefix[i] + double(light_bounds(scene.lights[i]).power);
 }
 
+void RllLightSampler::refresh_view() {
+  RllView& v = m_view;
+  v.tree = m_tree.view();
+  v.keyer = m_keyer;
+  v.table = m_table->view();
+  v.cuts = m_cuts->view();
+  v.last_used = view_of(m_last_used);
+  v.points = view_of(m_points);
+  v.power_prefix = view_of(m_power_prefix);
+  v.origin = m_origin;
+  v.extent = m_extent;
+  v.pass = uint32_t(m_pass);
+  v.descend_above = m_s.descend_above;
+  v.sample_jitter = m_s.sample_jitter;
+  v.within = m_s.within;
+  v.reward = m_s.reward;
+  v.defensive = m_s.defensive;
+  v.cold_uniform = m_s.cold_uniform;
+  v.guided = m_s.cut.guided;
+}
+
+SamplerView RllLightSampler::sampler_view() const {
+  SamplerView v;
+  v.kind = SamplerKind::Rll;
+  v.tree = m_view.tree;
+  v.rll = &m_view;
+  return v;
+}
+
 size_t RllLightSampler::bytes() const {
-  return m_table->bytes() + m_cuts->bytes() + m_s.capacity * (sizeof(uint32_t) + kPointWords * sizeof(int64_t)) +
+  return m_table->bytes() + m_cuts->bytes() +
+         m_s.capacity * (sizeof(uint32_t) + kPointWords * sizeof(int64_t)) +
          m_power_prefix.size() * sizeof(double);
 }
 
 void RllLightSampler::prepare(LightContext& ctx, float u) const {
-  ctx.cell = kNoCell;
-  if (length_sq(ctx.n) == 0) return;
-  CellCoord coord;
-  if (m_s.sample_jitter > 0) {
-    // This sample's own jitter, from hashes of u (the level's rounding uses u itself): a disk of
-    // sample_jitter cell radii (half edges) and a quarter normal bin.
-    const uint64_t h = mix64(uint64_t(std::bit_cast<uint32_t>(u)) ^ 0x6a09e667f3bcc909ull);
-    auto unit = [&](int i) { return float((h >> (16 * i)) & 0xffff) * 0x1p-16f; };
-    const Vec2 disk = sample_uniform_disk_concentric({unit(0), unit(1)});
-    const Vec2 d{disk.x * 0.5f * m_s.sample_jitter, disk.y * 0.5f * m_s.sample_jitter};
-    const Vec2 nj{(unit(2) - 0.5f) * 0.5f, (unit(3) - 0.5f) * 0.5f};
-    coord = m_keyer.locate_jittered(ctx.p, ctx.n, ctx.footprint, u, d, nj);
-  } else {
-    coord = m_keyer.locate(ctx.p, ctx.n, ctx.footprint, u);
-  }
-  if (m_s.grid.direction_bins > 0 && ctx.glossy && length_sq(ctx.wo) > 0) coord.dir = m_keyer.direction_bin(ctx.wo);
-  bool created = false;
-  uint32_t cell = m_table->find_or_insert(m_keyer.key(coord), &created);
-  if (cell == CellTable::kNone) return;  // table full: no cell until eviction makes room
-  if (created) m_cuts->set_anchor(cell, m_keyer.anchor(coord));
-  // Stamp the pass of last use; a write only when it changes (no cache-line traffic per sample).
-  if (m_last_used[cell].load(std::memory_order_relaxed) != uint32_t(m_pass))
-    m_last_used[cell].store(uint32_t(m_pass), std::memory_order_relaxed);
-  ctx.cell = cell;
-  if (!m_cuts->active(cell)) {  // the cell's first pass: its points make its anchor
-    std::atomic<int64_t>* w = &m_points[size_t(cell) * kPointWords];
-    const Vec3 q = (ctx.p - m_origin) * (0x1p24f / m_extent);
-    const float v[6] = {q.x, q.y, q.z, ctx.n.x * 0x1p24f, ctx.n.y * 0x1p24f, ctx.n.z * 0x1p24f};
-    for (int i = 0; i < 6; ++i) w[i].fetch_add(int64_t(std::llround(v[i])), std::memory_order_relaxed);
-    w[6].fetch_add(1, std::memory_order_relaxed);
-  }
-}
-
-bool RllLightSampler::has_cut(uint32_t cell) const { return cell != kNoCell && m_cuts->active(cell); }
-
-RllLightSampler::View RllLightSampler::view(uint32_t cell) const {
-  if (has_cut(cell)) return {m_cuts->size(cell), m_cuts->ends(cell), m_cuts->nodes(cell), m_cuts->cdf(cell)};
-  return {m_cuts->initial_size(), m_cuts->initial_ends(), m_cuts->initial_nodes(), nullptr};
-}
-
-bool RllLightSampler::descends(uint32_t begin, uint32_t end) const {
-  return m_s.within == WithinCluster::Tree || (m_s.within == WithinCluster::Hybrid && end - begin > m_s.descend_above);
-}
-
-SampledLight RllLightSampler::sample_within(const LightContext& ctx, uint32_t node, uint32_t begin, uint32_t end,
-                                            double u) const {
-  const uint32_t count = end - begin;
-  if (count == 1) return {begin, 1.0f};
-  if (descends(begin, end)) return sampled_light(tree_descend(m_tree, node, ctx.p, ctx.n, u));
-  if (m_s.within != WithinCluster::Uniform) {
-    // The static table: light powers in tree order as a prefix sum.
-    double lo = m_power_prefix[begin], total = m_power_prefix[end] - lo;
-    if (total > 0) {
-      double target = lo + u * total;
-      auto it = std::upper_bound(m_power_prefix.begin() + begin + 1, m_power_prefix.begin() + end + 1, target);
-      uint32_t l = std::min(uint32_t(it - m_power_prefix.begin()) - 1, end - 1);
-      while (l > begin && m_power_prefix[l + 1] == m_power_prefix[l]) --l;  // never a zero-power light
-      return {l, float((m_power_prefix[l + 1] - m_power_prefix[l]) / total)};
-    }
-  }
-  uint32_t l = begin + std::min(count - 1, uint32_t(u * count));
-  return {l, 1.0f / float(count)};
-}
-
-float RllLightSampler::pmf_within(const LightContext& ctx, uint32_t node, uint32_t begin, uint32_t end,
-                                  uint32_t light) const {
-  const uint32_t count = end - begin;
-  if (count == 1) return 1.0f;
-  if (descends(begin, end)) return tree_descend_pmf(m_tree, node, light, ctx.p, ctx.n);
-  if (m_s.within != WithinCluster::Uniform) {
-    double total = m_power_prefix[end] - m_power_prefix[begin];
-    if (total > 0) return float((m_power_prefix[light + 1] - m_power_prefix[light]) / total);
-  }
-  return 1.0f / float(count);
-}
-
-float RllLightSampler::mixture_pmf(const LightContext& ctx, const View& v, uint32_t k, uint32_t l, float within,
-                                   const DescentPath* path, float* cluster_pmf) const {
-  const float q = cdf_width(v, k);  // the cell's CDF: learnt, or with the prior
-  if (m_s.defensive == Defensive::Cell) {
-    *cluster_pmf = q;
-    return q * within;
-  }
-  // P(l|x) = [(1 - eps) Q(s)/sum Q + eps reach(s|x)] P(l|s): the defensive prior of DESIGN 2 is
-  // the tree's probability of the cluster at x. Before the cell has learnt anything, the tree
-  // alone. A descent from the root that went through the cluster (`path`) already holds reach.
-  const float eps = m_cuts->defensive_weight(ctx.cell);
-  const uint32_t node = v.nodes[k];
-  int at = path ? path->index_of(node) : -1;
-  float reach = at >= 0 ? path->product(0, at) : tree_reach_pmf(m_tree, node, ctx.p, ctx.n);
-  *cluster_pmf = (1 - eps) * q + eps * reach;
-  const uint32_t begin = k > 0 ? v.ends[k - 1] : 0;
-  if (descends(begin, v.ends[k])) return *cluster_pmf * within;
-  // Another within-cluster rule: mix the two distributions over lights.
-  float tree = path ? path->product(0, path->length - 1) : tree_descend_pmf(m_tree, LightTree::kRoot, l, ctx.p, ctx.n);
-  return (1 - eps) * q * within + eps * tree;
-}
-
-float RllLightSampler::cdf_width(const View& v, uint32_t k) const {
-  return float(double(v.cdf[k]) - (k > 0 ? double(v.cdf[k - 1]) : 0.0));
+  rll_prepare(m_view, ctx, u);
 }
 
 SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
-  View v = view(ctx.cell);
-  DescentPath path;
-  if (!has_cut(ctx.cell) && m_s.cold_uniform) {
-    // Every cluster of the initial cut alike (Fermat: every Q starts equal).
-    const uint32_t K = v.size;
-    const uint32_t k = std::min(K - 1, uint32_t(u * K));
-    const double u_within = std::clamp(u * K - k, 0.0, 0x1.fffffffffffffp-1);
-    SampledLight w = sample_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], u_within);
-    if (!(w.pmf > 0)) return {};
-    w.cluster = k;
-    w.cluster_pmf = 1.0f / float(K);
-    w.pmf = w.pmf / float(K);
-    return w;
-  }
-  if (!has_cut(ctx.cell)) {
-    // A point without a learnt cut (a cell new in this pass, or none: table full) samples
-    // like the light tree. Its reward still goes to its cluster of the initial cut: given the
-    // cluster, the tree chose the light with the probability of the path below the cluster.
-    SampledLight s = sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &path));
-    if (!(s.pmf > 0)) return {};
-    s.cluster = cluster_of(v, s.light);
-    int at = path.index_of(v.nodes[s.cluster]);
-    float within = path.product(at, path.length - 1);
-    s.cluster_pmf = within > 0 ? s.pmf / within : s.pmf;
-    if (m_s.cut.guided) s.cluster_importance = m_tree.importance(v.nodes[s.cluster], ctx.p, ctx.n);
-    return s;
-  }
-  if (m_s.cut.guided) return sample_guided(ctx, v, u);
-  const float eps = m_s.defensive == Defensive::Tree ? m_cuts->defensive_weight(ctx.cell) : 0.0f;
-  uint32_t k, l;
-  float within;
-  const DescentPath* descent = nullptr;
-  if (u < eps) {
-    // The defensive branch: a descent of the whole tree, then its cluster in this cut.
-    const TreeSample t = tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u / eps, &path);
-    if (!(t.pmf > 0)) return {};
-    l = t.light;
-    k = cluster_of(v, l);
-    const uint32_t begin = k > 0 ? v.ends[k - 1] : 0;
-    if (descends(begin, v.ends[k]))
-      within = path.product(path.index_of(v.nodes[k]), path.length - 1);
-    else
-      within = pmf_within(ctx, v.nodes[k], begin, v.ends[k], l);
-    descent = &path;
-  } else {
-    // The learnt branch: a cluster from the cell's CDF (first entry above u; zero-width
-    // entries are never returned), then a light inside it. Compared and differenced in
-    // double: the interval of u that selects cluster k is exactly [cdf[k-1], cdf[k]), and its
-    // width is what the pmf reports (cdf_width).
-    double uc = (u - eps) / (1 - eps);
-    k = uint32_t(std::upper_bound(v.cdf, v.cdf + v.size, uc, [](double x, float c) { return x < double(c); }) - v.cdf);
-    k = std::min(k, v.size - 1);
-    while (k > 0 && v.cdf[k] == v.cdf[k - 1]) --k;
-    double lo = k > 0 ? double(v.cdf[k - 1]) : 0.0;
-    double q = double(v.cdf[k]) - lo;
-    if (!(q > 0)) return {};
-    double u_within = std::clamp((uc - lo) / q, 0.0, 0x1.fffffffffffffp-1);
-    SampledLight w = sample_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], u_within);
-    if (!(w.pmf > 0)) return {};
-    l = w.light;
-    within = w.pmf;  // the same top-down product as pmf_within computes
-  }
-  SampledLight s;
-  s.light = l;
-  s.cluster = k;
-  s.pmf = mixture_pmf(ctx, v, k, l, within, descent, &s.cluster_pmf);
-  return s.pmf > 0 ? s : SampledLight{};
-}
-
-uint32_t RllLightSampler::cluster_of(const View& v, uint32_t light) const {
-  return uint32_t(std::upper_bound(v.ends, v.ends + v.size, light) - v.ends);
+  return rll_sample(m_view, ctx, u);
 }
 
 float RllLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
-  View v = view(ctx.cell);
-  uint32_t k = cluster_of(v, light);
-  if (k >= v.size) return 0;
-  if (!has_cut(ctx.cell)) {
-    if (!m_s.cold_uniform) return tree_descend_pmf(m_tree, LightTree::kRoot, light, ctx.p, ctx.n);
-    return pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], light) / float(v.size);
-  }
-  if (m_s.cut.guided) return pmf_guided(ctx, v, light);
-  float within = pmf_within(ctx, v.nodes[k], k > 0 ? v.ends[k - 1] : 0, v.ends[k], light);
-  float cluster_pmf;
-  return mixture_pmf(ctx, v, k, light, within, nullptr, &cluster_pmf);
-}
-
-SampledLight RllLightSampler::sample_guided(const LightContext& ctx, const View& v, double u) const {
-  const float *gl = m_cuts->guide_left(ctx.cell), *gr = m_cuts->guide_right(ctx.cell);
-  uint32_t index = LightTree::kRoot, k0 = 0, k1 = v.size;
-  float pmf = 1, importance = -1;
-  while (k1 - k0 > 1) {
-    // An inner node above the cut: its children meet at the boundary after cluster j.
-    const LightTreeNode& node = m_tree.node(index);
-    const uint32_t j = children_boundary(m_tree, node, v.ends, k0, k1);
-    float i0 = -1, i1 = -1;
-    const float p0 = first_child_probability(m_tree, node, ctx.p, ctx.n, gl[j], gr[j], &i0, &i1);
-    if (u < p0) {
-      u = std::min(u / p0, 0x1.fffffffffffffp-1);
-      pmf *= p0;
-      index = node.child;
-      k1 = j + 1;
-      importance = i0;
-    } else {
-      u = std::min((u - p0) / (1 - p0), 0x1.fffffffffffffp-1);
-      pmf *= 1 - p0;
-      index = node.child + 1;
-      k0 = j + 1;
-      importance = i1;
-    }
-  }
-  if (!(pmf > 0)) return {};
-  // The cluster is reached (index == v.nodes[k0]); its importance, where the last step did not
-  // compute it (a group node, or a cut of one cluster).
-  if (importance < 0) importance = m_tree.importance(index, ctx.p, ctx.n);
-  SampledLight w = sample_within(ctx, index, k0 > 0 ? v.ends[k0 - 1] : 0, v.ends[k0], u);
-  if (!(w.pmf > 0)) return {};
-  w.cluster = k0;
-  w.cluster_pmf = pmf;
-  w.cluster_importance = importance;
-  w.pmf = pmf * w.pmf;
-  return w.pmf > 0 ? w : SampledLight{};
-}
-
-float RllLightSampler::pmf_guided(const LightContext& ctx, const View& v, uint32_t light) const {
-  const float *gl = m_cuts->guide_left(ctx.cell), *gr = m_cuts->guide_right(ctx.cell);
-  uint32_t index = LightTree::kRoot, k0 = 0, k1 = v.size;
-  float pmf = 1;
-  while (k1 - k0 > 1) {
-    const LightTreeNode& node = m_tree.node(index);
-    const uint32_t j = children_boundary(m_tree, node, v.ends, k0, k1);
-    const float p0 = first_child_probability(m_tree, node, ctx.p, ctx.n, gl[j], gr[j], nullptr, nullptr);
-    if (light < v.ends[j]) {
-      pmf *= p0;
-      index = node.child;
-      k1 = j + 1;
-    } else {
-      pmf *= 1 - p0;
-      index = node.child + 1;
-      k0 = j + 1;
-    }
-    if (pmf == 0) return 0;
-  }
-  return pmf * pmf_within(ctx, index, k0 > 0 ? v.ends[k0 - 1] : 0, v.ends[k0], light);
+  return rll_pmf(m_view, ctx, light);
 }
 
 void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) {
   if (m_frozen) return;
-  const float estimate = r.estimate;
-  if (ctx.cell == kNoCell || !(s.pmf > 0) || !(estimate >= 0) || !std::isfinite(estimate)) return;
-  const float within = s.pmf / s.cluster_pmf;
-  // DESIGN 2: the cluster reward estimates the cluster's total contribution I(s):
-  // r = estimate / P(l|s). The original code divided by the full pdf (fixed point P ~ sqrt(I)).
-  float reward = 0;
-  switch (m_s.reward) {
-    case RewardKind::Cluster:
-      reward = estimate / within;
-      if (m_s.cut.guided) {
-        // The ratio of the cluster's contribution to the tree's importance of it at the point.
-        if (!(s.cluster_importance > 0)) return;
-        reward /= s.cluster_importance;
-      }
-      break;
-    case RewardKind::FullPdf: reward = estimate / s.pmf; break;
-    case RewardKind::Fermat:
-      if (!(r.unoccluded > 0)) return;  // the light cannot reach here at all: no reward
-      reward = r.max_rgb / s.pmf;
-      break;
-  }
-  if (!(reward >= 0) || !std::isfinite(reward)) return;
-  m_cuts->record(ctx.cell, s.cluster, reward);
+  rll_record(m_view, ctx, s, r);
 }
 
 void RllLightSampler::end_pass() {
@@ -444,17 +223,17 @@ void RllLightSampler::end_pass() {
   parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
       const uint32_t c = cells[i];
-      std::atomic<int64_t>* w = &m_points[size_t(c) * kPointWords];
-      if (const int64_t count = w[6].load(std::memory_order_relaxed); count > 0 && !m_cuts->active(c)) {
+      uint64_t* w = &m_points[size_t(c) * kPointWords];
+      if (const int64_t count = int64_t(w[6]); count > 0 && !m_cuts->active(c)) {
         double sum[6];
-        for (int j = 0; j < 6; ++j) sum[j] = double(w[j].load(std::memory_order_relaxed)) / double(count) * 0x1p-24;
+        for (int j = 0; j < 6; ++j) sum[j] = double(int64_t(w[j])) / double(count) * 0x1p-24;
         CellAnchor a = m_cuts->anchor(c);
         a.p = m_origin + Vec3(float(sum[0]), float(sum[1]), float(sum[2])) * m_extent;
         Vec3 n{float(sum[3]), float(sum[4]), float(sum[5])};
         if (length_sq(n) > 1e-6f) a.n = normalize(n);
         m_cuts->set_anchor(c, a);
       }
-      for (int j = 0; j < kPointWords; ++j) w[j].store(0, std::memory_order_relaxed);
+      for (int j = 0; j < kPointWords; ++j) w[j] = 0;
     }
   });
   if (m_s.cut.pool_levels > 0) pool_pass(cells);
@@ -492,9 +271,8 @@ void RllLightSampler::end_pass() {
     std::vector<uint32_t> used = cells_in_use();
     size_t target = cap * 7ull / 10;
     if (used.size() > target) {
-      std::stable_sort(used.begin(), used.end(), [&](uint32_t a, uint32_t b) {
-        return m_last_used[a].load(std::memory_order_relaxed) < m_last_used[b].load(std::memory_order_relaxed);
-      });
+      std::stable_sort(used.begin(), used.end(),
+                       [&](uint32_t a, uint32_t b) { return m_last_used[a] < m_last_used[b]; });
       evict.assign(used.begin(), used.begin() + long(used.size() - target));
       for (uint32_t c : evict) m_cuts->clear(c);
       m_evictions += evict.size();
@@ -514,6 +292,7 @@ void RllLightSampler::end_pass() {
     m_pool.clear();
     ++m_resets;
   }
+  refresh_view();
 }
 
 std::vector<uint32_t> RllLightSampler::cells_in_use() const {
@@ -528,7 +307,8 @@ void RllLightSampler::give_pool_shares() {
   give_pool_shares(cells, coarse_keys(cells, 0), coarse_keys(cells, 1));
 }
 
-std::vector<uint64_t> RllLightSampler::coarse_keys(const std::vector<uint32_t>& cells, int tier) const {
+std::vector<uint64_t> RllLightSampler::coarse_keys(const std::vector<uint32_t>& cells,
+                                                   int tier) const {
   if (tier >= m_s.cut.pool_tiers()) return {};
   const int up = m_s.cut.pool_levels + (tier > 0 ? m_s.cut.pool_up : 0);
   std::vector<uint64_t> keys(cells.size());
@@ -560,7 +340,8 @@ void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
     std::vector<uint64_t> count;
   };
   std::map<uint64_t, Pass> pass;
-  Pass cell{std::vector<double>(K), std::vector<double>(K), std::vector<uint64_t>(K)};  // one cell's
+  Pass cell{std::vector<double>(K), std::vector<double>(K),
+            std::vector<uint64_t>(K)};  // one cell's
   for (const auto& [key, i] : order) {
     // The cell's rewards once (with pool_guess=ratio, its prior too), then into each tier.
     std::fill(cell.sum.begin(), cell.sum.end(), 0.0);
@@ -605,7 +386,8 @@ void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
   give_pool_shares(cells, coarse, upper);
 }
 
-void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells, const std::vector<uint64_t>& coarse,
+void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells,
+                                       const std::vector<uint64_t>& coarse,
                                        const std::vector<uint64_t>& upper) {
   const size_t K = m_cuts->initial_size();
   const bool moment = m_s.cut.target == LearnTarget::Moment;
@@ -631,9 +413,11 @@ void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells, const
         values_of(pc, shares.data(), false);
         // pool_up: the coarse cell's values shrunk toward its own coarse cell's.
         if (!upper.empty())
-          if (const auto up = m_pool.find(upper[i]); up != m_pool.end() && values_of(up->second, above.data(), true))
-            shrink_toward(K, [&](size_t k) { return pc.q[k] >= 0; }, pc.n.data(), above.data(), m_s.cut.pool_weight,
-                          shares.data());
+          if (const auto up = m_pool.find(upper[i]);
+              up != m_pool.end() && values_of(up->second, above.data(), true))
+            shrink_toward(
+                K, [&](size_t k) { return pc.q[k] >= 0; }, pc.n.data(), above.data(),
+                m_s.cut.pool_weight, shares.data());
         // pool_guess=ratio: the coarse cell's factors times this cell's prior.
         if (m_s.cut.pool_ratio) m_cuts->cell_prior(cells[i], pri);
         for (size_t k = 0; k < K; ++k) {
@@ -663,6 +447,7 @@ void RllLightSampler::lights_changed(const Scene& scene) {
     give_pool_shares();
     refresh_all();
   }
+  refresh_view();
 }
 
 void RllLightSampler::save_state(BinaryWriter& w) const {
@@ -674,7 +459,7 @@ void RllLightSampler::save_state(BinaryWriter& w) const {
     if (!m_table->in_use(c)) continue;
     w.put(c);
     w.put(m_table->key_of(c));
-    w.put(m_last_used[c].load(std::memory_order_relaxed));
+    w.put(m_last_used[c]);
     m_cuts->save_cell(c, w);
   }
   if (m_s.cut.pool_levels > 0) {  // the coarse cells, in key order
@@ -698,7 +483,7 @@ void RllLightSampler::load_state(BinaryReader& r) {
   if (used > m_s.capacity) damaged("more cells than the table holds");
   for (uint32_t c = 0; c < m_s.capacity; ++c) {
     m_cuts->clear(c);
-    m_last_used[c].store(0, std::memory_order_relaxed);
+    m_last_used[c] = 0;
   }
   std::vector<uint64_t> key_of(m_s.capacity, 0);
   long previous = -1;
@@ -710,14 +495,15 @@ void RllLightSampler::load_state(BinaryReader& r) {
     if (key_of[c] == 0) damaged("a cell without a key");
     const uint32_t last = r.get<uint32_t>();
     if (last > pass) damaged("a cell used after the last pass");
-    m_last_used[c].store(last, std::memory_order_relaxed);
+    m_last_used[c] = last;
     m_cuts->load_cell(c, r);
   }
   m_pool.clear();
   if (m_s.cut.pool_levels > 0) {
     const size_t K = m_cuts->initial_size();
     const uint32_t count = r.get<uint32_t>();
-    if (count > uint64_t(used) * uint64_t(m_s.cut.pool_tiers())) damaged("more coarse cells than cells");
+    if (count > uint64_t(used) * uint64_t(m_s.cut.pool_tiers()))
+      damaged("more coarse cells than cells");
     uint64_t last = 0;
     for (uint32_t i = 0; i < count; ++i) {
       const uint64_t key = r.get<uint64_t>();
@@ -731,18 +517,19 @@ void RllLightSampler::load_state(BinaryReader& r) {
       r.get_array(pc.m2.data(), K);
       r.get_array(pc.n.data(), K);
       for (size_t k = 0; k < K; ++k)
-        if (!((pc.q[k] >= 0 || pc.q[k] == -1) && std::isfinite(pc.q[k]) && pc.m2[k] >= 0 && std::isfinite(pc.m2[k]) &&
-              pc.n[k] >= 0 && std::isfinite(pc.n[k])))
+        if (!((pc.q[k] >= 0 || pc.q[k] == -1) && std::isfinite(pc.q[k]) && pc.m2[k] >= 0 &&
+              std::isfinite(pc.m2[k]) && pc.n[k] >= 0 && std::isfinite(pc.n[k])))
           damaged("a coarse cell's value is negative or not finite");
     }
   }
   if (r.remaining() != 0) damaged("bytes after the last cell");
   if (!m_table->restore(key_of)) damaged("a cell key twice");
-  for (size_t i = 0; i < size_t(m_s.capacity) * kPointWords; ++i) m_points[i].store(0, std::memory_order_relaxed);
+  std::fill(m_points.begin(), m_points.end(), 0);
   m_pass = pass;
   m_resets = resets;
   m_keyer.set_pass(m_pass, 0);
   if (m_s.cut.pool_levels > 0) give_pool_shares();
+  refresh_view();
 }
 
 nlohmann::json RllLightSampler::describe() const {

@@ -6,7 +6,6 @@
 // the tables are baked again.
 #pragma once
 
-#include <atomic>
 #include <map>
 #include <memory>
 #include <vector>
@@ -14,24 +13,10 @@
 #include "rll/learn/cell_grid.h"
 #include "rll/learn/cuts.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/lights/rll_view.h"
 #include "rll/lights/tree_sampler.h"
 
 namespace rll {
-
-// How a light is drawn inside a cluster: uniformly (the paper), by power (a static table), by a
-// descent of the light tree below the cluster, or by power in small clusters and by descent in
-// clusters of more than `descend_above` lights (Hybrid).
-enum class WithinCluster { Uniform, Power, Tree, Hybrid };
-// A cluster's reward per next-event sample: its estimate of the cluster's contribution
-// (estimate / P(l | cluster), DESIGN 2), the estimate over the full pdf (the paper's fixed point,
-// P ~ sqrt(I)), or Fermat's: the largest RGB channel of the full MIS-weighted contribution
-// (path throughput included) over the full pdf, and no reward at all where the light could not
-// contribute even unoccluded.
-enum class RewardKind { Cluster, FullPdf, Fermat };
-// The defensive term of the cluster distribution: a per-cell prior folded into the cell's baked
-// table (constant cost), or the light tree's probability of the cluster at the shading point
-// itself (a walk from the root per sample and per pmf).
-enum class Defensive { Cell, Tree };
 
 // rll's cut settings: CutSettings' own, with pooling one level up, in two tiers, by ratio to each
 // cell's prior (docs/rll.md, "Pooling").
@@ -94,6 +79,7 @@ class RllLightSampler final : public LightSampler {
   bool has_state() const override { return true; }
   void save_state(BinaryWriter& w) const override;
   void load_state(BinaryReader& r) override;
+  SamplerView sampler_view() const override;
 
   // Stops learning: record() and end_pass() do nothing from now on (the oracle).
   void freeze() { m_frozen = true; }
@@ -105,31 +91,8 @@ class RllLightSampler final : public LightSampler {
   size_t bytes() const;
 
  private:
-  struct View {  // the cut of a point's cell, or the shared initial cut
-    uint32_t size;
-    const uint32_t* ends;
-    const uint32_t* nodes;
-    const float* cdf;
-  };
-  bool has_cut(uint32_t cell) const;
-  bool descends(uint32_t begin, uint32_t end) const;
-  uint32_t cluster_of(const View& v, uint32_t light) const;
-  // Probability of cluster k in the cell's CDF: the exact width of its interval.
-  float cdf_width(const View& v, uint32_t k) const;
-  View view(uint32_t cell) const;
-  // Light inside cluster node `node` covering [begin, end), and its probability.
-  SampledLight sample_within(const LightContext& ctx, uint32_t node, uint32_t begin, uint32_t end, double u) const;
-  float pmf_within(const LightContext& ctx, uint32_t node, uint32_t begin, uint32_t end, uint32_t light) const;
-  // The full pmf of light l in cluster k (which contains it), and the cluster's probability.
-  // `within` is pmf_within(l), already known to the caller.
-  // `path`: a descent from the root that reached l, if the caller has one (saves the reach).
-  float mixture_pmf(const LightContext& ctx, const View& v, uint32_t k, uint32_t l, float within,
-                    const DescentPath* path, float* cluster_pmf) const;
-  // The guided descent (rll.sampling=guided) of a cell with a cut: from the root, each step by
-  // the children's importance times the cell's factors, down to a cluster of the cut; then the
-  // light inside it as `within` says.
-  SampledLight sample_guided(const LightContext& ctx, const View& v, double u) const;
-  float pmf_guided(const LightContext& ctx, const View& v, uint32_t light) const;
+  // Points m_view at this sampler's arrays, pass and keyer (after anything that changes them).
+  void refresh_view();
   void refresh_light_powers(const Scene& scene);
   // Pooling (rll.pool): pools this pass's rewards of the cells into their coarse cells, folds
   // them into the coarse cells' values and gives every cell its coarse cell's shares.
@@ -157,15 +120,15 @@ class RllLightSampler final : public LightSampler {
   CellKeyer m_keyer;
   std::unique_ptr<CellTable> m_table;
   std::unique_ptr<CutStore> m_cuts;
-  std::unique_ptr<std::atomic<uint32_t>[]> m_last_used;  // pass of last lookup, per cell
+  std::vector<uint32_t> m_last_used;  // pass of last lookup, per cell
   // A new cell's anchor is the mean of the points that used it in its first pass (a point on
   // the surfaces it covers, where the box centre may lie behind a wall or above a lamp): exact
   // fixed-point sums of position (units of 2^-24 of the scene diameter) and normal, and a count.
-  static constexpr int kPointWords = 7;
-  std::unique_ptr<std::atomic<int64_t>[]> m_points;
+  static constexpr int kPointWords = kRllPointWords;
+  std::vector<uint64_t> m_points;
   Vec3 m_origin;
   float m_extent = 1;
-  std::vector<double> m_power_prefix;                    // per light, tree order
+  std::vector<double> m_power_prefix;  // per light, tree order
   uint64_t m_pass = 0;
   uint64_t m_resets = 0;
   bool m_warned_full = false;
@@ -173,6 +136,7 @@ class RllLightSampler final : public LightSampler {
   // Statistics.
   uint64_t m_evictions = 0, m_failed_inserts = 0;
   std::vector<uint32_t> m_splits_per_pass, m_collapses_per_pass, m_touched_per_pass;
+  RllView m_view;  // what prepare, sample, pmf and record read (rll_view.h)
 };
 
 }  // namespace rll

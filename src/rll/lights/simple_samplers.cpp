@@ -12,19 +12,27 @@ std::vector<float> light_powers(const Scene& scene) {
   return w;
 }
 
-UniformLightSampler::UniformLightSampler(const Scene& scene) : m_count(uint32_t(scene.lights.size())) {}
+UniformLightSampler::UniformLightSampler(const Scene& scene)
+    : m_count(uint32_t(scene.lights.size())) {}
 
 SampledLight UniformLightSampler::sample(const LightContext&, double u) const {
-  if (m_count == 0) return {};
-  uint32_t i = std::min(m_count - 1, uint32_t(u * m_count));
-  return {i, 1.0f / m_count};
+  return uniform_sample(m_count, u);
 }
 
 float UniformLightSampler::pmf(const LightContext&, uint32_t light) const {
-  return light < m_count ? 1.0f / m_count : 0.0f;
+  return uniform_pmf(m_count, light);
 }
 
-PowerLightSampler::PowerLightSampler(const Scene& scene) { lights_changed(scene); }
+SamplerView UniformLightSampler::sampler_view() const {
+  SamplerView v;
+  v.kind = SamplerKind::Uniform;
+  v.light_count = m_count;
+  return v;
+}
+
+PowerLightSampler::PowerLightSampler(const Scene& scene) {
+  lights_changed(scene);
+}
 
 void PowerLightSampler::lights_changed(const Scene& scene) {
   auto w = light_powers(scene);
@@ -32,13 +40,18 @@ void PowerLightSampler::lights_changed(const Scene& scene) {
 }
 
 SampledLight PowerLightSampler::sample(const LightContext&, double u) const {
-  if (m_distribution.empty()) return {};
-  size_t i = m_distribution.sample(u);
-  return {uint32_t(i), m_distribution.pmf(i)};
+  return power_sample(m_distribution.view(), u);
 }
 
 float PowerLightSampler::pmf(const LightContext&, uint32_t light) const {
-  return light < m_distribution.size() ? m_distribution.pmf(light) : 0.0f;
+  return power_pmf(m_distribution.view(), light);
+}
+
+SamplerView PowerLightSampler::sampler_view() const {
+  SamplerView v;
+  v.kind = SamplerKind::Power;
+  v.power = m_distribution.view();
+  return v;
 }
 
 }  // namespace rll

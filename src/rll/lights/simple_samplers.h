@@ -13,6 +13,7 @@ class UniformLightSampler final : public LightSampler {
   std::string name() const override { return "uniform"; }
   SampledLight sample(const LightContext& ctx, double u) const override;
   float pmf(const LightContext& ctx, uint32_t light) const override;
+  SamplerView sampler_view() const override;
 
  private:
   uint32_t m_count;
@@ -26,6 +27,7 @@ class PowerLightSampler final : public LightSampler {
   SampledLight sample(const LightContext& ctx, double u) const override;
   float pmf(const LightContext& ctx, uint32_t light) const override;
   void lights_changed(const Scene& scene) override;
+  SamplerView sampler_view() const override;
 
  private:
   DiscreteDistribution m_distribution;

@@ -12,11 +12,18 @@ TreeLightSampler::TreeLightSampler(const Scene& scene) : m_tree(light_tree_of(sc
 }
 
 SampledLight TreeLightSampler::sample(const LightContext& ctx, double u) const {
-  return sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u));
+  return tree_sample(m_tree.view(), ctx, u);
 }
 
 float TreeLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
-  return tree_descend_pmf(m_tree, LightTree::kRoot, light, ctx.p, ctx.n);
+  return tree_pmf(m_tree.view(), ctx, light);
+}
+
+SamplerView TreeLightSampler::sampler_view() const {
+  SamplerView v;
+  v.kind = SamplerKind::Tree;
+  v.tree = m_tree.view();
+  return v;
 }
 
 nlohmann::json TreeLightSampler::describe() const {

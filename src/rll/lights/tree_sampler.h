@@ -9,14 +9,6 @@
 
 namespace rll {
 
-// A descent's choice as a sampler's answer (no cluster).
-inline SampledLight sampled_light(const TreeSample& t) {
-  SampledLight s;
-  s.light = t.light;
-  s.pmf = t.pmf;
-  return s;
-}
-
 class TreeLightSampler final : public LightSampler {
  public:
   explicit TreeLightSampler(const Scene& scene);
@@ -24,6 +16,7 @@ class TreeLightSampler final : public LightSampler {
   SampledLight sample(const LightContext& ctx, double u) const override;
   float pmf(const LightContext& ctx, uint32_t light) const override;
   nlohmann::json describe() const override;
+  SamplerView sampler_view() const override;
 
  private:
   const LightTree& m_tree;

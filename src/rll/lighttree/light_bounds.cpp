@@ -3,13 +3,6 @@
 namespace rll {
 
 namespace {
-// cos(max(0, theta_a - theta_b)) and sin of the same, from sines and cosines.
-inline float cos_sub_clamped(float sin_a, float cos_a, float sin_b, float cos_b) {
-  return cos_a > cos_b ? 1.0f : cos_a * cos_b + sin_a * sin_b;
-}
-inline float sin_sub_clamped(float sin_a, float cos_a, float sin_b, float cos_b) {
-  return cos_a > cos_b ? 0.0f : sin_a * cos_b - cos_a * sin_b;
-}
 // cos of a cone's half-angle theta, widened by a hair and rounded down so that float rounding
 // never excludes a member direction (near theta = 0, cos rounds to exactly 1 otherwise).
 inline float widened_cos(float theta) {
@@ -171,50 +164,6 @@ ImportanceBounds importance_bounds(const LightBounds& b, const DistantFrame* fra
 float light_importance(const LightBounds& b, const Vec3& p, const Vec3& n,
                        const DistantFrame* frame) {
   return light_importance(importance_bounds(b, frame), p, n);
-}
-
-float light_importance(const ImportanceBounds& b, const Vec3& p, const Vec3& n) {
-  if (!(b.power > 0)) return 0;
-  const bool has_normal = n.x != 0 || n.y != 0 || n.z != 0;
-  if (b.flags & ImportanceBounds::kInfinite) {
-    // Distant lights' cones hold only for points within the frame's reach.
-    if (!has_normal ||
-        ((b.flags & ImportanceBounds::kDistant) && length_sq(p - b.center) > b.radius2))
-      return b.power;
-    // Best cosine between the normal and any direction of the cone.
-    float cos_i = dot(b.axis, n), sin_i = safe_sqrt(1 - cos_i * cos_i);
-    float c = cos_sub_clamped(sin_i, cos_i, b.sin_o, b.cos_o);
-    return c > 0 ? b.power * c : 0;
-  }
-  Vec3 d = p - b.center;  // from the lights to the point
-  float dist2 = length_sq(d);
-  // Near the lights, importance stops growing (see importance_bounds).
-  float d2 = std::max(dist2, b.min_dist2);
-  float cos_b = -1, sin_b = 0;  // half-angle of the box's bounding sphere seen from p
-  if (dist2 > b.radius2) {
-    float sin2 = b.radius2 / dist2;
-    cos_b = std::sqrt(1 - sin2);
-    sin_b = std::sqrt(sin2);
-  }
-  Vec3 wi = dist2 > 0 ? d * (1.0f / std::sqrt(dist2)) : Vec3(0, 0, 1);
-  float cos_w = dot(b.axis, wi);
-  if (b.flags & ImportanceBounds::kTwoSided) cos_w = std::abs(cos_w);
-  float sin_w = safe_sqrt(1 - cos_w * cos_w);
-  float cos_x = cos_sub_clamped(sin_w, cos_w, b.sin_o, b.cos_o);
-  float sin_x = sin_sub_clamped(sin_w, cos_w, b.sin_o, b.cos_o);
-  float cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-  if (cos_p <= b.cos_e) return 0;
-  float importance = b.power * cos_p / std::max(d2, 1e-20f);
-  if (has_normal) {
-    // Receiver side: the best cosine between n and a direction towards the lights' sphere. One-
-    // sided (n faces the side the path arrived from, and surfaces are opaque): pbrt-v4's
-    // two-sided |cos| gave 6% more error on cornell-boxes-room.
-    float cos_i = -dot(wi, n), sin_i = safe_sqrt(1 - cos_i * cos_i);
-    float cos_pi = cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
-    if (cos_pi <= 0) return 0;
-    importance *= cos_pi;
-  }
-  return std::max(importance, 0.0f);
 }
 
 }  // namespace rll

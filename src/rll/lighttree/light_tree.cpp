@@ -492,18 +492,6 @@ void LightTree::prepare_importance() {
   });
 }
 
-float LightTree::group_importance(uint32_t node, const Vec3& p, const Vec3& n) const {
-  const uint32_t c = m_nodes[node].child;
-  return importance(c, p, n) + importance(c + 1, p, n);
-}
-
-int LightTree::contributing_groups(uint32_t node, const Vec3& p, const Vec3& n) const {
-  const LightTreeNode& nd = m_nodes[node];
-  if (nd.group)
-    return contributing_groups(nd.child, p, n) + contributing_groups(nd.child + 1, p, n);
-  return importance(node, p, n) > 0 ? 1 : 0;
-}
-
 void build_light_tree(Scene& scene) {
   // A build over lights already in tree order can order ties differently, which would change
   // the scene's fingerprint: the tree finalize() left in place (it drops any tree when it remakes

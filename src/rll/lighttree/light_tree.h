@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "rll/core/device.h"
 #include "rll/lighttree/light_bounds.h"
 
 namespace rll {
@@ -32,8 +33,8 @@ struct LightTreeNode {
   uint32_t child = 0;           // first of the two adjacent children; 0 for a leaf
   uint32_t parent = ~0u;        // ~0u for the root
   bool group = false;           // above the group roots: children chosen by contributing groups
-  bool is_leaf() const { return child == 0; }
-  uint32_t light_count() const { return end - begin; }
+  RLL_HD bool is_leaf() const { return child == 0; }
+  RLL_HD uint32_t light_count() const { return end - begin; }
 };
 
 // How the subtrees of the local lights and of the sky dome are built (the group structure above
@@ -49,6 +50,62 @@ enum class TreeBuild : uint8_t {
 
 enum class LightGroup : uint8_t { Local, Dome, Directional };
 inline constexpr int kLightGroups = 3;
+
+// What the descents read of a LightTree (DESIGN 6): its nodes, their importance bounds (the sky
+// dome's frame is folded into these) and the leaf of each light, owning nothing, so that the same
+// RLL_HD functions descend it on the CPU and, pointing into device memory, on the GPU.
+struct LightTreeView {
+  View<const LightTreeNode> nodes;
+  View<const ImportanceBounds> importance;  // per node
+  View<const uint32_t> leaf_of;             // per light, tree order
+  uint32_t group_root[kLightGroups] = {~0u, ~0u, ~0u};
+
+  RLL_HD const LightTreeNode& node(uint32_t i) const { return nodes[i]; }
+  RLL_HD uint32_t light_count() const { return uint32_t(leaf_of.size); }
+};
+
+namespace detail {
+// Importance of `node`; at a group node the sum of its children's, left then right, nested as
+// the group nodes are. Unrolled by a depth bound instead of recursing (device code): group nodes
+// nest at most kLightGroups - 1 deep (root -> distant -> [dome, directional]).
+template <int Depth>
+RLL_HD inline float tree_importance_at(const LightTreeView& t, uint32_t node, const Vec3& p,
+                                       const Vec3& n) {
+  const ImportanceBounds& b = t.importance[node];
+  if constexpr (Depth > 0) {
+    if (b.flags & ImportanceBounds::kGroup) {
+      const uint32_t c = t.nodes[node].child;
+      return tree_importance_at<Depth - 1>(t, c, p, n) +
+             tree_importance_at<Depth - 1>(t, c + 1, p, n);
+    }
+  }
+  return light_importance(b, p, n);
+}
+template <int Depth>
+RLL_HD inline int contributing_groups_at(const LightTreeView& t, uint32_t node, const Vec3& p,
+                                         const Vec3& n) {
+  const LightTreeNode& nd = t.nodes[node];
+  if constexpr (Depth > 0) {
+    if (nd.group)
+      return contributing_groups_at<Depth - 1>(t, nd.child, p, n) +
+             contributing_groups_at<Depth - 1>(t, nd.child + 1, p, n);
+  }
+  return tree_importance_at<kLightGroups>(t, node, p, n) > 0 ? 1 : 0;
+}
+}  // namespace detail
+
+// Importance of the lights under `node` at p with normal n; for a group node, the sum of its
+// children's (their bounds are of different kinds and do not merge usefully).
+RLL_HD inline float tree_importance(const LightTreeView& t, uint32_t node, const Vec3& p,
+                                    const Vec3& n) {
+  return detail::tree_importance_at<kLightGroups>(t, node, p, n);
+}
+// How many groups under `node` can contribute at p (importance > 0 at their roots); for a node
+// inside a group, 1 or 0.
+RLL_HD inline int contributing_groups(const LightTreeView& t, uint32_t node, const Vec3& p,
+                                      const Vec3& n) {
+  return detail::contributing_groups_at<kLightGroups>(t, node, p, n);
+}
 
 class LightTree {
  public:
@@ -68,16 +125,19 @@ class LightTree {
   uint32_t leaf_of(uint32_t light) const { return m_leaf_of[light]; }
   // Root of a group's subtree (kNone where the scene has no such light; kRoot for a lone group).
   uint32_t group_root(LightGroup g) const { return m_group_root[int(g)]; }
-  // Importance of the lights under `node` at p with normal n; for a group node, the sum of its
-  // children's (their bounds are of different kinds and do not merge usefully).
-  float importance(uint32_t node, const Vec3& p, const Vec3& n) const {
-    const ImportanceBounds& b = m_fast[node];
-    if (b.flags & ImportanceBounds::kGroup) return group_importance(node, p, n);
-    return light_importance(b, p, n);
+  // The flat view the descents read; valid while the tree lives (refit keeps its arrays).
+  LightTreeView view() const {
+    LightTreeView v{view_of(m_nodes), view_of(m_fast), view_of(m_leaf_of)};
+    for (int g = 0; g < kLightGroups; ++g) v.group_root[g] = m_group_root[g];
+    return v;
   }
-  // How many groups under `node` can contribute at p (importance > 0 at their roots); for a
-  // node inside a group, 1 or 0.
-  int contributing_groups(uint32_t node, const Vec3& p, const Vec3& n) const;
+  // tree_importance and contributing_groups (above) over this tree.
+  float importance(uint32_t node, const Vec3& p, const Vec3& n) const {
+    return tree_importance(view(), node, p, n);
+  }
+  int contributing_groups(uint32_t node, const Vec3& p, const Vec3& n) const {
+    return rll::contributing_groups(view(), node, p, n);
+  }
   uint32_t depth() const { return m_depth; }
   TreeBuild method() const { return m_method; }
   size_t bytes() const {
@@ -86,7 +146,6 @@ class LightTree {
   }
 
  private:
-  float group_importance(uint32_t node, const Vec3& p, const Vec3& n) const;
   LightBounds leaf_bounds(const Light& light, uint32_t index) const;
   void prepare_importance();
   std::vector<LightTreeNode> m_nodes;

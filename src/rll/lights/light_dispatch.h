@@ -1,0 +1,58 @@
+// The light samplers' dispatch (DESIGN 6): RLL_HD sample_light and light_pmf switch on a
+// SamplerView's tag, not on a virtual call, so that kernels choose lights with the same functions
+// that the samplers' classes run on the CPU.
+#pragma once
+
+#include "rll/lights/rll_view.h"
+#include "rll/lights/sampler_view.h"
+
+namespace rll {
+
+// A light for the shading point ctx and its probability; SampledLight{} (pmf 0) for None.
+RLL_HD inline SampledLight sample_light(const SamplerView& s, const LightContext& ctx, double u) {
+  switch (s.kind) {
+    case SamplerKind::Uniform:
+      return uniform_sample(s.light_count, u);
+    case SamplerKind::Power:
+      return power_sample(s.power, u);
+    case SamplerKind::Tree:
+      return tree_sample(s.tree, ctx, u);
+    case SamplerKind::Rll:
+      return rll_sample(*s.rll, ctx, u);
+    case SamplerKind::None:
+      break;
+  }
+  return {};
+}
+
+// The probability that sample_light(s, ctx, .) returns `light`.
+RLL_HD inline float light_pmf(const SamplerView& s, const LightContext& ctx, uint32_t light) {
+  switch (s.kind) {
+    case SamplerKind::Uniform:
+      return uniform_pmf(s.light_count, light);
+    case SamplerKind::Power:
+      return power_pmf(s.power, light);
+    case SamplerKind::Tree:
+      return tree_pmf(s.tree, ctx, light);
+    case SamplerKind::Rll:
+      return rll_pmf(*s.rll, ctx, light);
+    case SamplerKind::None:
+      break;
+  }
+  return 0;
+}
+
+// Once per shading point before sample_light / light_pmf: a learning sampler finds the point's
+// cell (ctx.cell). u is a fresh uniform number for its stochastic choices.
+RLL_HD inline void prepare_point(const SamplerView& s, LightContext& ctx, float u) {
+  if (s.kind == SamplerKind::Rll) rll_prepare(*s.rll, ctx, u);
+}
+
+// One call per next-event sample, zeros included (see NeeRecord): a learning sampler's reward.
+// Thread-safe. For a sampler that learns() (a frozen one's record() does nothing; this records).
+RLL_HD inline void record_nee(const SamplerView& s, const LightContext& ctx,
+                              const SampledLight& sampled, const NeeRecord& r) {
+  if (s.kind == SamplerKind::Rll) rll_record(*s.rll, ctx, sampled, r);
+}
+
+}  // namespace rll

@@ -1,0 +1,247 @@
+// The light samplers as data (lights/sampler_view.h, light_dispatch.h): prepare_point,
+// sample_light, light_pmf and record_nee over a sampler's SamplerView answer and learn exactly as
+// the sampler's class does (rll with cells learnt by a short render), their samples carry the pmf
+// that light_pmf gives, their pmfs sum to one, and the power table inverts its own CDF.
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <type_traits>
+
+#include "rll/accel/accel.h"
+#include "rll/core/params.h"
+#include "rll/core/rng.h"
+#include "rll/lights/light_dispatch.h"
+#include "rll/lights/rll_sampler.h"
+#include "rll/lights/simple_samplers.h"
+#include "rll/lighttree/light_tree.h"
+#include "rll/scene/builtin.h"
+#include "support/sampler_contexts.h"
+#include "support/test_support.h"
+
+using namespace rll;
+using namespace rll::test;
+
+namespace {
+
+static_assert(std::is_trivially_copyable_v<SamplerView>);
+static_assert(std::is_trivially_copyable_v<LightTreeView>);
+static_assert(std::is_trivially_copyable_v<DistributionView>);
+static_assert(std::is_trivially_copyable_v<SobolView>);
+static_assert(std::is_trivially_copyable_v<RllView>);
+static_assert(std::is_trivially_copyable_v<CellKeyer>);
+
+struct Fixture {
+  Scene scene;
+  std::unique_ptr<Accel> accel;
+  std::vector<LightContext> contexts;
+};
+
+Fixture make_fixture(const std::string& name) {
+  Fixture f;
+  f.scene = small_builtin_scene(name, 48, 36);
+  f.accel = std::make_unique<Accel>(f.scene.mesh);
+  f.contexts = make_contexts(f.scene, *f.accel, 80, 77);
+  return f;
+}
+
+Fixture& fixture(const std::string& name) {
+  static std::map<std::string, Fixture> cache;
+  auto it = cache.find(name);
+  if (it == cache.end()) it = cache.emplace(name, make_fixture(name)).first;
+  return it->second;
+}
+
+// A sampler by name with --set options, trained by a short render where it learns.
+struct SamplerCase {
+  const char* label;
+  const char* name;
+  std::vector<std::string> set;
+};
+const SamplerCase kCases[] = {
+    {"uniform", "uniform", {}},
+    {"power", "power", {}},
+    {"tree", "tree", {}},
+    {"rll", "rll", {}},
+    {"rll_power", "rll", {"rll.within=power"}},
+    {"rll_hybrid_grow",
+     "rll",
+     {"rll.initial_cut=16", "rll.splits=4", "rll.within=hybrid", "rll.descend_above=8"}},
+    {"rll_defensive_tree",
+     "rll",
+     {"rll.defensive=tree", "rll.within=power", "rll.initial_cut=32", "rll.splits=2"}},
+    {"rll_full_table", "rll", {"rll.capacity=48"}},
+    {"rll_guided", "rll", {"rll.sampling=guided", "rll.capacity=48"}},
+    {"rll_paper", "rll", {"rll.within=uniform", "rll.reward=fullpdf"}},
+    {"fermat", "fermat", {}},
+};
+
+std::unique_ptr<LightSampler> make_case(Fixture& f, const SamplerCase& c, int passes) {
+  Params params = Params::parse(c.set);
+  auto sampler = make_light_sampler(c.name, f.scene, params);
+  if (passes > 0) train_sampler(f.scene, *f.accel, *sampler, passes);
+  return sampler;
+}
+
+using Param = std::tuple<std::string, size_t>;  // scene, case
+
+class SamplerViewDispatch : public ::testing::TestWithParam<Param> {};
+
+// sample_light and light_pmf over the view give the class's answers to the bit, and a sample's
+// pmf is light_pmf's.
+TEST_P(SamplerViewDispatch, EqualsTheClassBitForBit) {
+  Fixture& f = fixture(std::get<0>(GetParam()));
+  auto sampler = make_case(f, kCases[std::get<1>(GetParam())], 4);
+  const SamplerView v = sampler->sampler_view();
+  ASSERT_NE(v.kind, SamplerKind::None);
+  const uint32_t lights = uint32_t(f.scene.lights.size());
+  size_t with_cell = 0;
+  for (size_t c = 0; c < f.contexts.size(); ++c) {
+    // The class's prepare, then the dispatch's, which must find the same cell.
+    LightContext ctx = f.contexts[c], mine = f.contexts[c];
+    const float u_prepare = float(c % 97) / 97.0f;
+    sampler->prepare(ctx, u_prepare);
+    prepare_point(v, mine, u_prepare);
+    ASSERT_EQ(mine.cell, ctx.cell) << "context " << c;
+    with_cell += ctx.cell != kNoCell;
+    for (uint64_t k = 0; k < 32; ++k) {
+      const double u = SampleStream(3, c, k, PointSet::Sobol).next_double();
+      const SampledLight a = sample_light(v, ctx, u), b = sampler->sample(ctx, u);
+      ASSERT_EQ(a.light, b.light) << "context " << c << " u " << u;
+      ASSERT_EQ(std::bit_cast<uint32_t>(a.pmf), std::bit_cast<uint32_t>(b.pmf));
+      ASSERT_GT(a.pmf, 0);
+      ASSERT_EQ(std::bit_cast<uint32_t>(light_pmf(v, ctx, a.light)), std::bit_cast<uint32_t>(a.pmf))
+          << "light " << a.light;
+    }
+    for (uint32_t l = uint32_t(c % 7); l < lights; l += 7)
+      ASSERT_EQ(std::bit_cast<uint32_t>(light_pmf(v, ctx, l)),
+                std::bit_cast<uint32_t>(sampler->pmf(ctx, l)))
+          << "light " << l;
+    ASSERT_EQ(light_pmf(v, ctx, lights), 0.0f) << "a light past the last";
+  }
+  if (sampler->prepares()) {
+    // (rll.capacity=48 leaves most points without a cell, by design.)
+    EXPECT_GT(with_cell, f.contexts.size() / 6) << "too few points had a cell";
+  }
+}
+
+// Learning through record_nee gives the state learning through record() gives: two samplers
+// fed the same next-event samples, one by its class and one by the dispatch, sample alike after
+// the end of the pass.
+TEST_P(SamplerViewDispatch, RecordNeeLearnsAsTheClass) {
+  Fixture& f = fixture(std::get<0>(GetParam()));
+  const SamplerCase& sc = kCases[std::get<1>(GetParam())];
+  auto a = make_case(f, sc, 0), b = make_case(f, sc, 0);
+  if (!a->learns()) GTEST_SKIP() << sc.label << " does not learn";
+  Pcg32 rng(3);
+  for (int pass = 0; pass < 3; ++pass) {
+    const SamplerView vb = b->sampler_view();
+    for (size_t c = 0; c < f.contexts.size(); ++c)
+      for (int k = 0; k < 4; ++k) {
+        LightContext ca = f.contexts[c], cb = f.contexts[c];
+        const float up = rng.next_float();
+        const double u = rng.next_double();
+        NeeRecord r;
+        r.estimate = r.unoccluded = r.max_rgb = rng.next_float() < 0.3f ? 0.0f : rng.next_float();
+        a->prepare(ca, up);
+        prepare_point(vb, cb, up);
+        const SampledLight sa = a->sample(ca, u), sb = sample_light(vb, cb, u);
+        ASSERT_EQ(sa.light, sb.light);
+        if (sa.pmf > 0) a->record(ca, sa, r);
+        if (sb.pmf > 0) record_nee(vb, cb, sb, r);
+      }
+    a->end_pass();
+    b->end_pass();
+  }
+  const SamplerView va = a->sampler_view(), vb = b->sampler_view();
+  for (size_t c = 0; c < f.contexts.size(); ++c) {
+    LightContext ca = f.contexts[c], cb = f.contexts[c];
+    prepare_point(va, ca, 0.5f);
+    prepare_point(vb, cb, 0.5f);
+    for (uint32_t l = uint32_t(c % 5); l < f.scene.lights.size(); l += 5)
+      ASSERT_EQ(std::bit_cast<uint32_t>(light_pmf(va, ca, l)),
+                std::bit_cast<uint32_t>(light_pmf(vb, cb, l)))
+          << "context " << c << " light " << l;
+  }
+}
+
+TEST_P(SamplerViewDispatch, PmfsSumToOne) {
+  Fixture& f = fixture(std::get<0>(GetParam()));
+  auto sampler = make_case(f, kCases[std::get<1>(GetParam())], 4);
+  const SamplerView v = sampler->sampler_view();
+  for (size_t c = 0; c < f.contexts.size(); c += 10) {
+    LightContext ctx = f.contexts[c];
+    prepare_point(v, ctx, 0.25f);
+    double sum = 0;
+    for (uint32_t l = 0; l < f.scene.lights.size(); ++l) sum += light_pmf(v, ctx, l);
+    ASSERT_NEAR(sum, 1.0, 1e-4) << "context " << c;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Samplers, SamplerViewDispatch,
+                         ::testing::Combine(::testing::Values("cornell-boxes-room",
+                                                              "arch-interior"),
+                                            ::testing::Range(size_t(0), std::size(kCases))),
+                         [](const auto& info) {
+                           std::string s = std::get<0>(info.param) + "_" +
+                                           kCases[std::get<1>(info.param)].label;
+                           for (char& ch : s)
+                             if (ch == '-') ch = '_';
+                           return s;
+                         });
+
+// The samplers without a device version say so.
+TEST(SamplerView, SamplersWithoutADeviceVersionHaveNone) {
+  Fixture& f = fixture("cornell-boxes-room");
+  for (const char* name : {"ltc"})
+    EXPECT_EQ(make_light_sampler(name, f.scene, Params{})->sampler_view().kind, SamplerKind::None)
+        << name;
+}
+
+// The power table's sample is the index whose interval of the CDF holds u, for a CDF summed here
+// as DiscreteDistribution documents it (running sums of w / total), zero weights never drawn.
+TEST(SamplerView, PowerTableInvertsItsCdf) {
+  const std::vector<float> w = {0.5f, 0, 3, 1e-6f, 0, 0, 2, 7.25f, 0, 1};
+  const DiscreteDistribution d(w);
+  const DistributionView v = d.view();
+  double total = 0;
+  for (float x : w) total += x;
+  std::vector<double> cdf;
+  double acc = 0;
+  for (float x : w) cdf.push_back(acc += x / total);
+  cdf.back() = 1;
+  Pcg32 rng(11);
+  for (int i = 0; i < 20000; ++i) {
+    const double u = i < 10 ? (i == 0 ? 0.0 : cdf[size_t(i - 1)]) : rng.next_double();
+    double remapped = -1;
+    const size_t k = sample_discrete(v, u, &remapped);
+    ASSERT_LT(k, w.size());
+    ASSERT_GT(w[k], 0) << "u " << u;
+    ASSERT_LE(k == 0 ? 0.0 : cdf[k - 1], u);
+    ASSERT_LT(u, cdf[k]);
+    ASSERT_GE(remapped, 0);
+    ASSERT_LT(remapped, 1);
+    const SampledLight s = power_sample(v, u);
+    ASSERT_EQ(s.light, k);
+    ASSERT_EQ(s.pmf, float(w[k] / total));
+  }
+  EXPECT_EQ(power_pmf(v, uint32_t(w.size())), 0.0f);
+  EXPECT_EQ(power_sample(DistributionView{}, 0.5).pmf, 0.0f) << "an empty table draws nothing";
+}
+
+// A SampleStream over tables of its own gives the host tables' values (what a device copy of them
+// must give).
+TEST(SamplerView, SampleStreamOverOwnTablesEqualsHostTables) {
+  const SobolTables own;
+  ASSERT_NE(own.view().tables, host_sobol_view().tables);
+  for (uint64_t pixel = 0; pixel < 16; ++pixel)
+    for (uint64_t k = 0; k < 16; ++k) {
+      SampleStream a(own.view(), 9, pixel, k, PointSet::Sobol), b(9, pixel, k, PointSet::Sobol);
+      for (int d = 0; d < 1100; d += 1 + d / 8) {
+        a.seek(uint32_t(d));
+        b.seek(uint32_t(d));
+        ASSERT_EQ(a.next_double(), b.next_double()) << "dimension " << d;
+      }
+    }
+}
+
+}  // namespace
