@@ -436,6 +436,30 @@ TEST(ImageFiles, ExrAttributeValuesMustFillTheirSizeFields) {
   EXPECT_EQ(read_image(opaque)[5], Rgb(0.25f, 0.5f, 0.75f));
 }
 
+// OpenEXR takes a line buffer and its compressor's buffers for one chunk of rows of every
+// channel when it opens a file, before rll reads a pixel: the data window and the chunk are
+// checked before it opens the file.
+TEST(ImageFiles, ExrOpeningBuffersAreCheckedBeforeOpenExrTakesThem) {
+  ::testing::FLAGS_gtest_death_test_style = "threadsafe";
+  TempDir dir;
+  const std::string window = attribute_marker("dataWindow", "box2i");
+  // 2^23 x 1 pixels (OpenEXR refuses rows of 2 GB and more itself): each of its ZIP buffers
+  // (16 rows) takes 1.6 GB, in a file of 400 bytes.
+  const fs::path wide = dir / "wide.exr";
+  write_exr_channels(wide, {"R", "G", "B"});
+  patch_ints_after(wide, window, 4, {0, 0, (1 << 23) - 1, 0});
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(wide), "wide.exr.*claims 8388608x1 pixels");
+  // 65536 x 1, within the sizes rll reads: 3 buffers of 16 rows, 36 MiB, over a budget of 16 MiB.
+  const fs::path chunk = dir / "chunk.exr";
+  write_exr_channels(chunk, {"R", "G", "B"});
+  patch_ints_after(chunk, window, 4, {0, 0, 65535, 0});
+  {
+    BudgetScope budget(size_t(16) << 20);
+    expect_mentions(error_of([&] { read_image(chunk); }),
+                    {"opening '", "chunk.exr", "1048576 pixels in 3 channels", "needs 36.0 MiB"});
+  }
+}
+
 TEST(ImageFiles, ShareCountsMustBeUnsignedIntegers) {
   TempDir dir;
   write_exr_channels(dir / "float_count.exr", {"R", "G", "B", "count"});
