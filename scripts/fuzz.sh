@@ -8,8 +8,9 @@ seconds=${2:-60}
 root=$(cd "$(dirname "$0")/.." && pwd)
 corpus=$build/corpus
 crashes=$build/crashes
+logs=$build/logs
 rm -rf "$corpus/seeds"
-mkdir -p "$crashes"
+mkdir -p "$crashes" "$logs"
 "$build/fuzz/rll_fuzz_seeds" "$corpus/seeds"
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
@@ -22,11 +23,16 @@ for format in ply gltf pbrt json obj gzip exr; do
   if compgen -G "$regressions/*" > /dev/null; then
     "$fuzzer" -runs=0 -rss_limit_mb=1024 -timeout=10 "$regressions" || status=1
   fi
-  echo "== $format: fuzzing for ${seconds}s"
+  echo "== $format: fuzzing for ${seconds}s (whole output in $logs/$format.log)"
   # The working corpus grows across runs; seeds and regression inputs are read-only extras.
-  "$fuzzer" "$corpus/$format" "$corpus/seeds/$format" "$regressions" \
+  if ! "$fuzzer" "$corpus/$format" "$corpus/seeds/$format" "$regressions" \
     -max_total_time="$seconds" -timeout=10 -rss_limit_mb=1024 -max_len=65536 \
-    -artifact_prefix="$crashes/$format-" -print_final_stats=1 2>&1 | tail -n 25 || status=1
+    -artifact_prefix="$crashes/$format-" -print_final_stats=1 > "$logs/$format.log" 2>&1; then
+    status=1
+    tail -n 40 "$logs/$format.log"
+  fi
+  # The final figures: runs, coverage, corpus (files/bytes), exec/s, peak RSS.
+  grep -E '^#[0-9]+[[:space:]]+DONE|^stat::' "$logs/$format.log" || true
 done
 if [ "$status" -ne 0 ]; then
   echo "fuzz: a fuzzer found a crash; inputs are in $crashes (add them to tests/fuzz/<format>/)"

@@ -2,7 +2,9 @@
 #include "support/power.h"
 
 #include <fmt/format.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <chrono>
@@ -263,6 +265,26 @@ RenderRequest request(const std::string& sampler, const std::string& integrator,
   r.seed = seed;
   r.points = points;
   return r;
+}
+
+void run_in_bounded_memory(const std::function<void()>& read, size_t extra_bytes,
+                           bool may_succeed) {
+  long pages = 0;
+  std::ifstream("/proc/self/statm") >> pages;
+  const rlim_t cap = rlim_t(pages) * rlim_t(sysconf(_SC_PAGESIZE)) + rlim_t(extra_bytes);
+  const rlimit limit{cap, cap};
+  setrlimit(RLIMIT_AS, &limit);
+  try {
+    read();
+  } catch (const Error& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    // An allocation that failed under the cap, passed on as an rll::Error, is no refusal.
+    std::_Exit(std::string(e.what()).find("bad_alloc") == std::string::npos ? 0 : 3);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "not an rll::Error: %s\n", e.what());
+    std::_Exit(1);
+  }
+  std::_Exit(may_succeed ? 0 : 2);
 }
 
 }  // namespace rll::test

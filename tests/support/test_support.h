@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,17 @@ inline void expect_mentions(const std::string& message, std::initializer_list<st
   for (const auto& p : parts)
     EXPECT_NE(message.find(p), std::string::npos) << "'" << p << "' not in: " << message;
 }
+
+// Runs `read` with the address space allowed to grow by `extra_bytes` at most, then exits: 0
+// when it threw an rll::Error (whose message goes to stderr) that is not a failed allocation, or
+// when it returned and `may_succeed`; else non-zero. Run in a death test's child: a false size
+// claim must be refused without the memory it claims (and without a std::bad_alloc).
+[[noreturn]] void run_in_bounded_memory(const std::function<void()>& read, size_t extra_bytes,
+                                        bool may_succeed = false);
+// `read` refused within 1.5 GiB of address space, with a message matching `pattern`.
+#define EXPECT_REFUSED_IN_BOUNDED_MEMORY(read, pattern)                           \
+  EXPECT_EXIT(::rll::test::run_in_bounded_memory([&] { read; }, size_t(3) << 29), \
+              ::testing::ExitedWithCode(0), pattern)
 
 struct CommandResult {
   int exit_code = -1;

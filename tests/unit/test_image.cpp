@@ -180,33 +180,6 @@ std::string hdr_claim(int w, int h, int rows = 1) {
   return s;
 }
 
-// Runs `read` with the address space allowed to grow by 1.5 GiB at most, then exits: 0 when it
-// threw an rll::Error (whose message goes to stderr) that is not a failed allocation, else
-// non-zero. Run
-// in a death test's child: a false size claim must be refused without the memory it claims
-// (and without a std::bad_alloc).
-[[noreturn]] void read_in_bounded_memory(const std::function<void()>& read) {
-  long pages = 0;
-  std::ifstream("/proc/self/statm") >> pages;
-  const rlim_t cap = rlim_t(pages) * rlim_t(sysconf(_SC_PAGESIZE)) + (rlim_t(3) << 29);
-  const rlimit limit{cap, cap};
-  setrlimit(RLIMIT_AS, &limit);
-  try {
-    read();
-  } catch (const Error& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    // An allocation that failed under the cap, passed on as an rll::Error, is no refusal.
-    std::_Exit(std::string(e.what()).find("bad_alloc") == std::string::npos ? 0 : 3);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "not an rll::Error: %s\n", e.what());
-    std::_Exit(1);
-  }
-  std::_Exit(2);
-}
-
-#define EXPECT_REFUSED_IN_BOUNDED_MEMORY(read, pattern) \
-  EXPECT_EXIT(read_in_bounded_memory([&] { read; }), ::testing::ExitedWithCode(0), pattern)
-
 TEST(ImageFiles, ExrClaimingPixelsItDoesNotHoldIsRefusedWithoutTakingTheirMemory) {
   ::testing::FLAGS_gtest_death_test_style = "threadsafe";
   TempDir dir;
@@ -245,7 +218,9 @@ TEST(ImageFiles, ExrReadsInBandsKeepEveryPixel) {
     char* base = reinterpret_cast<char*>(rgb.data()) -
                  (ptrdiff_t(window.min.y) * w + window.min.x) * ptrdiff_t(3 * sizeof(float));
     for (int c = 0; c < 3; ++c)
-      fb.insert(c == 0 ? "R" : c == 1 ? "G" : "B",
+      fb.insert(c == 0   ? "R"
+                : c == 1 ? "G"
+                         : "B",
                 Imf::Slice(Imf::FLOAT, base + c * sizeof(float), 3 * sizeof(float),
                            3 * sizeof(float) * w));
     return fb;
@@ -293,8 +268,8 @@ TEST(ImageFiles, HdrClaimingMoreRowsThanItHoldsIsRefused) {
   expect_mentions(error_of([&] { read_image(dir / "short.hdr"); }),
                   {"short.hdr", "200x100", "at least", "only"});
   expect_mentions(error_of([&] {
-                    decode_image(reinterpret_cast<const unsigned char*>(bytes.data()),
-                                 bytes.size(), true, "mem.hdr");
+                    decode_image(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(),
+                                 true, "mem.hdr");
                   }),
                   {"mem.hdr", "200x100"});
   // A complete file of the same kind reads.
@@ -416,6 +391,73 @@ TEST(ImageFiles, ExrHeaderClaimsAreCheckedAgainstTheFileWithoutTakingTheirMemory
   patch_ints_after(tiled, attribute_marker("displayWindow", "box2i"), 4, {0, 0, 15999, 15999});
   patch_ints_after(tiled, attribute_marker("tiles", "tiledesc"), 4, {1, 1});
   EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(tiled), "tiled.exr");
+}
+
+// OpenEXR reads a value of a type it knows by its type, not by its size field, and reads on from
+// where the value ends: each value must fill its size exactly, or OpenEXR would read attributes
+// that the check of every size claim never saw.
+TEST(ImageFiles, ExrAttributeValuesMustFillTheirSizeFields) {
+  ::testing::FLAGS_gtest_death_test_style = "threadsafe";
+  TempDir dir;
+  const std::string aspect = attribute_marker("pixelAspectRatio", "float");
+  // A float whose size field claims 4 + 16 bytes, the 16 an attribute of an unknown type claiming
+  // 2^31 - 1 bytes: OpenEXR reads the float's 4 bytes, then this hidden attribute, and allocates
+  // 2 GiB for it; a walk by the size fields skips it.
+  const fs::path hidden = dir / "hidden.exr";
+  write_exr_channels(hidden, {"R", "G", "B"});
+  {
+    std::string bytes = read_bytes(hidden);
+    const size_t value = bytes.find(aspect) + aspect.size() + 4;
+    const std::string claim =
+        attribute_marker("hidden", "blob") + std::string("\xff\xff\xff\x7f", 4);
+    bytes.insert(value + 4, claim);
+    std::ofstream(hidden, std::ios::binary | std::ios::trunc) << bytes;
+  }
+  patch_ints_after(hidden, aspect, 0, {4 + 16});
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(hidden),
+                                   "hidden.exr.*'pixelAspectRatio'.*float.*4 bytes.*claims 20");
+  // A channel list longer than its size field (the fuzzer's case: OpenEXR reads the whole list
+  // and then attributes from inside it; here it would read the file as if nothing were wrong).
+  const fs::path list = dir / "list.exr";
+  write_exr_channels(list, {"R", "G", "B"});
+  patch_ints_after(list, attribute_marker("channels", "chlist"), 0, {19});
+  expect_mentions(error_of([&] { read_image(list); }),
+                  {"list.exr", "attribute 'channels' of type chlist", "its 19 bytes"});
+  // A value of a type OpenEXR does not know is read by its size, as the walk reads it.
+  const fs::path opaque = dir / "opaque.exr";
+  write_exr_channels(opaque, {"R", "G", "B"},
+                     [](Imf::Header& h) { h.insert("note", Imf::StringAttribute("0123456789")); });
+  {
+    std::string bytes = read_bytes(opaque);
+    const std::string note = attribute_marker("note", "string");
+    bytes.replace(bytes.find(note), note.size(), attribute_marker("note", "blobby"));
+    std::ofstream(opaque, std::ios::binary | std::ios::trunc) << bytes;
+  }
+  EXPECT_EQ(read_image(opaque)[5], Rgb(0.25f, 0.5f, 0.75f));
+}
+
+// OpenEXR takes a line buffer and its compressor's buffers for one chunk of rows of every
+// channel when it opens a file, before rll reads a pixel: the data window and the chunk are
+// checked before it opens the file.
+TEST(ImageFiles, ExrOpeningBuffersAreCheckedBeforeOpenExrTakesThem) {
+  ::testing::FLAGS_gtest_death_test_style = "threadsafe";
+  TempDir dir;
+  const std::string window = attribute_marker("dataWindow", "box2i");
+  // 2^23 x 1 pixels (OpenEXR refuses rows of 2 GB and more itself): each of its ZIP buffers
+  // (16 rows) takes 1.6 GB, in a file of 400 bytes.
+  const fs::path wide = dir / "wide.exr";
+  write_exr_channels(wide, {"R", "G", "B"});
+  patch_ints_after(wide, window, 4, {0, 0, (1 << 23) - 1, 0});
+  EXPECT_REFUSED_IN_BOUNDED_MEMORY(read_image(wide), "wide.exr.*claims 8388608x1 pixels");
+  // 65536 x 1, within the sizes rll reads: 3 buffers of 16 rows, 36 MiB, over a budget of 16 MiB.
+  const fs::path chunk = dir / "chunk.exr";
+  write_exr_channels(chunk, {"R", "G", "B"});
+  patch_ints_after(chunk, window, 4, {0, 0, 65535, 0});
+  {
+    BudgetScope budget(size_t(16) << 20);
+    expect_mentions(error_of([&] { read_image(chunk); }),
+                    {"opening '", "chunk.exr", "1048576 pixels in 3 channels", "needs 36.0 MiB"});
+  }
 }
 
 TEST(ImageFiles, ShareCountsMustBeUnsignedIntegers) {

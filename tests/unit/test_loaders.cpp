@@ -226,6 +226,10 @@ TEST(ObjLoader, BadFaceIndicesNameTheLine) {
   expect_mentions(obj_error(dir, v + "f 1 2\n"), {"m.obj:5:", "at least 3"});
   expect_mentions(obj_error(dir, v + "f 1 2 x\n"), {"m.obj:5:", "'x'"});
   expect_mentions(obj_error(dir, v + "f 1/1/1/1 2 3\n"), {"m.obj:5:"});
+  // A slash and nothing after it: tinyobjloader would take the next vertex's 4 as its texture
+  // coordinate, past the only one (the fuzzer's heap overflow).
+  expect_mentions(obj_error(dir, v + "vt 0 0\nf 1/ 4/1 2/1\n"),
+                  {"m.obj:6:", "malformed face vertex '1/'"});
   expect_mentions(obj_error(dir, v), {"m.obj", "no faces"});
 }
 

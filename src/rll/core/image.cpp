@@ -1,12 +1,19 @@
 #include "rll/core/image.h"
 
+#include <Iex.h>
 #include <ImfArray.h>
+#include <ImfAttribute.h>
+#include <ImfBoxAttribute.h>
 #include <ImfChannelList.h>
+#include <ImfChannelListAttribute.h>
+#include <ImfCompressionAttribute.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
+#include <ImfTileDescriptionAttribute.h>
 #include <fmt/ranges.h>
 #include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
@@ -16,9 +23,12 @@
 #include <atomic>
 #include <cstdio>
 #include <fstream>
+#include <memory>
+#include <optional>
 
 #include "rll/core/error.h"
 #include "rll/core/file_checks.h"
+#include "rll/core/memory_budget.h"
 #include "rll/core/paths.h"
 
 namespace rll {
@@ -70,9 +80,10 @@ Image from_8bit(unsigned char* data, int w, int h, bool srgb, const std::string&
 void check_claimed_size(int64_t w, int64_t h, const std::string& name) {
   if (w <= 0 || h <= 0) fail("cannot read '{}': its header claims a size of {}x{}", name, w, h);
   if (w > kMaxImageSide || h > kMaxImageSide || w * h > int64_t(kMaxImagePixels))
-    fail("cannot read '{}': its header claims {}x{} pixels; rll reads images of at most {} "
-         "pixels a side and {} in all",
-         name, w, h, kMaxImageSide, kMaxImagePixels);
+    fail(
+        "cannot read '{}': its header claims {}x{} pixels; rll reads images of at most {} "
+        "pixels a side and {} in all",
+        name, w, h, kMaxImageSide, kMaxImagePixels);
 }
 
 // The fewest bytes a Radiance .hdr file of w x h pixels can take as stb_image reads it: each
@@ -92,6 +103,90 @@ std::string shown(const std::string& text) {
   return text.size() > 64 ? out + "..." : out;
 }
 
+// One attribute's value as OpenEXR's reader for its type sees it: exactly the `size` bytes the
+// attribute's size field gives, read from the file; reading past them throws.
+class AttributeValue : public Imf::IStream {
+ public:
+  AttributeValue(std::ifstream& in, uint64_t start, uint64_t size)
+      : Imf::IStream("attribute value"), m_in(in), m_start(start), m_size(size) {}
+  bool read(char c[], int n) override {
+    if (n < 0 || m_pos + uint64_t(n) > m_size)
+      throw Iex::InputExc("its value runs past those bytes");
+    m_in.seekg(std::streamoff(m_start + m_pos));
+    if (!m_in.read(c, n)) throw Iex::InputExc("the file ends inside it");
+    m_pos += uint64_t(n);
+    return m_pos < m_size;
+  }
+  uint64_t tellg() override { return m_pos; }
+  void seekg(uint64_t pos) override { m_pos = pos; }
+  void clear() override { m_in.clear(); }
+
+ private:
+  std::ifstream& m_in;
+  uint64_t m_start, m_size, m_pos = 0;
+};
+
+// The rows OpenEXR compresses together, and so holds in its buffers at once (OpenEXR's
+// "compression" document); the most of any where the method is unknown.
+int64_t rows_per_chunk(Imf::Compression compression) {
+  switch (compression) {
+    case Imf::NO_COMPRESSION:
+    case Imf::RLE_COMPRESSION:
+    case Imf::ZIPS_COMPRESSION:
+      return 1;
+    case Imf::ZIP_COMPRESSION:
+    case Imf::PXR24_COMPRESSION:
+      return 16;
+    case Imf::PIZ_COMPRESSION:
+    case Imf::B44_COMPRESSION:
+    case Imf::B44A_COMPRESSION:
+    case Imf::DWAA_COMPRESSION:
+      return 32;
+    default:
+      return 256;
+  }
+}
+
+// What one part's header claims that OpenEXR allocates for when it opens the file, before rll
+// reads a pixel: its data window (checked as every image size is), and a line buffer and the
+// compressor's buffers for one chunk (rows, or a tile) of every channel, each about as large as
+// the chunk (a fuzzed header of 6.3 M x 1 M pixels made OpenEXR take 1.2 GB for them).
+struct PartClaims {
+  std::optional<Imath::Box2i> window;
+  Imf::ChannelList channels;
+  Imf::Compression compression = Imf::ZIP_COMPRESSION;  // Imf::Header's default
+  std::optional<Imf::TileDescription> tiles;
+
+  void note(const std::string& attr, const Imf::Attribute& value) {
+    if (const auto* a = dynamic_cast<const Imf::Box2iAttribute*>(&value); a && attr == "dataWindow")
+      window = a->value();
+    if (const auto* a = dynamic_cast<const Imf::ChannelListAttribute*>(&value);
+        a && attr == "channels")
+      channels = a->value();
+    if (const auto* a = dynamic_cast<const Imf::CompressionAttribute*>(&value);
+        a && attr == "compression")
+      compression = a->value();
+    if (const auto* a = dynamic_cast<const Imf::TileDescriptionAttribute*>(&value);
+        a && attr == "tiles")
+      tiles = a->value();
+  }
+  void check(const std::string& name) const {
+    if (!window) return;
+    const int64_t w = int64_t(window->max.x) - window->min.x + 1;
+    const int64_t h = int64_t(window->max.y) - window->min.y + 1;
+    check_claimed_size(w, h, name);
+    double pixel_bytes = 0, channel_count = 0;
+    for (auto c = channels.begin(); c != channels.end(); ++c, ++channel_count)
+      pixel_bytes += c.channel().type == Imf::HALF ? 2 : 4;
+    const double chunk = tiles ? double(tiles->xSize) * double(tiles->ySize)
+                               : double(w) * double(rows_per_chunk(compression));
+    check_memory_budget(3 * pixel_bytes * chunk,
+                        fmt::format("opening '{}' (OpenEXR's buffers for chunks of {} pixels in "
+                                    "{} channels)",
+                                    name, chunk, channel_count));
+  }
+};
+
 // OpenEXR takes the memory an attribute's size field claims before it reads the value (a
 // string attribute claiming 2^31 - 1 bytes costs 2 GiB in a file of 300 bytes), and its reader
 // has no bound to set. So the header is walked here first, reading only the header's bytes, and
@@ -101,6 +196,14 @@ std::string shown(const std::string& text) {
 // (OpenEXR's "file layout" document): magic number and version (8 bytes), then per part the
 // attributes (name\0 type\0 int32 size, value), ended by an empty name; a multi-part file ends
 // its list of headers with one more empty name.
+//
+// OpenEXR reads a value of a type it knows by the type (a float takes 4 bytes, a channel list
+// runs to its empty name), not by the size field, and goes on from where that reading ends: a
+// size that disagrees with its value would let OpenEXR's reading part from this walk and reach
+// a size claim the walk never saw (the fuzzer's case: a channel list longer than its size, then
+// an unknown attribute claiming 1.8 GB). So each such value is read here by OpenEXR's own
+// reader, from exactly its bytes, and must fill them; a value of a type OpenEXR does not know it
+// reads by the size, as this walk does.
 void check_exr_header(const fs::path& path) {
   const std::string name = path.string();
   std::error_code ec;
@@ -115,6 +218,9 @@ void check_exr_header(const fs::path& path) {
   if (head[0] != 0x76 || head[1] != 0x2f || head[2] != 0x31 || head[3] != 0x01)
     damaged("no OpenEXR magic number");
   const bool multipart = head[5] & 0x10;  // bit 12 of the version field
+  const int version = int(uint32_t(head[4]) | uint32_t(head[5]) << 8 | uint32_t(head[6]) << 16 |
+                          uint32_t(head[7]) << 24);
+  Imf::staticInitialize();  // registers the attribute types OpenEXR knows
   auto text = [&](const char* what) {
     std::string s;
     for (char c; in.get(c) && c != '\0';)
@@ -131,6 +237,7 @@ void check_exr_header(const fs::path& path) {
   };
   for (bool more = true; more;) {
     int attributes = 0;
+    PartClaims claims;
     for (std::string attr = text("name"); !attr.empty(); attr = text("name"), ++attributes) {
       const std::string type = text("type");
       const int32_t size = int32();
@@ -141,8 +248,25 @@ void check_exr_header(const fs::path& path) {
             "cannot read '{}': its header attribute '{}' claims a {} value of {} bytes, but the "
             "file has only {} bytes left",
             name, shown(attr), shown(type), size, left);
+      if (Imf::Attribute::knownType(type.c_str())) {
+        const std::unique_ptr<Imf::Attribute> value(Imf::Attribute::newAttribute(type.c_str()));
+        AttributeValue bytes(in, start, uint64_t(size));
+        try {
+          value->readValueFrom(bytes, size, version);
+        } catch (const std::exception& e) {
+          damaged(fmt::format("attribute '{}' of type {} does not fit its {} bytes: {}",
+                              shown(attr), shown(type), size, e.what()));
+        }
+        if (bytes.tellg() != uint64_t(size))
+          damaged(
+              fmt::format("attribute '{}' of type {} holds a value of {} bytes, but its size "
+                          "field claims {}",
+                          shown(attr), shown(type), bytes.tellg(), size));
+        claims.note(attr, *value);
+      }
       in.seekg(std::streamoff(start + uint64_t(size)));
     }
+    if (attributes > 0) claims.check(name);
     more = multipart && attributes > 0;
   }
 }
@@ -201,9 +325,10 @@ ExrFile read_exr_unchecked(const fs::path& path, bool extras, LuminanceOnly lumi
     std::error_code ec;
     const uintmax_t size = fs::file_size(path, ec);
     if (!ec && pixel_bytes * uint64_t(w) * uint64_t(h) > size)
-      fail("cannot read '{}': its header claims {}x{} uncompressed pixels ({} bytes), but the "
-           "file has only {} bytes",
-           name, w, h, pixel_bytes * uint64_t(w) * uint64_t(h), size);
+      fail(
+          "cannot read '{}': its header claims {}x{} uncompressed pixels ({} bytes), but the "
+          "file has only {} bytes",
+          name, w, h, pixel_bytes * uint64_t(w) * uint64_t(h), size);
   }
   // A compressed file can claim any size in a few bytes. The pixels are read in bands of rows
   // and memory is taken band by band as the file delivers them, so a false claim fails at its
@@ -214,7 +339,8 @@ ExrFile read_exr_unchecked(const fs::path& path, bool extras, LuminanceOnly lumi
   for (int64_t y0 = 0; y0 < h; y0 += kBand) {
     const int64_t rows = std::min(kBand, h - y0);
     const size_t need = size_t((y0 + rows) * w);
-    if (need > px.capacity()) px.reserve(std::min(size_t(w * h), std::max(need, 2 * px.capacity())));
+    if (need > px.capacity())
+      px.reserve(std::min(size_t(w * h), std::max(need, 2 * px.capacity())));
     px.resize(need);
     if (has_counts) out.counts.resize(need);
     // OpenEXR addresses pixel (x, y) at base + x * xs + y * ys in data-window coordinates.
@@ -227,9 +353,11 @@ ExrFile read_exr_unchecked(const fs::path& path, bool extras, LuminanceOnly lumi
       if (c == 0 || std::string_view(rgb[c]) != rgb[0])
         fb.insert(rgb[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
     if (has_counts) {
-      const ptrdiff_t corigin = ptrdiff_t(((dw.min.y + y0) * w + dw.min.x) * int64_t(sizeof(uint32_t)));
+      const ptrdiff_t corigin =
+          ptrdiff_t(((dw.min.y + y0) * w + dw.min.x) * int64_t(sizeof(uint32_t)));
       char* cbase = reinterpret_cast<char*>(out.counts.data() + y0 * w) - corigin;
-      fb.insert("count", Imf::Slice(Imf::UINT, cbase, sizeof(uint32_t), sizeof(uint32_t) * size_t(w)));
+      fb.insert("count",
+                Imf::Slice(Imf::UINT, cbase, sizeof(uint32_t), sizeof(uint32_t) * size_t(w)));
     }
     file.setFrameBuffer(fb);
     file.readPixels(int(dw.min.y + y0), int(dw.min.y + y0 + rows - 1));
@@ -255,7 +383,8 @@ ExrFile read_exr(const fs::path& path, bool extras, LuminanceOnly luminance) {
 void read_image_checks(const fs::path& path) {
   std::error_code ec;
   const auto status = fs::status(path, ec);
-  if (fs::is_directory(status)) fail("cannot read '{}': it is a folder, not an image", path.string());
+  if (fs::is_directory(status))
+    fail("cannot read '{}': it is a folder, not an image", path.string());
   if (!fs::exists(status)) fail("image '{}' not found", path.string());
   if (!fs::is_regular_file(status))
     fail("cannot read '{}': it is not a regular file (a device or a pipe?)", path.string());
@@ -292,7 +421,8 @@ void write_exr_to(const fs::path& tmp, const fs::path& path, const Image& image,
 
 // Refuses what no reader can open: an empty image; then prepare_write's checks.
 fs::path check_writable_image(const fs::path& path, const Image& image) {
-  if (image.width() <= 0 || image.height() <= 0) fail("cannot write '{}': empty image", path.string());
+  if (image.width() <= 0 || image.height() <= 0)
+    fail("cannot write '{}': empty image", path.string());
   return prepare_write(path);
 }
 
@@ -309,7 +439,8 @@ void write_exr(const fs::path& path, const ExrFile& file) {
     fail("cannot write '{}': {} sample counts for {} pixels", path.string(), file.counts.size(),
          file.image.pixel_count());
   const fs::path tmp = temp_sibling(check_writable_image(path, file.image));
-  write_exr_to(tmp, path, file.image, file.attributes, file.counts.empty() ? nullptr : &file.counts);
+  write_exr_to(tmp, path, file.image, file.attributes,
+               file.counts.empty() ? nullptr : &file.counts);
   commit(tmp, path);
 }
 
@@ -380,15 +511,17 @@ Image read_image(const fs::path& path, bool srgb, LuminanceOnly luminance) {
   if (stbi_is_hdr(path.c_str())) {
     const uintmax_t size = fs::file_size(path, ec);
     if (!ec && min_hdr_bytes(w, h) > size)
-      fail("cannot read '{}': its header claims {}x{} pixels, which take at least {} bytes, but "
-           "the file has only {}",
-           path.string(), w, h, min_hdr_bytes(w, h), size);
+      fail(
+          "cannot read '{}': its header claims {}x{} pixels, which take at least {} bytes, but "
+          "the file has only {}",
+          path.string(), w, h, min_hdr_bytes(w, h), size);
   }
   if (ext == ".hdr") {
     float* data = stbi_loadf(path.c_str(), &w, &h, &n, 3);
     if (!data) fail("cannot read '{}': {}", path.string(), stbi_failure_reason());
     Image img(w, h);
-    for (size_t i = 0; i < img.pixel_count(); ++i) img[i] = Rgb(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
+    for (size_t i = 0; i < img.pixel_count(); ++i)
+      img[i] = Rgb(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
     stbi_image_free(data);
     return img;
   }
@@ -404,13 +537,15 @@ Image decode_image(const unsigned char* bytes, size_t size, bool srgb, const std
   check_claimed_size(w, h, name);
   if (stbi_is_hdr_from_memory(bytes, int(size))) {
     if (min_hdr_bytes(w, h) > size)
-      fail("cannot read '{}': its header claims {}x{} pixels, which take at least {} bytes, but "
-           "it has only {}",
-           name, w, h, min_hdr_bytes(w, h), size);
+      fail(
+          "cannot read '{}': its header claims {}x{} pixels, which take at least {} bytes, but "
+          "it has only {}",
+          name, w, h, min_hdr_bytes(w, h), size);
     float* data = stbi_loadf_from_memory(bytes, int(size), &w, &h, &n, 3);
     if (!data) fail("cannot read '{}': {}", name, stbi_failure_reason());
     Image img(w, h);
-    for (size_t i = 0; i < img.pixel_count(); ++i) img[i] = Rgb(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
+    for (size_t i = 0; i < img.pixel_count(); ++i)
+      img[i] = Rgb(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
     stbi_image_free(data);
     return img;
   }

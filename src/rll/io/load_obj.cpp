@@ -136,9 +136,9 @@ void load_mtl(const fs::path& mtl, const std::string& obj_file, size_t obj_line,
     bytes = it->second;
   } else {
     if (!policy.read_files)
-      fail_line(obj_file, obj_line,
-                fmt::format("material library '{}': reading other files is turned off",
-                            printable(name)));
+      fail_line(
+          obj_file, obj_line,
+          fmt::format("material library '{}': reading other files is turned off", printable(name)));
     if (const std::string why = unreadable_reason(mtl); !why.empty())
       fail_line(obj_file, obj_line,
                 fmt::format("material library '{}' {} ({})", printable(name), why,
@@ -216,7 +216,8 @@ void scan_obj(std::string_view text, const std::string& file, const fs::path& ba
         int np = 0;
         for (size_t b = 0;; ++np) {
           size_t e = tok.find('/', b);
-          if (np == 3) fail_line(file, ln, fmt::format("malformed face vertex '{}'", printable(tok)));
+          if (np == 3)
+            fail_line(file, ln, fmt::format("malformed face vertex '{}'", printable(tok)));
           parts[np] = tok.substr(b, e == std::string_view::npos ? std::string_view::npos : e - b);
           if (e == std::string_view::npos) {
             ++np;
@@ -228,6 +229,10 @@ void scan_obj(std::string_view text, const std::string& file, const fs::path& ba
         if (!parse_long(parts[0], idx))
           fail_line(file, ln, fmt::format("malformed face vertex '{}'", printable(tok)));
         check_index(idx, v.positions.size(), use_v, file, ln, "vertex");
+        // "3/" (a slash and nothing after it): tinyobjloader reads the next vertex's number,
+        // across the space, as its texture coordinate.
+        if (np == 2 && parts[1].empty())
+          fail_line(file, ln, fmt::format("malformed face vertex '{}'", printable(tok)));
         if (np >= 2 && !parts[1].empty()) {
           if (!parse_long(parts[1], idx))
             fail_line(file, ln, fmt::format("malformed face vertex '{}'", printable(tok)));
@@ -269,8 +274,9 @@ void scan_obj(std::string_view text, const std::string& file, const fs::path& ba
         std::string libs;
         for (const auto& f : lib.files) libs += (libs.empty() ? "" : ", ") + f.filename().string();
         fail_line(file, ln,
-                  libs.empty() ? fmt::format("usemtl '{}' but no mtllib was read before it", printable(name))
-                               : fmt::format("usemtl '{}': no such material in {}", printable(name), libs));
+                  libs.empty()
+                      ? fmt::format("usemtl '{}' but no mtllib was read before it", printable(name))
+                      : fmt::format("usemtl '{}': no such material in {}", printable(name), libs));
       }
     }
   }
@@ -375,13 +381,28 @@ Material convert_material(const tinyobj::material_t& t, bool has_kd, const fs::p
 // numbered in the file's order of positions (variants of one position in order of first use),
 // so that a file written from a mesh reads back with the same numbering. Local material ids:
 // the MTL materials in order, `default_material` for faces without usemtl.
+// The scan checked the indices as rll reads them; the mesh is built from tinyobjloader's, which
+// read some face vertices differently (a fuzzed file made it index a texture coordinate past the
+// last), so each is checked again against the arrays it indexes before it is used.
 Mesh build_mesh(const ObjVertices& v, const std::vector<tinyobj::shape_t>& shapes,
-                uint32_t default_material, bool& uses_default) {
+                uint32_t default_material, bool& uses_default, const std::string& file) {
   std::vector<int32_t> first_variant(v.positions.size(), -1), next_variant;
   std::vector<uint32_t> variant_count(v.positions.size(), 0), variant_rank;
   std::vector<int32_t> variant_position;
   std::vector<std::array<int32_t, 2>> variant_key;  // (normal, uv)
   auto variant = [&](const tinyobj::index_t& idx) {
+    auto outside = [](int i, size_t count, int lowest) {
+      return i < lowest || (i >= 0 && size_t(i) >= count);
+    };
+    if (outside(idx.vertex_index, v.positions.size(), 0) ||
+        outside(idx.texcoord_index, v.uvs.size(), -1) ||
+        outside(idx.normal_index, v.normals.size(), -1))
+      fail(
+          "{}: tinyobjloader reads a face vertex as position {}, texture coordinate {}, normal {} "
+          "(counted from 1; 0 for none), beyond the {} positions, {} texture coordinates and {} "
+          "normals of the file: a malformed face vertex",
+          file, idx.vertex_index + 1, idx.texcoord_index + 1, idx.normal_index + 1,
+          v.positions.size(), v.uvs.size(), v.normals.size());
     const size_t p = size_t(idx.vertex_index);
     int32_t k = first_variant[p];
     for (; k >= 0; k = next_variant[size_t(k)])
@@ -472,7 +493,7 @@ void parse_obj(std::string_view text_view, const std::string& file, const fs::pa
 
   const uint32_t default_material = uint32_t(lib.materials.size());
   bool uses_default = false;
-  Mesh mesh = build_mesh(v, shapes, default_material, uses_default);
+  Mesh mesh = build_mesh(v, shapes, default_material, uses_default, file);
   mesh.light.assign(mesh.triangles.size(), -1);
   if (mesh.triangles.empty()) fail("{}: the file has no faces", file);
   if (const std::string why = triangle_budget_problem(
