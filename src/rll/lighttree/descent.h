@@ -73,8 +73,10 @@ RLL_HD inline float first_child_probability(const LightTreeView& tree, const Lig
       return clamp(float(w0 / (w0 + w1)), detail::kMinStep, 1 - detail::kMinStep);
     }
   } else {
-    float i0 = tree_importance(tree, node.child, p, n);
-    float i1 = tree_importance(tree, node.child + 1, p, n);
+    // The children of a node that is not a group node are not group nodes either: their own
+    // bounds (tree_importance would unroll the group case into device code for nothing).
+    float i0 = light_importance(tree.importance[node.child], p, n);
+    float i1 = light_importance(tree.importance[node.child + 1], p, n);
     if (importance0) *importance0 = i0;
     if (importance1) *importance1 = i1;
     if (i0 > 0 && i1 > 0) {

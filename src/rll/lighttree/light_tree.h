@@ -67,7 +67,7 @@ struct LightTreeView {
 namespace detail {
 // Importance of `node`; at a group node the sum of its children's, left then right, nested as
 // the group nodes are. Unrolled by a depth bound instead of recursing (device code): group nodes
-// nest at most kLightGroups - 1 deep (root -> distant -> [dome, directional]).
+// nest at most kGroupDepth deep (below).
 template <int Depth>
 RLL_HD inline float tree_importance_at(const LightTreeView& t, uint32_t node, const Vec3& p,
                                        const Vec3& n) {
@@ -90,21 +90,26 @@ RLL_HD inline int contributing_groups_at(const LightTreeView& t, uint32_t node, 
       return contributing_groups_at<Depth - 1>(t, nd.child, p, n) +
              contributing_groups_at<Depth - 1>(t, nd.child + 1, p, n);
   }
-  return tree_importance_at<kLightGroups>(t, node, p, n) > 0 ? 1 : 0;
+  // Not a group node (below its groups or past the deepest group node): its own bounds.
+  return light_importance(t.importance[node], p, n) > 0 ? 1 : 0;
 }
+// Group nodes nest at most this deep (root -> distant -> [dome, directional]): the unrolling's
+// bound. Deeper unrolling would only copy the importance into device code to no effect (each
+// copy is inlined: at kLightGroups, a descent step held 144 of them).
+inline constexpr int kGroupDepth = kLightGroups - 1;
 }  // namespace detail
 
 // Importance of the lights under `node` at p with normal n; for a group node, the sum of its
 // children's (their bounds are of different kinds and do not merge usefully).
 RLL_HD inline float tree_importance(const LightTreeView& t, uint32_t node, const Vec3& p,
                                     const Vec3& n) {
-  return detail::tree_importance_at<kLightGroups>(t, node, p, n);
+  return detail::tree_importance_at<detail::kGroupDepth>(t, node, p, n);
 }
 // How many groups under `node` can contribute at p (importance > 0 at their roots); for a node
 // inside a group, 1 or 0.
 RLL_HD inline int contributing_groups(const LightTreeView& t, uint32_t node, const Vec3& p,
                                       const Vec3& n) {
-  return detail::contributing_groups_at<kLightGroups>(t, node, p, n);
+  return detail::contributing_groups_at<detail::kGroupDepth>(t, node, p, n);
 }
 
 class LightTree {

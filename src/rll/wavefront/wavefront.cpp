@@ -142,7 +142,7 @@ RenderProgress render_wavefront(
   if (wavefront.path_slots < 1) fail("the wavefront renderer needs at least one path slot");
   const SceneData data(scene);
   const PathConstants c = make_path_constants(scene, data.view(), integrator);
-  const WavefrontLightSampler sampler(light_sampler);
+  WavefrontLightSampler sampler(light_sampler);
   const bool mis = c.strategy == LightStrategy::Mis;
   const int w = film.width();
   const size_t pixels = size_t(w) * film.height();
