@@ -32,6 +32,7 @@ struct Render {
   bool wavefront = true;
   int threads = 0;
   uint32_t path_slots = WavefrontSettings{}.path_slots;
+  WavefrontTimes* times = nullptr;
 };
 
 // A scene rendered by one of the two renderers with a fresh sampler: its image and film counts.
@@ -50,6 +51,7 @@ Image render_image(const Scene& scene, const Accel& accel, const Render& r,
   if (r.wavefront) {
     WavefrontSettings ws;
     ws.path_slots = r.path_slots;
+    ws.times = r.times;
     p = render_wavefront(scene, accel, *sampler, is, film, rs, nullptr, {}, ws);
   } else {
     Integrator integrator(scene, accel, *sampler, is);
@@ -187,6 +189,30 @@ TEST(Wavefront, BitIdenticalForAnyThreadCount) {
   EXPECT_TRUE(same_bits(render_image(scene, accel, r), one)) << "777 path slots";
   r.seed = 2;  // the comparison can fail: another seed gives another image
   EXPECT_FALSE(same_bits(render_image(scene, accel, r), one));
+}
+
+// The stage times (--stats of `rll interactive`): filled when asked for, without changing the
+// image; every stage that ran took time, and the stages fit in the render's total.
+TEST(Wavefront, StageTimesAreRecordedWithoutChangingTheImage) {
+  const Scene scene = small_builtin_scene("cornell-boxes-room", 24, 18);
+  const Accel accel(scene.mesh);
+  Render r;
+  r.sampler = "rll";
+  r.spp = 4;
+  r.path_slots = 300;  // several batches per pass
+  const Image plain = render_image(scene, accel, r);
+  WavefrontTimes times;
+  r.times = &times;
+  EXPECT_TRUE(same_bits(render_image(scene, accel, r), plain));
+  for (size_t s = 0; s < kWavefrontStages; ++s)
+    EXPECT_GT(times.stage_seconds[s], 0.0) << kWavefrontStageNames[s];
+  EXPECT_LE(times.stages_sum(), times.total_seconds);
+  // A second render adds to the record.
+  const WavefrontTimes first = times;
+  render_image(scene, accel, r);
+  EXPECT_GT(times.total_seconds, first.total_seconds);
+  EXPECT_GT(times[WavefrontStage::ClosestHit],
+            first.stage_seconds[size_t(WavefrontStage::ClosestHit)]);
 }
 
 // The light-sampler contract on an rll cell table learnt by the wavefront renderer: sample's pmf
