@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <vector>
@@ -29,6 +30,7 @@ struct InteractiveOptions {
   std::string sampler = "rll";
   int frames = 16;
   int warmup = 1;
+  bool warmup_given = false;  // --warmup was on the command line
   uint64_t seed = 1;
   int threads = 0;
   std::string output;
@@ -72,12 +74,13 @@ std::string stage_columns(const std::array<double, kWavefrontStages>& ms) {
   return line;
 }
 
-void run(const InteractiveOptions& o) {
+void run(InteractiveOptions o) {
   install_interrupt_handler();
   ThreadLimit limit(o.threads);
   // Bad flags are reported before the scene (perhaps slow to load) is read.
   parse_resolution(o.session.resolution);
   Params::parse(o.session.set);
+  if (!o.warmup_given) o.warmup = std::min(o.warmup, o.frames - 1);  // a single frame is measured
   if (o.warmup >= o.frames)
     fail("--warmup {}: must be less than --frames {} (the summary needs a measured frame)",
          o.warmup, o.frames);
@@ -145,7 +148,10 @@ void run(const InteractiveOptions& o) {
          {"samples", p.samples},
          {"rays",
           {{"camera", p.rays.camera}, {"bounce", p.rays.bounce}, {"shadow", p.rays.shadow}}}});
-    if (!o.quiet) fmt::print("frame {} {:.2f} ms:{}\n", f, ft.total_ms, stage_columns(ft.stage_ms));
+    if (!o.quiet) {
+      fmt::print("frame {} {:.2f} ms:{}\n", f, ft.total_ms, stage_columns(ft.stage_ms));
+      std::fflush(stdout);  // a line as each frame ends, also into a pipe
+    }
   }
 
   // The summary over the frames after the warm-up (an interrupted run: those it has).
@@ -225,9 +231,11 @@ void add_interactive_command(CLI::App& app) {
       ->capture_default_str()
       ->check(integer_in(1, kMaxFrames));
   cmd->add_option("--warmup", o->warmup,
-                  "Frames left out of the summary's median, min and max (less than --frames)")
+                  "Frames left out of the summary's median, min and max (less than --frames; "
+                  "by default 1, or 0 with --frames 1)")
       ->capture_default_str()
-      ->check(integer_in(0, kMaxFrames - 1));
+      ->check(integer_in(0, kMaxFrames - 1))
+      ->each([o](const std::string&) { o->warmup_given = true; });
   cmd->add_option("--seed", o->seed,
                   "Random seed; the same seed gives the same images with any --threads")
       ->capture_default_str()

@@ -103,6 +103,19 @@ TEST(InteractiveCli, AnimatedSceneFollowsItsFrames) {
   EXPECT_EQ(j.at("integrator").at("name"), "direct");
 }
 
+// One frame is measured by default: the warm-up then leaves it in the summary.
+TEST(InteractiveCli, OneFrameIsItsOwnSummary) {
+  TempDir tmp;
+  const std::string stats = (tmp / "one.json").string();
+  const CommandResult r = run_rll(
+      {"interactive", "builtin:cornell-box", "--res", "8x6", "--frames", "1", "--stats", stats},
+      60);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(read_text(stats));
+  EXPECT_EQ(j.at("warmup"), 0);
+  EXPECT_EQ(j.at("summary").at("ms_total").at("median"), j.at("frames")[0].at("ms_total"));
+}
+
 TEST(InteractiveCli, DefaultsAre1080pAndTheWavefrontInHelp) {
   const CommandResult r = run_rll({"interactive", "--help"}, 30);
   ASSERT_EQ(r.exit_code, 0) << r.output;
