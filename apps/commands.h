@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -21,6 +22,7 @@ void add_convert_command(CLI::App& app);
 void add_merge_command(CLI::App& app);
 void add_error_command(CLI::App& app);
 void add_devices_command(CLI::App& app);
+void add_interactive_command(CLI::App& app);
 
 // ASCII lower case (file extensions).
 std::string lower(std::string s);
@@ -62,6 +64,10 @@ inline constexpr double kMaxExposure = 64;
 void add_session_options(CLI::App* cmd, SessionSettings& settings);
 // --wavefront (render and compare): SessionSettings::wavefront.
 void add_wavefront_option(CLI::App* cmd, SessionSettings& settings);
+
+// What the --stats file of every command that renders says of its session: the scene, the
+// resolution, the integrator, the renderer and the sample points.
+nlohmann::json session_stats(const RenderSession& session);
 
 // The files a scene reads: the scene file itself and, followed through text formats (JSON,
 // OBJ, MTL, glTF, pbrt), every existing file they name (meshes, material libraries, buffers,

@@ -109,6 +109,18 @@ void add_wavefront_option(CLI::App* cmd, SessionSettings& s) {
       "the same images within noise");
 }
 
+nlohmann::json session_stats(const RenderSession& session) {
+  const IntegratorSettings& is = session.integrator();
+  return {{"scene", session.settings().scene},
+          {"resolution", {session.scene().width, session.scene().height}},
+          {"integrator",
+           {{"name", integrator_name(is.type)},
+            {"max_depth", is.max_depth},
+            {"strategy", strategy_name(is.strategy)}}},
+          {"renderer", session.renderer_name()},
+          {"points", point_set_name(session.points())}};
+}
+
 namespace {
 
 // Formats whose text names other files that a scene reads.

@@ -469,19 +469,12 @@ void run(const CompareOptions& o) {
   report.plot_svg = plot_svg(plot);
   write_file_atomic(out / "report.html", report_html(report));
 
-  nlohmann::json j;
-  j["scene"] = o.session.scene;
-  j["resolution"] = {scene.width, scene.height};
+  nlohmann::json j = session_stats(session);
   j["lights"] = scene.lights.size();
-  j["integrator"] = {{"name", integrator_name(session.integrator().type)},
-                     {"max_depth", session.integrator().max_depth},
-                     {"strategy", strategy_name(session.integrator().strategy)}};
   j["budget"] = o.time > 0 ? nlohmann::json{{"time", o.time}} : nlohmann::json{{"spp", o.spp}};
-  j["renderer"] = session.renderer_name();
   j["frames"] = o.frames;
   j["repeats"] = o.repeats;
   j["seed"] = o.seed;
-  j["points"] = point_set_name(session.points());
   j["pass_spp"] = {{"first", o.pass_spp}, {"max", o.max_pass_spp}};
   j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
   j["set"] = o.session.set;

@@ -108,6 +108,7 @@ int main(int argc, char** argv) {
   rll::cli::add_merge_command(app);
   rll::cli::add_error_command(app);
   rll::cli::add_devices_command(app);
+  rll::cli::add_interactive_command(app);
   if (rll::cli::unknown_command(app, argc, argv)) return int(CLI::ExitCodes::ExtrasError);
   try {
     app.parse(argc, argv);

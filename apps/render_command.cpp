@@ -15,8 +15,8 @@
 #include "rll/lights/light_sampler.h"
 #include "rll/lights/sampler_state.h"
 #include "rll/render/progress.h"
-#include "rll/session/session.h"
 #include "rll/render/share.h"
+#include "rll/session/session.h"
 
 namespace rll::cli {
 namespace fs = std::filesystem;
@@ -126,7 +126,6 @@ void run(const RenderOptions& o) {
 
   RenderSession session(o.session);
   Scene& scene = session.scene();
-  const IntegratorSettings& is = session.integrator();
   auto sampler = make_sampler_for(session, o.sampler, "--sampler");
   session.check_params_used();
   if (!o.state.empty()) check_sampler_has_state(*sampler, "--rll-state");
@@ -197,14 +196,8 @@ void run(const RenderOptions& o) {
   }
 
   if (!o.stats.empty()) {
-    nlohmann::json j;
-    j["scene"] = o.session.scene;
-    j["resolution"] = {scene.width, scene.height};
-    j["integrator"] = {{"name", integrator_name(is.type)},
-                       {"max_depth", is.max_depth},
-                       {"strategy", strategy_name(is.strategy)}};
+    nlohmann::json j = session_stats(session);
     j["sampler"] = sampler->describe();
-    j["renderer"] = session.renderer_name();
     j["spp"] = total.spp_done;
     j["frames"] = frame_stats;
     j["seconds"] = total.seconds;
@@ -221,7 +214,6 @@ void run(const RenderOptions& o) {
     j["seed"] = o.seed;
     j["task"] = {{"index", task.index}, {"count", task.count}, {"first_sample", rs.first_sample}};
     j["rll_state"] = {{"file", o.state}, {"mode", o.state_mode}, {"loaded", state_loaded}};
-    j["points"] = point_set_name(session.points());
     j["interrupted"] = total.cancelled;
     j["nonfinite_samples"] = total.nonfinite;
     j["memory"] = {{"peak_rss_bytes", peak_rss_bytes()}};

@@ -8,7 +8,6 @@
 #include "rll/core/error.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/render/progress.h"
-#include "rll/wavefront/wavefront.h"
 
 namespace rll {
 
@@ -93,15 +92,17 @@ void RenderSession::set_frame(int frame, LightSampler* sampler) {
 RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
                                      const RenderSettings& settings, const std::string& label,
                                      bool show_progress, const std::atomic<bool>* cancel,
-                                     const AfterPass& after_pass) const {
+                                     const AfterPass& after_pass, WavefrontTimes* times) const {
   Integrator integrator(m_scene, *m_accel, sampler, m_integrator);
   ProgressBar bar(label, show_progress);
   RenderSettings rs = settings;
   rs.points = m_points;
+  WavefrontSettings wavefront;
+  wavefront.times = times;
   auto run = [&](const RenderSettings& r, const AfterPass& after) {
-    return m_settings.wavefront
-               ? render_wavefront(m_scene, *m_accel, sampler, m_integrator, film, r, cancel, after)
-               : rll::render(m_scene, integrator, sampler, film, r, cancel, after);
+    return m_settings.wavefront ? render_wavefront(m_scene, *m_accel, sampler, m_integrator, film,
+                                                   r, cancel, after, wavefront)
+                                : rll::render(m_scene, integrator, sampler, film, r, cancel, after);
   };
   RenderProgress p = run(rs, [&](const RenderProgress& pr, const Film& f) {
     bar.update(pr);

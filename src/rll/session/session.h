@@ -15,6 +15,7 @@
 #include "rll/render/integrator.h"
 #include "rll/render/render.h"
 #include "rll/scene/scene.h"
+#include "rll/wavefront/wavefront.h"
 
 namespace rll {
 
@@ -67,11 +68,12 @@ class RenderSession {
   // settings.points says), showing a progress bar labelled
   // `label` on a terminal when `show_progress`; `after_pass` as in render(). Unless cancelled,
   // at least one sample per pixel is taken, however short the time budget: a render never
-  // ends as a black image of 0 spp.
+  // ends as a black image of 0 spp. With `times`, the wavefront renderer adds its stage times
+  // to it (the megakernel has no stages and leaves it as it is).
   RenderProgress render(LightSampler& sampler, Film& film, const RenderSettings& settings,
                         const std::string& label, bool show_progress,
-                        const std::atomic<bool>* cancel = nullptr,
-                        const AfterPass& after_pass = {}) const;
+                        const std::atomic<bool>* cancel = nullptr, const AfterPass& after_pass = {},
+                        WavefrontTimes* times = nullptr) const;
 
  private:
   SessionSettings m_settings;

@@ -1,6 +1,7 @@
 #include "rll/wavefront/wavefront.h"
 
 #include <algorithm>
+#include <chrono>
 #include <new>
 #include <type_traits>
 #include <vector>
@@ -131,7 +132,28 @@ void for_queue(const Queue& q, const Body& body) {
   host_parallel_for(q.count(), [&](size_t k) { body(slots[k]); });
 }
 
+double seconds_between(std::chrono::steady_clock::time_point a,
+                       std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+// Runs `body`, adding its wall time to `stage` of `times` when there is a record to fill; without
+// one it reads no clock.
+template <typename Body>
+void timed(WavefrontTimes* times, WavefrontStage stage, const Body& body) {
+  if (!times) return body();
+  const auto t0 = std::chrono::steady_clock::now();
+  body();
+  (*times)[stage] += seconds_between(t0, std::chrono::steady_clock::now());
+}
+
 }  // namespace
+
+double WavefrontTimes::stages_sum() const {
+  double sum = 0;
+  for (double s : stage_seconds) sum += s;
+  return sum;
+}
 
 RenderProgress render_wavefront(
     const Scene& scene, const Accel& accel, LightSampler& light_sampler,
@@ -140,6 +162,8 @@ RenderProgress render_wavefront(
     const std::function<void(const RenderProgress&, const Film&)>& after_pass,
     const WavefrontSettings& wavefront) {
   if (wavefront.path_slots < 1) fail("the wavefront renderer needs at least one path slot");
+  const auto t_start = std::chrono::steady_clock::now();
+  WavefrontTimes* const times = wavefront.times;
   const SceneData data(scene);
   const PathConstants c = make_path_constants(scene, data.view(), integrator);
   WavefrontLightSampler sampler(light_sampler);
@@ -168,16 +192,18 @@ RenderProgress render_wavefront(
 
       // Camera rays: item `batch + i` is sample first + (item % count) of pixel item / count, so
       // that each pixel's samples reach the film in the megakernel's order.
-      host_parallel_for(n, [&](size_t i) {
-        const size_t item = batch + i, pixel = item / size_t(count);
-        const int s = first + int(item % size_t(count));
-        SampleStream stream(frame_seed, pixel, settings.first_sample + uint64_t(s),
-                            settings.points);
-        p.ray[i] = camera_ray(scene, int(pixel % size_t(w)), int(pixel / size_t(w)), stream);
-        p.stream[i] = stream;
-        p.depth[i] = 0;
-        p.store(uint32_t(i), start_path(c));
-        rays.slots[i] = uint32_t(i);
+      timed(times, WavefrontStage::Camera, [&] {
+        host_parallel_for(n, [&](size_t i) {
+          const size_t item = batch + i, pixel = item / size_t(count);
+          const int s = first + int(item % size_t(count));
+          SampleStream stream(frame_seed, pixel, settings.first_sample + uint64_t(s),
+                              settings.points);
+          p.ray[i] = camera_ray(scene, int(pixel % size_t(w)), int(pixel / size_t(w)), stream);
+          p.stream[i] = stream;
+          p.depth[i] = 0;
+          p.store(uint32_t(i), start_path(c));
+          rays.slots[i] = uint32_t(i);
+        });
       });
       *rays.size = n;
 
@@ -189,124 +215,143 @@ RenderProgress render_wavefront(
         next_rays.clear();
 
         // Closest hit.
-        for_queue(rays, [&](uint32_t i) {
-          Hit hit;
-          if (!trace_closest(accel, p.ray[i], hit) || !hit_matters(c, hit, p.depth[i])) return;
-          p.hit[i] = hit;
-          hits.push(i);
+        timed(times, WavefrontStage::ClosestHit, [&] {
+          for_queue(rays, [&](uint32_t i) {
+            Hit hit;
+            if (!trace_closest(accel, p.ray[i], hit) || !hit_matters(c, hit, p.depth[i])) return;
+            p.hit[i] = hit;
+            hits.push(i);
+          });
         });
 
         // Emission and its MIS weight at the hit; the vertex's BSDF and light context.
-        for_queue(hits, [&](uint32_t i) {
-          PathState s = p.load(i);
-          const int depth = p.depth[i];
-          const SurfaceHit sh = make_surface_hit(c.scene.mesh, p.hit[i]);
-          const Vec3 wo = -p.ray[i].d;
-          const HitEmission e = hit_emission(c, s, sh, wo, depth);
-          add_emission(c, s, sh, e,
-                       e.needs_light_pmf ? sampler.pmf(s.prev_ctx, uint32_t(sh.light)) : 0.0f);
-          if (depth >= c.max_depth) return p.store(i, s);
-          SampleStream& stream = p.stream[i];
-          stream.seek(vertex_dimension(depth, kLobe));
-          BsdfNumbers u;
-          u.u_lobe = stream.next();
-          u.u_dir = stream.next2();
-          const Bsdf* bsdf = new (&p.bsdf[i]) Bsdf(make_vertex_bsdf(c, sh, wo, u, depth));
-          if (bsdf->is_black()) return p.store(i, s);
-          LightContext ctx = make_vertex_context(c, s, sh, p.hit[i], wo, *bsdf);
-          if (sampler.prepares() && !bsdf->is_delta()) {
-            stream.seek(vertex_dimension(depth, kPrepare));
-            sampler.prepare(ctx, stream.next());
-          }
-          p.store(i, s);
-          p.surface[i] = sh;
-          p.numbers[i] = u;
-          p.ctx[i] = ctx;
-          if (samples_light(c, *bsdf)) nee.push(i);
-          bounces.push(i);
+        timed(times, WavefrontStage::Emission, [&] {
+          for_queue(hits, [&](uint32_t i) {
+            PathState s = p.load(i);
+            const int depth = p.depth[i];
+            const SurfaceHit sh = make_surface_hit(c.scene.mesh, p.hit[i]);
+            const Vec3 wo = -p.ray[i].d;
+            const HitEmission e = hit_emission(c, s, sh, wo, depth);
+            add_emission(c, s, sh, e,
+                         e.needs_light_pmf ? sampler.pmf(s.prev_ctx, uint32_t(sh.light)) : 0.0f);
+            if (depth >= c.max_depth) return p.store(i, s);
+            SampleStream& stream = p.stream[i];
+            stream.seek(vertex_dimension(depth, kLobe));
+            BsdfNumbers u;
+            u.u_lobe = stream.next();
+            u.u_dir = stream.next2();
+            const Bsdf* bsdf = new (&p.bsdf[i]) Bsdf(make_vertex_bsdf(c, sh, wo, u, depth));
+            if (bsdf->is_black()) return p.store(i, s);
+            LightContext ctx = make_vertex_context(c, s, sh, p.hit[i], wo, *bsdf);
+            if (sampler.prepares() && !bsdf->is_delta()) {
+              stream.seek(vertex_dimension(depth, kPrepare));
+              sampler.prepare(ctx, stream.next());
+            }
+            p.store(i, s);
+            p.surface[i] = sh;
+            p.numbers[i] = u;
+            p.ctx[i] = ctx;
+            if (samples_light(c, *bsdf)) nee.push(i);
+            bounces.push(i);
+          });
         });
 
         // Next-event estimation: the light, the point on it, the unoccluded contribution.
-        for_queue(nee, [&](uint32_t i) {
-          SampleStream& stream = p.stream[i];
-          stream.seek(vertex_dimension(p.depth[i], kLightChoice));
-          const double u_light = stream.next_double();
-          const Vec2 u_pos = stream.next2();
-          const SampledLight sl = sampler.sample(p.ctx[i], u_light);
-          p.light[i] = sl;
-          if (sl.pmf <= 0) return;
-          const NeeSetup setup = nee_setup(c, p.ctx[i], p.bsdf[i], -p.ray[i].d, sl.light, u_pos);
-          p.nee[i] = setup;
-          p.occluded[i] = 0;
-          if (setup.counts_shadow_ray) atomic_add(&tally[0].shadow, uint64_t(1));
-          if (setup.traces) shadows.push(i);
+        timed(times, WavefrontStage::NeeSample, [&] {
+          for_queue(nee, [&](uint32_t i) {
+            SampleStream& stream = p.stream[i];
+            stream.seek(vertex_dimension(p.depth[i], kLightChoice));
+            const double u_light = stream.next_double();
+            const Vec2 u_pos = stream.next2();
+            const SampledLight sl = sampler.sample(p.ctx[i], u_light);
+            p.light[i] = sl;
+            if (sl.pmf <= 0) return;
+            const NeeSetup setup = nee_setup(c, p.ctx[i], p.bsdf[i], -p.ray[i].d, sl.light, u_pos);
+            p.nee[i] = setup;
+            p.occluded[i] = 0;
+            if (setup.counts_shadow_ray) atomic_add(&tally[0].shadow, uint64_t(1));
+            if (setup.traces) shadows.push(i);
+          });
         });
 
         // Shadow rays.
-        for_queue(shadows,
-                  [&](uint32_t i) { p.occluded[i] = trace_shadow(accel, p.nee[i].shadow); });
+        timed(times, WavefrontStage::Shadow, [&] {
+          for_queue(shadows,
+                    [&](uint32_t i) { p.occluded[i] = trace_shadow(accel, p.nee[i].shadow); });
+        });
 
         // The next-event sample's contribution after the shadow ray's verdict.
-        for_queue(nee, [&](uint32_t i) {
-          const SampledLight& sl = p.light[i];
-          Rgb value(0);
-          if (sl.pmf > 0) {
-            const NeeResult r = nee_finish(p.nee[i], p.nee[i].traces && p.occluded[i] != 0,
-                                           p.bsdf[i], -p.ray[i].d, p.beta[i], sl.pmf, mis);
-            p.record[i] = r.record;
-            value = r.value;
-          }
-          p.L[i] += p.beta[i] * value;
+        timed(times, WavefrontStage::NeeFinish, [&] {
+          for_queue(nee, [&](uint32_t i) {
+            const SampledLight& sl = p.light[i];
+            Rgb value(0);
+            if (sl.pmf > 0) {
+              const NeeResult r = nee_finish(p.nee[i], p.nee[i].traces && p.occluded[i] != 0,
+                                             p.bsdf[i], -p.ray[i].d, p.beta[i], sl.pmf, mis);
+              p.record[i] = r.record;
+              value = r.value;
+            }
+            p.L[i] += p.beta[i] * value;
+          });
         });
 
         // Rewards to a learning sampler.
         if (sampler.learns())
-          for_queue(nee, [&](uint32_t i) {
-            if (p.light[i].pmf > 0) sampler.record(p.ctx[i], p.light[i], p.record[i]);
+          timed(times, WavefrontStage::Rewards, [&] {
+            for_queue(nee, [&](uint32_t i) {
+              if (p.light[i].pmf > 0) sampler.record(p.ctx[i], p.light[i], p.record[i]);
+            });
           });
 
         // BSDF sampling, the throughput, Russian roulette: the next bounce's rays.
-        for_queue(bounces, [&](uint32_t i) {
-          const int depth = p.depth[i];
-          const Bsdf& bsdf = p.bsdf[i];
-          if (!continues_after_light(c, bsdf, depth)) return;
-          PathState s = p.load(i);
-          Ray next;
-          bool roulette = false;
-          if (!sample_bounce(c, s, bsdf, p.ctx[i], p.surface[i], -p.ray[i].d, p.numbers[i], depth,
-                             next, roulette))
-            return;
-          if (roulette) {
-            SampleStream& stream = p.stream[i];
-            stream.seek(vertex_dimension(depth, kRoulette));
-            if (!survive(s, stream.next())) return;
-          }
-          p.store(i, s);
-          p.ray[i] = next;
-          p.depth[i] = depth + 1;
-          atomic_add(&tally[0].bounce, uint64_t(1));
-          next_rays.push(i);
+        timed(times, WavefrontStage::BsdfSample, [&] {
+          for_queue(bounces, [&](uint32_t i) {
+            const int depth = p.depth[i];
+            const Bsdf& bsdf = p.bsdf[i];
+            if (!continues_after_light(c, bsdf, depth)) return;
+            PathState s = p.load(i);
+            Ray next;
+            bool roulette = false;
+            if (!sample_bounce(c, s, bsdf, p.ctx[i], p.surface[i], -p.ray[i].d, p.numbers[i], depth,
+                               next, roulette))
+              return;
+            if (roulette) {
+              SampleStream& stream = p.stream[i];
+              stream.seek(vertex_dimension(depth, kRoulette));
+              if (!survive(s, stream.next())) return;
+            }
+            p.store(i, s);
+            p.ray[i] = next;
+            p.depth[i] = depth + 1;
+            atomic_add(&tally[0].bounce, uint64_t(1));
+            next_rays.push(i);
+          });
         });
         std::swap(rays, next_rays);
       }
 
       // Accumulation, in slot order: the film's sums do not depend on the threads.
-      for (uint32_t i = 0; i < n; ++i) {
-        const size_t pixel = (batch + i) / size_t(count);
-        Rgb L = p.L[i];
-        if (!is_finite(L)) {
-          ++pass_nonfinite;
-          L = Rgb(0);
+      timed(times, WavefrontStage::Accumulate, [&] {
+        for (uint32_t i = 0; i < n; ++i) {
+          const size_t pixel = (batch + i) / size_t(count);
+          Rgb L = p.L[i];
+          if (!is_finite(L)) {
+            ++pass_nonfinite;
+            L = Rgb(0);
+          }
+          film.add(int(pixel % size_t(w)), int(pixel / size_t(w)), L);
         }
-        film.add(int(pixel % size_t(w)), int(pixel / size_t(w)), L);
-      }
+      });
       pass_rays.camera += n;
       pass_rays.bounce += tally[0].bounce;
       pass_rays.shadow += tally[0].shadow;
     }
   };
-  return run_passes(
-      scene, [&] { sampler.end_pass(); }, film, settings, cancel, after_pass, pass);
+  const RenderProgress progress = run_passes(
+      scene, [&] { timed(times, WavefrontStage::EndPass, [&] { sampler.end_pass(); }); }, film,
+      settings, cancel, after_pass, pass);
+  if (times) times->total_seconds += seconds_between(t_start, std::chrono::steady_clock::now());
+  return progress;
 }
 
 }  // namespace rll

@@ -1,0 +1,259 @@
+// `rll interactive`: the interactive-rate mode for measurement (issue 31, item 7): frames of one
+// sample per pixel with one sampler whose learning carries from frame to frame, timed stage by
+// stage by the wavefront renderer.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "commands.h"
+#include "rll/core/error.h"
+#include "rll/core/image.h"
+#include "rll/core/parallel.h"
+#include "rll/core/params.h"
+#include "rll/core/sysinfo.h"
+#include "rll/lights/light_sampler.h"
+#include "rll/session/session.h"
+
+namespace rll::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct InteractiveOptions {
+  SessionSettings session;
+  std::string sampler = "rll";
+  int frames = 16;
+  int warmup = 1;
+  bool warmup_given = false;  // --warmup was on the command line
+  uint64_t seed = 1;
+  int threads = 0;
+  std::string output;
+  std::string stats;
+  float exposure = 0;
+  bool quiet = false;
+};
+
+// Median, least and greatest of a set of times (not empty).
+struct Spread {
+  double median = 0, min = 0, max = 0;
+};
+
+Spread spread_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return {n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]), v.front(), v.back()};
+}
+
+nlohmann::json spread_json(const Spread& s) {
+  return {{"median", s.median}, {"min", s.min}, {"max", s.max}};
+}
+
+// One frame's times in milliseconds: the total and each stage's.
+struct FrameTimes {
+  double total_ms = 0;
+  std::array<double, kWavefrontStages> stage_ms{};
+};
+
+FrameTimes to_ms(const WavefrontTimes& t) {
+  FrameTimes f;
+  f.total_ms = 1e3 * t.total_seconds;
+  for (size_t s = 0; s < kWavefrontStages; ++s) f.stage_ms[s] = 1e3 * t.stage_seconds[s];
+  return f;
+}
+
+std::string stage_columns(const std::array<double, kWavefrontStages>& ms) {
+  std::string line;
+  for (size_t s = 0; s < kWavefrontStages; ++s)
+    line += fmt::format(" {} {:.2f}", kWavefrontStageNames[s], ms[s]);
+  return line;
+}
+
+void run(InteractiveOptions o) {
+  install_interrupt_handler();
+  ThreadLimit limit(o.threads);
+  // Bad flags are reported before the scene (perhaps slow to load) is read.
+  parse_resolution(o.session.resolution);
+  Params::parse(o.session.set);
+  if (!o.warmup_given) o.warmup = std::min(o.warmup, o.frames - 1);  // a single frame is measured
+  if (o.warmup >= o.frames)
+    fail("--warmup {}: must be less than --frames {} (the summary needs a measured frame)",
+         o.warmup, o.frames);
+  std::vector<std::pair<fs::path, std::string>> outputs;
+  if (!o.output.empty()) {
+    prepare_output(o.output, "-o", {".exr", ".png"});
+    outputs.emplace_back(o.output, "-o");
+  }
+  if (!o.stats.empty()) {
+    prepare_output(o.stats, "--stats", {".json"});
+    outputs.emplace_back(o.stats, "--stats");
+  }
+  refuse_same_outputs(outputs);
+  const std::vector<fs::path> inputs = scene_inputs(o.session.scene);
+  for (const auto& [path, flag] : outputs) refuse_input(path, flag, inputs);
+
+  SessionSettings settings = o.session;
+  settings.wavefront = true;  // the renderer with stages to time
+  RenderSession session(settings);
+  const Scene& scene = session.scene();
+  const IntegratorSettings& is = session.integrator();
+  auto sampler = make_sampler_for(session, o.sampler, "--sampler");
+  session.check_params_used();
+  const bool animated = bool(scene.animate);
+
+  RenderSettings rs;
+  rs.spp = 1;
+  rs.seed = o.seed;
+  rs.pass_spp = rs.max_pass_spp = 1;
+  // A static scene's frames are further samples of one image (sample f of each pixel in frame
+  // f); an animated scene's frames are images of their own (the frame enters the seed).
+  Film film(scene.width, scene.height);
+  std::vector<FrameTimes> frames;
+  nlohmann::json frame_stats = nlohmann::json::array();
+  if (!o.quiet)
+    fmt::print("rll interactive: {} {}x{}, {} {} depth {}, sampler {}, CPU wavefront, {} frames\n",
+               o.session.scene, scene.width, scene.height, integrator_name(is.type),
+               strategy_name(is.strategy), is.max_depth, sampler->name(), o.frames);
+  begin_work();
+  bool cancelled = false;
+  for (int f = 0; f < o.frames && !interrupted(); ++f) {
+    session.set_frame(f, sampler.get());
+    if (animated) {
+      rs.frame = f;
+      film = Film(scene.width, scene.height);
+    } else {
+      rs.spp = f + 1;  // the film holds samples 0 to f - 1: this frame takes sample f
+    }
+    WavefrontTimes times;
+    // One pass of 1 spp: the sampler's end_pass after it carries the frame's learning on.
+    const RenderProgress p =
+        session.render(*sampler, film, rs, "frame", false, interrupt_flag(), {}, &times);
+    if (p.cancelled) {
+      cancelled = true;
+      break;
+    }
+    const FrameTimes ft = to_ms(times);
+    frames.push_back(ft);
+    nlohmann::json stages;
+    for (size_t s = 0; s < kWavefrontStages; ++s) stages[kWavefrontStageNames[s]] = ft.stage_ms[s];
+    frame_stats.push_back(
+        {{"frame", f},
+         {"ms_total", ft.total_ms},
+         {"ms_stages", stages},
+         {"samples", p.samples},
+         {"rays",
+          {{"camera", p.rays.camera}, {"bounce", p.rays.bounce}, {"shadow", p.rays.shadow}}}});
+    if (!o.quiet) {
+      fmt::print("frame {} {:.2f} ms:{}\n", f, ft.total_ms, stage_columns(ft.stage_ms));
+      std::fflush(stdout);  // a line as each frame ends, also into a pipe
+    }
+  }
+
+  // The summary over the frames after the warm-up (an interrupted run: those it has).
+  nlohmann::json summary;
+  const int measured = int(frames.size()) - o.warmup;
+  if (measured > 0) {
+    auto over = [&](auto&& value) {
+      std::vector<double> v;
+      for (size_t f = size_t(o.warmup); f < frames.size(); ++f) v.push_back(value(frames[f]));
+      return spread_of(v);
+    };
+    const Spread total = over([](const FrameTimes& t) { return t.total_ms; });
+    summary["ms_total"] = spread_json(total);
+    std::array<double, kWavefrontStages> medians{};
+    for (size_t s = 0; s < kWavefrontStages; ++s) {
+      const Spread sp = over([s](const FrameTimes& t) { return t.stage_ms[s]; });
+      summary["ms_stages"][kWavefrontStageNames[s]] = spread_json(sp);
+      medians[s] = sp.median;
+    }
+    if (!o.quiet) {
+      fmt::print("median of {} frames after {} warm-up: {:.2f} ms (min {:.2f}, max {:.2f})\n",
+                 measured, o.warmup, total.median, total.min, total.max);
+      fmt::print("median ms per stage:{}\n", stage_columns(medians));
+    }
+  }
+
+  if (!o.output.empty() && !frames.empty()) {
+    write_image(o.output, film.resolve(), o.exposure);
+    fmt::print(stderr, "wrote {} ({})\n", o.output,
+               animated ? "the last frame" : fmt::format("{} frames accumulated", frames.size()));
+  }
+  if (!o.stats.empty()) {
+    nlohmann::json j = session_stats(session);
+    j["sampler"] = sampler->describe();
+    j["device"] = "cpu";
+    j["animated"] = animated;
+    j["spp_per_frame"] = 1;
+    j["frames_requested"] = o.frames;
+    j["warmup"] = o.warmup;
+    j["stages"] = kWavefrontStageNames;
+    j["frames"] = frame_stats;
+    j["summary"] = summary;
+    j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
+    j["seed"] = o.seed;
+    j["interrupted"] = cancelled || interrupted();
+    j["memory"] = {{"peak_rss_bytes", peak_rss_bytes()}};
+    write_file_atomic(o.stats, j.dump(2) + "\n");
+  }
+  if (cancelled || interrupted())
+    fmt::print(stderr, "rll: interrupted after {} frames\n", frames.size());
+}
+
+}  // namespace
+
+void add_interactive_command(CLI::App& app) {
+  auto o = std::make_shared<InteractiveOptions>();
+  o->session.resolution = "1920x1080";
+  auto* cmd = app.add_subcommand(
+      "interactive",
+      "Interactive-rate measurement: frames of 1 spp with learning carried from frame to frame, "
+      "timed per stage (on the CPU it measures the CPU wavefront renderer)");
+  add_session_options(cmd, o->session);
+  cmd->get_option("--res")->description(
+      fmt::format("Film resolution WIDTHxHEIGHT, each from 1 to {}, at most {} pixels",
+                  kMaxFilmSide, kMaxFilmPixels));
+  cmd->get_option("--res")->capture_default_str();
+  cmd->add_option("--sampler", o->sampler,
+                  fmt::format("Light sampler, one for all frames (what it learns in a frame is "
+                              "used by the next): {}",
+                              fmt::join(light_sampler_names(), ", ")))
+      ->capture_default_str();
+  cmd->add_option("--frames", o->frames,
+                  fmt::format("Frames to render, 1 spp each, at most {}; an animated scene "
+                              "(builtin:cornell-boxes-dynamic) moves to frame f in frame f, a "
+                              "static one accumulates them",
+                              kMaxFrames))
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxFrames));
+  cmd->add_option("--warmup", o->warmup,
+                  "Frames left out of the summary's median, min and max (less than --frames; "
+                  "by default 1, or 0 with --frames 1)")
+      ->capture_default_str()
+      ->check(integer_in(0, kMaxFrames - 1))
+      ->each([o](const std::string&) { o->warmup_given = true; });
+  cmd->add_option("--seed", o->seed,
+                  "Random seed; the same seed gives the same images with any --threads")
+      ->capture_default_str()
+      ->check(unsigned_integer());
+  cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")
+      ->capture_default_str()
+      ->check(integer_in(0, kMaxThreads));
+  cmd->add_option("-o,--output", o->output,
+                  "Write the last frame (animated scene) or all frames accumulated (static "
+                  "scene): .exr (linear) or .png (sRGB); none by default");
+  cmd->add_option("--stats", o->stats,
+                  "Write the per-frame and per-stage times (ms) and their summary to this JSON "
+                  "file");
+  cmd->add_option("--exposure", o->exposure, "Exposure in stops for .png output")
+      ->capture_default_str()
+      ->check(number_in(-kMaxExposure, kMaxExposure));
+  cmd->add_flag("--quiet", o->quiet, "No per-frame lines and summary on stdout");
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace rll::cli
