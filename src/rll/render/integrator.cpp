@@ -72,12 +72,10 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sam
 
 Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
                              const Rgb& beta, SampleStream& stream, RayCounters& counters) const {
-  stream.seek(vertex_dimension(depth, kLightChoice));
-  double u_light = stream.next_double();
-  Vec2 u_pos = stream.next2();
-  SampledLight sl = m_sampler.sample(ctx, u_light);
+  const LightNumbers u = light_numbers(stream, depth);
+  SampledLight sl = m_sampler.sample(ctx, u.u_light);
   if (sl.pmf <= 0) return Rgb(0);
-  const NeeSetup n = nee_setup(m_constants, ctx, bsdf, wo, sl.light, u_pos);
+  const NeeSetup n = nee_setup(m_constants, ctx, bsdf, wo, sl.light, u.u_pos);
   if (n.counts_shadow_ray) ++counters.shadow;
   const bool occluded = n.traces && m_accel.occluded(n.shadow);
   const NeeResult r =
@@ -102,27 +100,19 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
                  e.needs_light_pmf ? m_sampler.pmf(s.prev_ctx, uint32_t(sh.light)) : 0.0f);
     if (depth >= c.max_depth) break;
 
-    stream.seek(vertex_dimension(depth, kLobe));
-    BsdfNumbers u;
-    u.u_lobe = stream.next();
-    u.u_dir = stream.next2();
+    const BsdfNumbers u = bsdf_numbers(stream, depth);
     const Bsdf bsdf = make_vertex_bsdf(c, sh, wo, u, depth);
     if (bsdf.is_black()) break;
     LightContext ctx = make_vertex_context(c, s, sh, hit, wo, bsdf);
     const bool light = samples_light(c, bsdf);
-    if (m_prepares && !bsdf.is_delta()) {
-      stream.seek(vertex_dimension(depth, kPrepare));
-      m_sampler.prepare(ctx, stream.next());
-    }
+    if (m_prepares && !bsdf.is_delta())
+      m_sampler.prepare(ctx, vertex_number(stream, depth, kPrepare));
     if (light) s.L += s.beta * sample_light(ctx, bsdf, wo, depth, s.beta, stream, counters);
     if (!continues_after_light(c, bsdf, depth)) break;
 
     bool roulette = false;
     if (!sample_bounce(c, s, bsdf, ctx, sh, wo, u, depth, ray, roulette)) break;
-    if (roulette) {
-      stream.seek(vertex_dimension(depth, kRoulette));
-      if (!survive(s, stream.next())) break;
-    }
+    if (roulette && !survive(s, vertex_number(stream, depth, kRoulette))) break;
     ++counters.bounce;
   }
   return s.L;

@@ -9,6 +9,7 @@
 
 #include "rll/core/device.h"
 #include "rll/core/hash.h"
+#include "rll/core/rng.h"
 #include "rll/core/sampling.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/scene/bsdf.h"
@@ -38,6 +39,25 @@ enum VertexDim : uint32_t {
 };
 RLL_HD inline uint32_t vertex_dimension(int depth, VertexDim d) {
   return kCameraDims + uint32_t(depth) * kVertexDims + d;
+}
+// The number of decision `d` at the vertex at `depth` (a learning sampler's prepare, Russian
+// roulette): the stream continues at the decision's own dimension.
+RLL_HD inline float vertex_number(SampleStream& stream, int depth, VertexDim d) {
+  stream.seek(vertex_dimension(depth, d));
+  return stream.next();
+}
+
+// The next-event sample's numbers: the light's choice (53 bits) and the point on it.
+struct LightNumbers {
+  double u_light = 0;
+  Vec2 u_pos;
+};
+RLL_HD inline LightNumbers light_numbers(SampleStream& stream, int depth) {
+  stream.seek(vertex_dimension(depth, kLightChoice));
+  LightNumbers u;
+  u.u_light = stream.next_double();
+  u.u_pos = stream.next2();
+  return u;
 }
 
 // What every vertex of every path of a render reads: the scene's views and the integrator's
@@ -115,6 +135,13 @@ struct BsdfNumbers {
   float u_lobe = 0;
   Vec2 u_dir;
 };
+RLL_HD inline BsdfNumbers bsdf_numbers(SampleStream& stream, int depth) {
+  stream.seek(vertex_dimension(depth, kLobe));
+  BsdfNumbers u;
+  u.u_lobe = stream.next();
+  u.u_dir = stream.next2();
+  return u;
+}
 
 RLL_HD inline Bsdf make_vertex_bsdf(const PathConstants& c, const SurfaceHit& sh, const Vec3& wo,
                                     const BsdfNumbers& u, int depth) {

@@ -236,17 +236,12 @@ RenderProgress render_wavefront(
                          e.needs_light_pmf ? sampler.pmf(s.prev_ctx, uint32_t(sh.light)) : 0.0f);
             if (depth >= c.max_depth) return p.store(i, s);
             SampleStream& stream = p.stream[i];
-            stream.seek(vertex_dimension(depth, kLobe));
-            BsdfNumbers u;
-            u.u_lobe = stream.next();
-            u.u_dir = stream.next2();
+            const BsdfNumbers u = bsdf_numbers(stream, depth);
             const Bsdf* bsdf = new (&p.bsdf[i]) Bsdf(make_vertex_bsdf(c, sh, wo, u, depth));
             if (bsdf->is_black()) return p.store(i, s);
             LightContext ctx = make_vertex_context(c, s, sh, p.hit[i], wo, *bsdf);
-            if (sampler.prepares() && !bsdf->is_delta()) {
-              stream.seek(vertex_dimension(depth, kPrepare));
-              sampler.prepare(ctx, stream.next());
-            }
+            if (sampler.prepares() && !bsdf->is_delta())
+              sampler.prepare(ctx, vertex_number(stream, depth, kPrepare));
             p.store(i, s);
             p.surface[i] = sh;
             p.numbers[i] = u;
@@ -259,14 +254,12 @@ RenderProgress render_wavefront(
         // Next-event estimation: the light, the point on it, the unoccluded contribution.
         timed(times, WavefrontStage::NeeSample, [&] {
           for_queue(nee, [&](uint32_t i) {
-            SampleStream& stream = p.stream[i];
-            stream.seek(vertex_dimension(p.depth[i], kLightChoice));
-            const double u_light = stream.next_double();
-            const Vec2 u_pos = stream.next2();
-            const SampledLight sl = sampler.sample(p.ctx[i], u_light);
+            const LightNumbers u = light_numbers(p.stream[i], p.depth[i]);
+            const SampledLight sl = sampler.sample(p.ctx[i], u.u_light);
             p.light[i] = sl;
             if (sl.pmf <= 0) return;
-            const NeeSetup setup = nee_setup(c, p.ctx[i], p.bsdf[i], -p.ray[i].d, sl.light, u_pos);
+            const NeeSetup setup =
+                nee_setup(c, p.ctx[i], p.bsdf[i], -p.ray[i].d, sl.light, u.u_pos);
             p.nee[i] = setup;
             p.occluded[i] = 0;
             if (setup.counts_shadow_ray) atomic_add(&tally[0].shadow, uint64_t(1));
@@ -315,11 +308,7 @@ RenderProgress render_wavefront(
             if (!sample_bounce(c, s, bsdf, p.ctx[i], p.surface[i], -p.ray[i].d, p.numbers[i], depth,
                                next, roulette))
               return;
-            if (roulette) {
-              SampleStream& stream = p.stream[i];
-              stream.seek(vertex_dimension(depth, kRoulette));
-              if (!survive(s, stream.next())) return;
-            }
+            if (roulette && !survive(s, vertex_number(p.stream[i], depth, kRoulette))) return;
             p.store(i, s);
             p.ray[i] = next;
             p.depth[i] = depth + 1;
