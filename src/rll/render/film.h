@@ -4,24 +4,38 @@
 #include <cstdint>
 #include <vector>
 
+#include "rll/core/device.h"
 #include "rll/core/image.h"
 
 namespace rll {
 
+// A film's sums and counts as a kernel adds to them (in host or device memory).
+struct FilmView {
+  View<double> sum;  // 3 per pixel
+  View<uint32_t> count;
+  int width = 0;
+
+  // Not thread-safe per pixel: one thread adds a pixel's samples, in their order.
+  RLL_HD void add(size_t pixel, const Rgb& v) const {
+    sum[3 * pixel] += v.x;
+    sum[3 * pixel + 1] += v.y;
+    sum[3 * pixel + 2] += v.z;
+    ++count[pixel];
+  }
+};
+
 class Film {
  public:
   Film(int width, int height)
-      : m_w(width), m_h(height), m_sum(size_t(width) * height * 3, 0.0), m_count(size_t(width) * height, 0) {}
+      : m_w(width),
+        m_h(height),
+        m_sum(size_t(width) * height * 3, 0.0),
+        m_count(size_t(width) * height, 0) {}
   int width() const { return m_w; }
   int height() const { return m_h; }
   // Not thread-safe per pixel: each pixel is owned by one tile at a time.
-  void add(int x, int y, const Rgb& v) {
-    size_t i = size_t(y) * m_w + x;
-    m_sum[3 * i] += v.x;
-    m_sum[3 * i + 1] += v.y;
-    m_sum[3 * i + 2] += v.z;
-    ++m_count[i];
-  }
+  void add(int x, int y, const Rgb& v) { view().add(size_t(y) * m_w + x, v); }
+  FilmView view() { return {view_of(m_sum), view_of(m_count), m_w}; }
   uint32_t count(int x, int y) const { return m_count[size_t(y) * m_w + x]; }
   uint32_t min_count() const;
   const std::vector<uint32_t>& counts() const { return m_count; }

@@ -11,8 +11,9 @@
 #include "rll/core/hash.h"
 #include "rll/core/rng.h"
 #include "rll/core/sampling.h"
-#include "rll/lights/light_sampler.h"
+#include "rll/lights/light_context.h"
 #include "rll/scene/bsdf.h"
+#include "rll/scene/camera.h"
 #include "rll/scene/interaction.h"
 #include "rll/scene/scene_view.h"
 
@@ -45,6 +46,14 @@ RLL_HD inline uint32_t vertex_dimension(int depth, VertexDim d) {
 RLL_HD inline float vertex_number(SampleStream& stream, int depth, VertexDim d) {
   stream.seek(vertex_dimension(depth, d));
   return stream.next();
+}
+
+// The camera ray of pixel (x, y): a jitter inside the pixel, and a point on the lens drawn only for
+// a thin lens, so that pinhole images keep their sample streams (and stay bit-identical).
+RLL_HD inline Ray camera_ray(const Camera& camera, int x, int y, SampleStream& stream) {
+  const Vec2 jitter = stream.next2();
+  return camera.has_lens() ? camera.generate_ray(x + jitter.x, y + jitter.y, stream.next2())
+                           : camera.generate_ray(x + jitter.x, y + jitter.y);
 }
 
 // The next-event sample's numbers: the light's choice (53 bits) and the point on it.

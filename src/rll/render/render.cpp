@@ -6,6 +6,7 @@
 #include "rll/core/error.h"
 #include "rll/core/parallel.h"
 #include "rll/core/rng.h"
+#include "rll/render/path_vertex.h"
 
 namespace rll {
 
@@ -27,12 +28,7 @@ bool PassStop::operator()() const {
 }
 
 Ray camera_ray(const Scene& scene, int x, int y, SampleStream& stream) {
-  Vec2 jitter = stream.next2();
-  // The lens sample is drawn only for a thin lens, so that pinhole images keep their sample
-  // streams (and stay bit-identical).
-  return scene.camera.has_lens()
-             ? scene.camera.generate_ray(x + jitter.x, y + jitter.y, stream.next2())
-             : scene.camera.generate_ray(x + jitter.x, y + jitter.y);
+  return camera_ray(scene.camera, x, y, stream);
 }
 
 RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_pass, Film& film,

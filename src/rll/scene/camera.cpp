@@ -1,6 +1,5 @@
 #include "rll/scene/camera.h"
 
-#include "rll/core/sampling.h"
 
 namespace rll {
 
@@ -19,37 +18,6 @@ void Camera::setup(int width, int height) {
   m_y0 = (whole ? -1 : screen_window[2]) * m_tan_half;
   m_y1 = (whole ? 1 : screen_window[3]) * m_tan_half;
   m_pixel_angle = whole ? 2 * m_tan_half / float(height) : (m_y1 - m_y0) / float(height);
-}
-
-Vec3 Camera::image_plane_point(float x, float y) const {
-  if (m_whole) {  // the arithmetic of rll's pinhole camera before screen windows, bit for bit
-    const float sx = (2 * x / m_width - 1) * m_tan_half * m_aspect;
-    const float sy = (1 - 2 * y / m_height) * m_tan_half;
-    return m_forward + m_right * sx + m_up * sy;
-  }
-  const float sx = m_x0 + (m_x1 - m_x0) * (x / float(m_width));
-  const float sy = m_y1 - (m_y1 - m_y0) * (y / float(m_height));
-  return m_forward + m_right * sx + m_up * sy;
-}
-
-Ray Camera::generate_ray(float x, float y) const {
-  Ray r;
-  r.o = position;
-  r.d = normalize(image_plane_point(x, y));
-  return r;
-}
-
-Ray Camera::generate_ray(float x, float y, Vec2 lens) const {
-  if (!(lens_radius > 0)) return generate_ray(x, y);
-  // The pinhole ray meets the plane in focus (distance focal_distance along forward) at
-  // `focus`; the thin-lens ray leaves a point of the lens's disk towards it.
-  const Vec3 focus = image_plane_point(x, y) * focal_distance;
-  const Vec2 d = sample_uniform_disk_concentric(lens);
-  const Vec3 o = m_right * (d.x * lens_radius) + m_up * (d.y * lens_radius);
-  Ray r;
-  r.o = position + o;
-  r.d = normalize(focus - o);
-  return r;
 }
 
 }  // namespace rll

@@ -16,46 +16,19 @@
 #include "rll/render/integrator.h"
 #include "rll/render/render.h"
 #include "rll/scene/scene.h"
+#include "rll/wavefront/stages.h"
 
 namespace rll {
 
-// The stages of the wavefront renderer, in the order a bounce runs them; end_pass is the
-// sampler's work between passes (learning), which the pass loop runs.
-enum class WavefrontStage {
-  Camera,
-  ClosestHit,
-  Emission,
-  NeeSample,
-  Shadow,
-  NeeFinish,
-  Rewards,
-  BsdfSample,
-  Accumulate,
-  EndPass,
-  Count
-};
-inline constexpr size_t kWavefrontStages = size_t(WavefrontStage::Count);
-// Their names in --stats files and tables.
-inline constexpr std::array<const char*, kWavefrontStages> kWavefrontStageNames = {
-    "camera",     "closest_hit", "emission",    "nee_sample", "shadow",
-    "nee_finish", "rewards",     "bsdf_sample", "accumulate", "end_pass"};
-
-// Where the time of a render went, stage by stage, summed over its batches and bounces. On the
-// CPU each stage's loop is timed by the wall clock; a device version records the same stages
-// with events around its launches, so that the two compare stage for stage.
-struct WavefrontTimes {
-  std::array<double, kWavefrontStages> stage_seconds{};
-  // The whole render_wavefront call: the stages, the set-up (views, slot memory), the loops
-  // between them and the caller's after_pass.
-  double total_seconds = 0;
-
-  double& operator[](WavefrontStage s) { return stage_seconds[size_t(s)]; }
-  double stages_sum() const;
-};
+// What the wavefront renderer traces rays with on the CPU: Embree (the CPU's tracer), or rll's own
+// BVH (bvh/traverse.h), the traversal a GPU runs, so that the CPU renders exactly what the GPU's
+// code does.
+enum class WavefrontTracer { Embree, Bvh };
 
 struct WavefrontSettings {
   // Paths in flight at once: the state of each slot takes under 1 KB, allocated once per render.
   uint32_t path_slots = 1u << 15;
+  WavefrontTracer tracer = WavefrontTracer::Embree;
   // When set, the times of the render are added to it (the clock is read only then).
   WavefrontTimes* times = nullptr;
 };

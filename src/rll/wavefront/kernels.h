@@ -1,0 +1,319 @@
+// The wavefront renderer's stages as RLL_HD kernel bodies over flat data (DESIGN 6): each stage is
+// one function of a slot (or a pixel), reading and writing the structure-of-arrays path state and
+// pushing slots onto the next stage's queue. The CPU runs them through host_parallel_for
+// (wavefront/driver.h with the host backend), a GPU through CUDA launches (cuda/wavefront.cu):
+// the same functions. They call the megakernel's per-vertex functions (render/path_vertex.h) in
+// the megakernel's order, so a path's radiance is the same to the bit on the CPU.
+#pragma once
+
+#include <cstdint>
+
+#include "rll/bvh/traverse.h"
+#include "rll/core/device.h"
+#include "rll/core/rng.h"
+#include "rll/core/sobol.h"
+#include "rll/lights/light_dispatch.h"
+#include "rll/render/film.h"
+#include "rll/render/path_vertex.h"
+#include "rll/scene/camera.h"
+#include "rll/wavefront/stages.h"
+
+namespace rll {
+
+// Path slots pushed by many threads at once; their order varies, what each slot holds does not.
+struct WavefrontQueue {
+  View<uint32_t> slots;
+  uint32_t* size = nullptr;  // in the slot memory, so that the queue copies into a kernel by value
+  RLL_HD void push(uint32_t slot) const { slots[atomic_add(size, 1u)] = slot; }
+  RLL_HD uint32_t count() const { return atomic_load(size); }
+};
+
+// The queues of a bounce, their sizes in one array (kWavefrontQueues words) so that a device
+// clears or reads them with one copy.
+enum WavefrontQueueId : uint32_t {
+  kRays,
+  kNextRays,
+  kHits,
+  kNee,
+  kShadows,
+  kBounces,
+  kWavefrontQueues
+};
+
+// The state of the paths in flight, one element per slot in each array.
+struct PathSlots {
+  View<SampleStream> stream;
+  View<Ray> ray;
+  View<Hit> hit;
+  View<int> depth;
+  // PathState, field by field.
+  View<Rgb> L, beta;
+  View<float> footprint, prev_dir_pdf, prev_bsdf_pdf;
+  View<uint8_t> prev_delta;
+  View<LightContext> prev_ctx;
+  // The current vertex.
+  View<SurfaceHit> surface;
+  View<BsdfNumbers> numbers;
+  View<Bsdf> bsdf;
+  View<LightContext> ctx;
+  // Its next-event sample.
+  View<SampledLight> light;
+  View<NeeSetup> nee;
+  View<uint8_t> occluded;
+  View<NeeRecord> record;
+
+  // Takes every array from `take(count, tag)`, a function of the memory that holds them (host or
+  // device) called as take.template operator()<T>(n).
+  template <typename Take>
+  static PathSlots make(Take& take, size_t n) {
+    PathSlots p;
+    p.stream = take.template operator()<SampleStream>(n);
+    p.ray = take.template operator()<Ray>(n);
+    p.hit = take.template operator()<Hit>(n);
+    p.depth = take.template operator()<int>(n);
+    p.L = take.template operator()<Rgb>(n);
+    p.beta = take.template operator()<Rgb>(n);
+    p.footprint = take.template operator()<float>(n);
+    p.prev_dir_pdf = take.template operator()<float>(n);
+    p.prev_bsdf_pdf = take.template operator()<float>(n);
+    p.prev_delta = take.template operator()<uint8_t>(n);
+    p.prev_ctx = take.template operator()<LightContext>(n);
+    p.surface = take.template operator()<SurfaceHit>(n);
+    p.numbers = take.template operator()<BsdfNumbers>(n);
+    p.bsdf = take.template operator()<Bsdf>(n);
+    p.ctx = take.template operator()<LightContext>(n);
+    p.light = take.template operator()<SampledLight>(n);
+    p.nee = take.template operator()<NeeSetup>(n);
+    p.occluded = take.template operator()<uint8_t>(n);
+    p.record = take.template operator()<NeeRecord>(n);
+    return p;
+  }
+
+  RLL_HD PathState load(uint32_t i) const {
+    PathState s;
+    s.L = L[i];
+    s.beta = beta[i];
+    s.footprint = footprint[i];
+    s.prev_dir_pdf = prev_dir_pdf[i];
+    s.prev_bsdf_pdf = prev_bsdf_pdf[i];
+    s.prev_delta = prev_delta[i] != 0;
+    s.prev_ctx = prev_ctx[i];
+    return s;
+  }
+  RLL_HD void store(uint32_t i, const PathState& s) const {
+    L[i] = s.L;
+    beta[i] = s.beta;
+    footprint[i] = s.footprint;
+    prev_dir_pdf[i] = s.prev_dir_pdf;
+    prev_bsdf_pdf[i] = s.prev_bsdf_pdf;
+    prev_delta[i] = s.prev_delta;
+    prev_ctx[i] = s.prev_ctx;
+  }
+};
+
+// Counts of a batch, added to by the stages with integer atomics.
+struct WavefrontTally {
+  uint64_t bounce = 0, shadow = 0, nonfinite = 0;
+};
+
+// The batch of paths a launch works on: items [first_item, first_item + n) of a pass, item k being
+// sample first_sample + (k % count) of pixel k / count (each pixel's samples in order).
+struct WavefrontBatch {
+  uint64_t first_item = 0;
+  uint32_t n = 0;
+  int count = 1;            // samples per pixel in this pass
+  int first = 0;            // the pass's first sample of each pixel
+  uint64_t frame_seed = 0;  // as run_passes derives it
+  uint64_t first_sample = 0;
+  PointSet points = PointSet::Sobol;
+
+  RLL_HD uint64_t pixel_of(uint32_t slot) const { return (first_item + slot) / uint64_t(count); }
+  // The pixels the batch touches: [first_pixel(), first_pixel() + pixels()).
+  RLL_HD uint64_t first_pixel() const { return first_item / uint64_t(count); }
+  RLL_HD uint64_t pixels() const { return n == 0 ? 0 : pixel_of(n - 1) - first_pixel() + 1; }
+};
+
+// Tracing by rll's own BVH (bvh/traverse.h): what a GPU runs, and what the CPU can run to test it.
+struct BvhTracer {
+  BvhView bvh;
+  RLL_HD bool closest(const Ray& ray, Hit& hit) const { return intersect(bvh, ray, hit); }
+  RLL_HD bool shadow(const Ray& ray) const { return occluded(bvh, ray); }
+};
+
+// A light sampler with a device version, reached through the tag-dispatched functions of
+// lights/light_dispatch.h.
+struct ViewSampler {
+  SamplerView view;
+  bool prepares = false, learns = false;
+  RLL_HD void prepare(LightContext& ctx, float u) const { prepare_point(view, ctx, u); }
+  RLL_HD SampledLight sample(const LightContext& ctx, double u) const {
+    return sample_light(view, ctx, u);
+  }
+  RLL_HD float pmf(const LightContext& ctx, uint32_t light) const {
+    return light_pmf(view, ctx, light);
+  }
+  RLL_HD void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) const {
+    record_nee(view, ctx, s, r);
+  }
+};
+
+// Everything a stage reads, by value into every launch: the scene and integrator (PathConstants),
+// the camera, the Sobol' tables, a tracer, a light sampler, the path slots, the queues, the tally
+// and the film. Tracer and Sampler are the CPU's or the device's (BvhTracer, ViewSampler).
+template <typename Tracer, typename Sampler>
+struct WavefrontKernels {
+  PathConstants c;
+  Camera camera;
+  int width = 1;  // of the film
+  SobolView sobol;
+  Tracer tracer;
+  Sampler sampler;
+  PathSlots p;
+  View<uint32_t> queue_slots[kWavefrontQueues];
+  uint32_t* queue_sizes = nullptr;  // kWavefrontQueues words
+  WavefrontTally* tally = nullptr;
+  FilmView film;
+  bool mis = true;
+
+  RLL_HD WavefrontQueue queue(WavefrontQueueId q) const {
+    return {queue_slots[q], &queue_sizes[q]};
+  }
+
+  // Camera rays: slot i starts item first_item + i and joins the ray queue.
+  RLL_HD void camera_stage(const WavefrontBatch& b, uint32_t i) const {
+    const uint64_t item = b.first_item + i, pixel = item / uint64_t(b.count);
+    const int s = b.first + int(item % uint64_t(b.count));
+    SampleStream stream(sobol, b.frame_seed, pixel, b.first_sample + uint64_t(s), b.points);
+    p.ray[i] =
+        camera_ray(camera, int(pixel % uint64_t(width)), int(pixel / uint64_t(width)), stream);
+    p.stream[i] = stream;
+    p.depth[i] = 0;
+    p.store(i, start_path(c));
+    queue_slots[kRays][i] = i;
+  }
+
+  // Closest hit of each ray; hits that matter join the hit queue.
+  RLL_HD void closest_hit_stage(uint32_t i) const {
+    Hit hit;
+    if (!tracer.closest(p.ray[i], hit) || !hit_matters(c, hit, p.depth[i])) return;
+    p.hit[i] = hit;
+    queue(kHits).push(i);
+  }
+
+  // Emission and its MIS weight at the hit; the vertex's BSDF and light context.
+  RLL_HD void emission_stage(uint32_t i) const {
+    PathState s = p.load(i);
+    const int depth = p.depth[i];
+    const SurfaceHit sh = make_surface_hit(c.scene.mesh, p.hit[i]);
+    const Vec3 wo = -p.ray[i].d;
+    const HitEmission e = hit_emission(c, s, sh, wo, depth);
+    add_emission(c, s, sh, e,
+                 e.needs_light_pmf ? sampler.pmf(s.prev_ctx, uint32_t(sh.light)) : 0.0f);
+    if (depth >= c.max_depth) return p.store(i, s);
+    SampleStream& stream = p.stream[i];
+    const BsdfNumbers u = bsdf_numbers(stream, depth);
+    const Bsdf* bsdf = new (&p.bsdf[i]) Bsdf(make_vertex_bsdf(c, sh, wo, u, depth));
+    if (bsdf->is_black()) return p.store(i, s);
+    LightContext ctx = make_vertex_context(c, s, sh, p.hit[i], wo, *bsdf);
+    if (sampler.prepares && !bsdf->is_delta())
+      sampler.prepare(ctx, vertex_number(stream, depth, kPrepare));
+    p.store(i, s);
+    p.surface[i] = sh;
+    p.numbers[i] = u;
+    p.ctx[i] = ctx;
+    if (samples_light(c, *bsdf)) queue(kNee).push(i);
+    queue(kBounces).push(i);
+  }
+
+  // Next-event estimation: the light, the point on it, the unoccluded contribution.
+  RLL_HD void nee_sample_stage(uint32_t i) const {
+    const LightNumbers u = light_numbers(p.stream[i], p.depth[i]);
+    const SampledLight sl = sampler.sample(p.ctx[i], u.u_light);
+    p.light[i] = sl;
+    if (sl.pmf <= 0) return;
+    const NeeSetup setup = nee_setup(c, p.ctx[i], p.bsdf[i], -p.ray[i].d, sl.light, u.u_pos);
+    p.nee[i] = setup;
+    p.occluded[i] = 0;
+    if (setup.counts_shadow_ray) atomic_add(&tally->shadow, uint64_t(1));
+    if (setup.traces) queue(kShadows).push(i);
+  }
+
+  RLL_HD void shadow_stage(uint32_t i) const { p.occluded[i] = tracer.shadow(p.nee[i].shadow); }
+
+  // The next-event sample's contribution after the shadow ray's verdict.
+  RLL_HD void nee_finish_stage(uint32_t i) const {
+    const SampledLight& sl = p.light[i];
+    Rgb value(0);
+    if (sl.pmf > 0) {
+      const NeeResult r = nee_finish(p.nee[i], p.nee[i].traces && p.occluded[i] != 0, p.bsdf[i],
+                                     -p.ray[i].d, p.beta[i], sl.pmf, mis);
+      p.record[i] = r.record;
+      value = r.value;
+    }
+    p.L[i] += p.beta[i] * value;
+  }
+
+  // Rewards to a learning sampler.
+  RLL_HD void rewards_stage(uint32_t i) const {
+    if (p.light[i].pmf > 0) sampler.record(p.ctx[i], p.light[i], p.record[i]);
+  }
+
+  // BSDF sampling, the throughput, Russian roulette: the next bounce's rays.
+  RLL_HD void bsdf_sample_stage(uint32_t i) const {
+    const int depth = p.depth[i];
+    const Bsdf& bsdf = p.bsdf[i];
+    if (!continues_after_light(c, bsdf, depth)) return;
+    PathState s = p.load(i);
+    Ray next;
+    bool roulette = false;
+    if (!sample_bounce(c, s, bsdf, p.ctx[i], p.surface[i], -p.ray[i].d, p.numbers[i], depth, next,
+                       roulette))
+      return;
+    if (roulette && !survive(s, vertex_number(p.stream[i], depth, kRoulette))) return;
+    p.store(i, s);
+    p.ray[i] = next;
+    p.depth[i] = depth + 1;
+    atomic_add(&tally->bounce, uint64_t(1));
+    queue(kNextRays).push(i);
+  }
+
+  // Stage S (of the queue stages) for slot i.
+  template <WavefrontStage S>
+  RLL_HD void run(uint32_t i) const {
+    if constexpr (S == WavefrontStage::ClosestHit)
+      closest_hit_stage(i);
+    else if constexpr (S == WavefrontStage::Emission)
+      emission_stage(i);
+    else if constexpr (S == WavefrontStage::NeeSample)
+      nee_sample_stage(i);
+    else if constexpr (S == WavefrontStage::Shadow)
+      shadow_stage(i);
+    else if constexpr (S == WavefrontStage::NeeFinish)
+      nee_finish_stage(i);
+    else if constexpr (S == WavefrontStage::Rewards)
+      rewards_stage(i);
+    else if constexpr (S == WavefrontStage::BsdfSample)
+      bsdf_sample_stage(i);
+    else
+      static_assert(S == WavefrontStage::BsdfSample, "not a queue stage");
+  }
+
+  // Accumulation of pixel first_pixel() + j of the batch: its samples in the batch, in their
+  // order, so that the film's sums do not depend on the threads or the device.
+  RLL_HD void accumulate_stage(const WavefrontBatch& b, uint64_t j) const {
+    const uint64_t pixel = b.first_pixel() + j, count = uint64_t(b.count);
+    const uint64_t begin = pixel * count > b.first_item ? pixel * count : b.first_item;
+    const uint64_t end_item = b.first_item + b.n, pixel_end = (pixel + 1) * count;
+    const uint64_t end = pixel_end < end_item ? pixel_end : end_item;
+    for (uint64_t item = begin; item < end; ++item) {
+      Rgb L = p.L[uint32_t(item - b.first_item)];
+      if (!is_finite(L)) {
+        atomic_add(&tally->nonfinite, uint64_t(1));
+        L = Rgb(0);
+      }
+      film.add(size_t(pixel), L);
+    }
+  }
+};
+
+}  // namespace rll
