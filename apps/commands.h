@@ -64,6 +64,8 @@ inline constexpr double kMaxExposure = 64;
 void add_session_options(CLI::App* cmd, SessionSettings& settings);
 // --wavefront (render and compare): SessionSettings::wavefront.
 void add_wavefront_option(CLI::App* cmd, SessionSettings& settings);
+// --device cpu|cuda and --tracer embree|bvh (add_wavefront_option adds them too).
+void add_device_options(CLI::App* cmd, SessionSettings& settings);
 
 // What the --stats file of every command that renders says of its session: the scene, the
 // resolution, the integrator, the renderer and the sample points.

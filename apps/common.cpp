@@ -107,6 +107,21 @@ void add_wavefront_option(CLI::App* cmd, SessionSettings& s) {
       "Render with the wavefront path tracer (paths advanced a bounce at a time by stages "
       "over queues) instead of the megakernel (one path per call): the same estimator, "
       "the same images within noise");
+  add_device_options(cmd, s);
+}
+
+void add_device_options(CLI::App* cmd, SessionSettings& s) {
+  cmd->add_option("--device", s.device,
+                  "cpu, or cuda: the wavefront renderer on the GPU (an NVIDIA GPU of compute "
+                  "capability 9.0 or newer; rays traced by rll's own BVH; samplers uniform, "
+                  "power, tree, rll and fermat). Without a GPU, cuda exits with an error")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"cpu", "cuda"}));
+  cmd->add_option("--tracer", s.tracer,
+                  "What the CPU wavefront renderer (--wavefront) traces rays with: embree, or "
+                  "bvh (rll's own BVH, the traversal --device cuda runs, to check it on the CPU)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"embree", "bvh"}));
 }
 
 nlohmann::json session_stats(const RenderSession& session) {

@@ -116,9 +116,12 @@ void run(InteractiveOptions o) {
   std::vector<FrameTimes> frames;
   nlohmann::json frame_stats = nlohmann::json::array();
   if (!o.quiet)
-    fmt::print("rll interactive: {} {}x{}, {} {} depth {}, sampler {}, CPU wavefront, {} frames\n",
+    fmt::print("rll interactive: {} {}x{}, {} {} depth {}, sampler {}, {}, {} frames\n",
                o.session.scene, scene.width, scene.height, integrator_name(is.type),
-               strategy_name(is.strategy), is.max_depth, sampler->name(), o.frames);
+               strategy_name(is.strategy), is.max_depth, sampler->name(),
+               session.gpu() ? "GPU wavefront on " + session.gpu()->device_name()
+                             : std::string("CPU wavefront"),
+               o.frames);
   begin_work();
   bool cancelled = false;
   for (int f = 0; f < o.frames && !interrupted(); ++f) {
@@ -186,7 +189,11 @@ void run(InteractiveOptions o) {
   if (!o.stats.empty()) {
     nlohmann::json j = session_stats(session);
     j["sampler"] = sampler->describe();
-    j["device"] = "cpu";
+    j["device"] = o.session.device;
+    if (session.gpu()) {
+      j["gpu"] = session.gpu()->device_name();
+      j["memory"]["gpu_bytes"] = session.gpu()->device_bytes();
+    }
     j["animated"] = animated;
     j["spp_per_frame"] = 1;
     j["frames_requested"] = o.frames;
@@ -197,7 +204,7 @@ void run(InteractiveOptions o) {
     j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
     j["seed"] = o.seed;
     j["interrupted"] = cancelled || interrupted();
-    j["memory"] = {{"peak_rss_bytes", peak_rss_bytes()}};
+    j["memory"]["peak_rss_bytes"] = peak_rss_bytes();
     write_file_atomic(o.stats, j.dump(2) + "\n");
   }
   if (cancelled || interrupted())
@@ -212,8 +219,10 @@ void add_interactive_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "interactive",
       "Interactive-rate measurement: frames of 1 spp with learning carried from frame to frame, "
-      "timed per stage (on the CPU it measures the CPU wavefront renderer)");
+      "timed per stage (the CPU wavefront renderer, or with --device cuda the GPU's, its "
+      "stages timed by CUDA events)");
   add_session_options(cmd, o->session);
+  add_device_options(cmd, o->session);
   cmd->get_option("--res")->description(
       fmt::format("Film resolution WIDTHxHEIGHT, each from 1 to {}, at most {} pixels",
                   kMaxFilmSide, kMaxFilmPixels));

@@ -65,3 +65,46 @@ TEST(DevicesCli, Json) {
 TEST(DevicesCli, UnknownOption) {
   expect_clean_failure({"devices", "--bogus"}, {"--bogus"});
 }
+
+// --device cuda: on a machine without a usable GPU, render, compare and interactive exit non-zero
+// with require_gpu's reason; with one, a sampler without a device version is refused by name.
+// --device and --tracer take only their values.
+TEST(DevicesCli, DeviceCudaWithoutAGpuSaysWhy) {
+  const std::string problem = gpu_problem();
+  if (problem.empty()) {
+    TempDir dir;
+    const CommandResult r =
+        run_rll({"render", "builtin:cornell-boxes-room", "--res", "16x12", "--spp", "1", "--device",
+                 "cuda", "--sampler", "ltc", "-o", (dir.path() / "x.exr").string()},
+                120);
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    expect_mentions(r.output, {"'ltc' has no device version"});
+    return;
+  }
+  TempDir dir;
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"render", "builtin:cornell-boxes-room", "--device", "cuda", "-o",
+                                 (dir.path() / "x.exr").string()},
+        std::vector<std::string>{"compare", "builtin:cornell-boxes-room", "--device", "cuda",
+                                 "--out", (dir.path() / "cmp").string(), "--spp", "1"},
+        std::vector<std::string>{"interactive", "builtin:cornell-boxes-room", "--device", "cuda",
+                                 "--frames", "1"}}) {
+    const CommandResult r = run_rll(args, 60);
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    expect_mentions(r.output, {problem});
+  }
+}
+
+TEST(DevicesCli, DeviceAndTracerTakeOnlyTheirValues) {
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"render", "builtin:cornell-boxes-room", "--device", "gpu"},
+        std::vector<std::string>{"render", "builtin:cornell-boxes-room", "--tracer", "optix"}}) {
+    const CommandResult r = run_rll(args, 60);
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    expect_mentions(r.output, {args[2]});
+  }
+  const CommandResult r =
+      run_rll({"render", "builtin:cornell-boxes-room", "--tracer", "bvh", "--res", "8x6"}, 60);
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  expect_mentions(r.output, {"--tracer bvh", "--wavefront"});
+}

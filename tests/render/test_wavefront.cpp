@@ -32,6 +32,7 @@ struct Render {
   bool wavefront = true;
   int threads = 0;
   uint32_t path_slots = WavefrontSettings{}.path_slots;
+  WavefrontTracer tracer = WavefrontTracer::Embree;
   WavefrontTimes* times = nullptr;
 };
 
@@ -52,6 +53,7 @@ Image render_image(const Scene& scene, const Accel& accel, const Render& r,
     WavefrontSettings ws;
     ws.path_slots = r.path_slots;
     ws.times = r.times;
+    ws.tracer = r.tracer;
     p = render_wavefront(scene, accel, *sampler, is, film, rs, nullptr, {}, ws);
   } else {
     Integrator integrator(scene, accel, *sampler, is);
@@ -69,21 +71,6 @@ bool same_bits(const Image& a, const Image& b) {
 Image scaled(Image image, float s) {
   for (Rgb& p : image.pixels()) p = p * s;
   return image;
-}
-
-// Empty if two independent renders agree in mean over the image and in each of 4 x 4 regions
-// (z = 4.5 each: 17 bounds falsely fail with probability about 1e-4 together); else the first
-// disagreement. The standard errors come from the per-pixel differences of the two images.
-std::string disagreement(const Image& a, const Image& b) {
-  constexpr double z = 4.5;
-  const Estimate d = difference_estimate(a, b);
-  if (std::abs(d.mean) > z * d.stderr_ + 1e-6)
-    return fmt::format("image: difference {} +- {}", d.mean, d.stderr_);
-  const auto regions = region_differences(a, b, 4, 4);
-  for (size_t i = 0; i < regions.size(); ++i)
-    if (std::abs(regions[i].mean) > z * regions[i].stderr_ + 1e-6)
-      return fmt::format("region {}: difference {} +- {}", i, regions[i].mean, regions[i].stderr_);
-  return {};
 }
 
 struct SceneCase {
@@ -129,16 +116,21 @@ TEST_P(WavefrontAgreement, EqualsMegakernelWithinNoiseByRegion) {
     r.seed = 1;
     const Image megakernel = render_image(scene, accel, r);
     r.wavefront = true;
-    r.seed = 2;  // independent of the megakernel's samples
-    const Image wavefront = render_image(scene, accel, r);
-    EXPECT_EQ(disagreement(wavefront, megakernel), "");
-    // The bound's power: an image `bias` too bright, or too dark, is caught.
-    for (const float scale : {1 + bias, 1 - bias}) {
-      const Image biased = scaled(wavefront, scale);
-      const Estimate d = difference_estimate(biased, megakernel);
-      EXPECT_NE(disagreement(biased, megakernel), "")
-          << "the comparison cannot see an image scaled by " << scale << " at these settings: z "
-          << d.mean / d.stderr_;
+    // Traced by Embree, and by rll's own BVH (the GPU's traversal, run here on the CPU).
+    for (const WavefrontTracer tracer : {WavefrontTracer::Embree, WavefrontTracer::Bvh}) {
+      SCOPED_TRACE(tracer == WavefrontTracer::Bvh ? "rll's BVH" : "Embree");
+      r.tracer = tracer;
+      r.seed = 2;  // independent of the megakernel's samples
+      const Image wavefront = render_image(scene, accel, r);
+      EXPECT_EQ(region_disagreement(wavefront, megakernel), "");
+      // The bound's power: an image `bias` too bright, or too dark, is caught.
+      for (const float scale : {1 + bias, 1 - bias}) {
+        const Image biased = scaled(wavefront, scale);
+        const Estimate d = difference_estimate(biased, megakernel);
+        EXPECT_NE(region_disagreement(biased, megakernel), "")
+            << "the comparison cannot see an image scaled by " << scale << " at these settings: z "
+            << d.mean / d.stderr_;
+      }
     }
   }
 }
@@ -267,41 +259,7 @@ TEST(Wavefront, RllLearntByTheWavefrontPassesTheSamplerChecks) {
       }
     }
     EXPECT_GT(differ_from_untrained, 0) << "nothing was learnt";
-    const double alpha = sidak_alpha(0.01, 2 * 4);
-    for (size_t c = 0; c < contexts.size(); ++c) {
-      const LightContext& ctx = contexts[c];
-      for (int k = 0; k < 32; ++k) {
-        const SampledLight s = sampler->sample(ctx, SampleStream(99, c, uint64_t(k)).next_double());
-        ASSERT_GT(s.pmf, 0);
-        ASSERT_EQ(s.pmf, sampler->pmf(ctx, s.light)) << "context " << c << " light " << s.light;
-      }
-      double sum = 0;
-      for (uint32_t l = 0; l < n; ++l) sum += sampler->pmf(ctx, l);
-      ASSERT_NEAR(sum, 1.0, 1e-4) << "context " << c;
-    }
-    for (int c = 0; c < 4; ++c) {
-      const LightContext& ctx = contexts[size_t(c) * 23 % contexts.size()];
-      const int N = 20000;
-      std::vector<double> stratified(n, 0), random(n, 0), expected(n, 0);
-      for (int k = 0; k < N; ++k) {
-        stratified[sampler->sample(ctx, (k + 0.5) / N).light] += 1;
-        random[sampler->sample(ctx, SampleStream(4242, uint64_t(c), uint64_t(k)).next_double())
-                   .light] += 1;
-      }
-      for (uint32_t l = 0; l < n; ++l) {
-        const double p = sampler->pmf(ctx, l);
-        expected[l] = p * N;
-        if (p == 0)
-          ASSERT_EQ(stratified[l], 0) << "light " << l << " drawn with pmf 0";
-        else
-          ASSERT_NEAR(stratified[l] / expected[l], 1.0, 2.0 / expected[l] + 1e-4)
-              << "context " << c << " light " << l;
-      }
-      const ChiSquareResult chi = chi_square(random, expected);
-      EXPECT_FALSE(chi.sample_in_zero_bin) << "context " << c;
-      EXPECT_GT(chi.p_value, alpha)
-          << "context " << c << ": chi2 " << chi.chi2 << " dof " << chi.dof;
-    }
+    expect_sampler_contract(*sampler, contexts, n);
   }
 }
 

@@ -24,6 +24,12 @@ bool light_can_contribute(const Light& light, const Vec3& p, const Vec3& n);
 void render_path_passes(const Scene& scene, const Accel& accel, LightSampler& sampler, int spp,
                         PointSet points = PointSet::Sobol);
 
+// The light-sampler contract at contexts already prepared by `sampler`: sample's pmf equals pmf()
+// exactly and is positive, pmfs sum to one, stratified u draws each light N * pmf times to within
+// two draws, and independent draws fit N * pmf (chi-square, Sidak-corrected over 4 contexts).
+void expect_sampler_contract(const LightSampler& sampler, const std::vector<LightContext>& contexts,
+                             uint32_t lights);
+
 // Trains a learning sampler by rendering `passes` passes of the scene (no-op otherwise).
 void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler, int passes,
                    PointSet points = PointSet::Sobol);

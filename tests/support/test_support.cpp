@@ -199,6 +199,18 @@ std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx,
   return out;
 }
 
+std::string region_disagreement(const Image& a, const Image& b) {
+  constexpr double z = 4.5;
+  const Estimate d = difference_estimate(a, b);
+  if (std::abs(d.mean) > z * d.stderr_ + 1e-6)
+    return fmt::format("image: difference {} +- {}", d.mean, d.stderr_);
+  const auto regions = region_differences(a, b, 4, 4);
+  for (size_t i = 0; i < regions.size(); ++i)
+    if (std::abs(regions[i].mean) > z * regions[i].stderr_ + 1e-6)
+      return fmt::format("region {}: difference {} +- {}", i, regions[i].mean, regions[i].stderr_);
+  return {};
+}
+
 void expect_images_agree(const Image& a, const Image& b, const std::string& what) {
   Estimate d = difference_estimate(a, b);
   EXPECT_LE(std::abs(d.mean), 4.5 * d.stderr_)

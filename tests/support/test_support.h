@@ -120,6 +120,11 @@ Estimate difference_estimate(const Image& a, const Image& b);
 // a and b agree over the image and in each of 4 x 4 regions (`what` names them in failures).
 // The regional bound is Bonferroni-corrected: 16 regions at z = 4.5 falsely fail with
 // probability 1e-4 together.
+// Empty if two independent renders agree in mean over the image and in each of 4 x 4 regions
+// (z = 4.5 each: 17 bounds falsely fail with probability about 1e-4 together); else the first
+// disagreement. The standard errors come from the per-pixel differences of the two images.
+std::string region_disagreement(const Image& a, const Image& b);
+
 void expect_images_agree(const Image& a, const Image& b, const std::string& what);
 std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx, int ny);
 

@@ -4,6 +4,7 @@
 #include "rll/cuda/onesource_check.h"
 #include "rll/cuda/sampler_check.h"
 #include "rll/cuda/trace.h"
+#include "rll/cuda/wavefront.h"
 
 namespace rll::cuda {
 
@@ -39,6 +40,30 @@ std::vector<uint8_t> gpu_occluded(const GpuBvh&, const std::vector<Ray>&) {
   return {};
 }
 TraceRate gpu_trace_rate(const GpuBvh&, const std::vector<Ray>&, bool, int) {
+  require_gpu();
+  return {};
+}
+
+// cuda/wavefront.h: the constructor says why there is no GPU renderer.
+struct GpuRenderer::Impl {};
+GpuRenderer::GpuRenderer(const Scene&) {
+  require_gpu();
+}
+GpuRenderer::~GpuRenderer() = default;
+void GpuRenderer::update(const Scene&) {
+  require_gpu();
+}
+size_t GpuRenderer::device_bytes() const {
+  return 0;
+}
+const std::string& GpuRenderer::device_name() const {
+  static const std::string none;
+  return none;
+}
+RenderProgress GpuRenderer::render(const Scene&, LightSampler&, const IntegratorSettings&, Film&,
+                                   const RenderSettings&, const std::atomic<bool>*,
+                                   const std::function<void(const RenderProgress&, const Film&)>&,
+                                   const WavefrontSettings&) {
   require_gpu();
   return {};
 }

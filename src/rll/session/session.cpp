@@ -6,6 +6,7 @@
 #include <charconv>
 
 #include "rll/core/error.h"
+#include "rll/cuda/cuda.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/render/progress.h"
 
@@ -41,14 +42,41 @@ RenderSession::RenderSession(const SessionSettings& settings)
     : m_settings(settings), m_params(Params::parse(settings.set)) {
   const LoadOptions lo = parse_resolution(settings.resolution);
   m_points = parse_point_set(settings.points, "--points");
+  if (settings.device != "cpu" && settings.device != "cuda")
+    fail("--device '{}': expected cpu or cuda", settings.device);
+  if (settings.tracer != "embree" && settings.tracer != "bvh")
+    fail("--tracer '{}': expected embree or bvh", settings.tracer);
+  if (settings.tracer == "bvh" && (!settings.wavefront || settings.device == "cuda"))
+    fail(
+        "--tracer bvh is the CPU wavefront renderer's: add --wavefront (--device cuda always "
+        "traces with rll's BVH)");
+  // Before the scene (perhaps slow to load): a GPU render needs a GPU.
+  if (settings.device == "cuda") cuda::require_gpu();
   m_scene = load_scene(settings.scene, lo);
   // Reorders the lights: everything keyed by their order (fingerprint, learnt states) follows.
   build_light_tree(m_scene);
   m_integrator = make_integrator_settings(settings.integrator, settings.max_depth, m_params);
   m_accel = std::make_unique<Accel>(m_scene.mesh);
+  if (settings.device == "cuda") m_gpu = std::make_unique<cuda::GpuRenderer>(m_scene);
+}
+
+const char* RenderSession::renderer_name() const {
+  if (m_gpu) return "cuda-wavefront";
+  if (!m_settings.wavefront) return "megakernel";
+  return m_settings.tracer == "bvh" ? "wavefront-bvh" : "wavefront";
 }
 
 std::unique_ptr<LightSampler> RenderSession::make_sampler(const std::string& spec) const {
+  std::unique_ptr<LightSampler> s = make_sampler_on_host(spec);
+  if (m_gpu && s->sampler_view().kind == SamplerKind::None)
+    fail(
+        "sampler '{}' has no device version: --device cuda renders with uniform, power, tree, "
+        "rll and fermat (use --device cpu for it)",
+        spec);
+  return s;
+}
+
+std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::string& spec) const {
   size_t colon = spec.find(':');
   if (colon == std::string::npos) return make_light_sampler(spec, m_scene, m_params, m_accel.get());
   const std::string name = spec.substr(0, colon);
@@ -86,6 +114,7 @@ void RenderSession::set_frame(int frame, LightSampler* sampler) {
   m_scene.refresh_lights_from_mesh();
   refit_light_tree(m_scene);
   m_accel->update_vertices(m_scene.mesh);
+  if (m_gpu) m_gpu->update(m_scene);
   if (sampler) sampler->lights_changed(m_scene);
 }
 
@@ -99,7 +128,10 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   rs.points = m_points;
   WavefrontSettings wavefront;
   wavefront.times = times;
+  wavefront.tracer = m_settings.tracer == "bvh" ? WavefrontTracer::Bvh : WavefrontTracer::Embree;
   auto run = [&](const RenderSettings& r, const AfterPass& after) {
+    if (m_gpu)
+      return m_gpu->render(m_scene, sampler, m_integrator, film, r, cancel, after, wavefront);
     return m_settings.wavefront ? render_wavefront(m_scene, *m_accel, sampler, m_integrator, film,
                                                    r, cancel, after, wavefront)
                                 : rll::render(m_scene, integrator, sampler, film, r, cancel, after);

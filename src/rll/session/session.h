@@ -11,6 +11,7 @@
 
 #include "rll/accel/accel.h"
 #include "rll/core/params.h"
+#include "rll/cuda/wavefront.h"
 #include "rll/io/load.h"
 #include "rll/render/integrator.h"
 #include "rll/render/render.h"
@@ -27,6 +28,8 @@ struct SessionSettings {
   std::vector<std::string> set;  // key=value parameters for samplers and the integrator
   std::string points = "sobol";  // --points: sobol or independent
   bool wavefront = false;        // --wavefront: render with rll/wavefront instead of the megakernel
+  std::string device = "cpu";    // --device: cpu, or cuda (the wavefront renderer on the GPU)
+  std::string tracer = "embree";  // --tracer: the CPU wavefront's tracer, embree or bvh
 };
 
 // Film size limits of --res: a larger film would exhaust the memory of most machines.
@@ -48,8 +51,11 @@ class RenderSession {
   const IntegratorSettings& integrator() const { return m_integrator; }
   PointSet points() const { return m_points; }
   const SessionSettings& settings() const { return m_settings; }
-  // The renderer that render() runs: "wavefront" or "megakernel" (--stats and reports say it).
-  const char* renderer_name() const { return m_settings.wavefront ? "wavefront" : "megakernel"; }
+  // The renderer that render() runs: "megakernel", "wavefront" (on the CPU; "wavefront-bvh" with
+  // --tracer bvh) or "cuda-wavefront" (--stats and reports say it).
+  const char* renderer_name() const;
+  // The GPU renderer of --device cuda, else null.
+  const cuda::GpuRenderer* gpu() const { return m_gpu.get(); }
 
   // A fresh sampler (no learnt state) by name, its parameters from --set. A variant may carry
   // its own parameters after colons, keys prefixed with the sampler's name unless they hold a
@@ -76,12 +82,15 @@ class RenderSession {
                         WavefrontTimes* times = nullptr) const;
 
  private:
+  std::unique_ptr<LightSampler> make_sampler_on_host(const std::string& spec) const;
+
   SessionSettings m_settings;
   Params m_params;
   Scene m_scene;
   IntegratorSettings m_integrator;
   PointSet m_points = PointSet::Sobol;
   std::unique_ptr<Accel> m_accel;
+  std::unique_ptr<cuda::GpuRenderer> m_gpu;
 };
 
 }  // namespace rll

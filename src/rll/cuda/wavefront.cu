@@ -1,0 +1,275 @@
+// The GPU's side of the wavefront renderer: the CUDA backend of wavefront/driver.h (device memory,
+// launches over queues, CUDA events), the scene, BVH, Sobol' tables and film in device memory, and
+// the light sampler's tables mirrored there around each end of pass.
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <chrono>
+#include <optional>
+
+#include "rll/bvh/bvh.h"
+#include "rll/core/error.h"
+#include "rll/core/sobol.h"
+#include "rll/cuda/cuda.h"
+#include "rll/cuda/device_scene.cuh"
+#include "rll/cuda/launch.cuh"
+#include "rll/cuda/wavefront.h"
+#include "rll/lights/rll_view.h"
+#include "rll/scene/scene_view.h"
+#include "rll/wavefront/driver.h"
+#include "rll/wavefront/passes.h"
+
+namespace rll::cuda {
+
+namespace {
+
+template <typename Body>
+__global__ void queue_kernel(WavefrontQueue q, uint32_t upper, Body body) {
+  const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  if (k < upper && k < q.count()) body(q.slots[k]);
+}
+
+// The GPU's side of wavefront/driver.h.
+class CudaBackend {
+ public:
+  explicit CudaBackend(WavefrontTimes* times) : m_times(times) {}
+
+  template <typename T>
+  View<T> take(size_t n) {
+    void* p = m_memory.allocate(n * sizeof(T));
+    check(cudaMemset(p, 0, n * sizeof(T)), "cudaMemset");
+    return {static_cast<T*>(p), n};
+  }
+  template <typename Body>
+  void launch(size_t n, const Body& body) {
+    parallel_for(n, body);
+  }
+  // One thread per slot the queue may hold; those past its size return at once (the size is
+  // known only on the device).
+  template <typename Body>
+  void launch_queue(const WavefrontQueue& q, uint32_t upper, const Body& body) {
+    if (upper == 0) return;
+    const unsigned blocks = (upper + detail::kBlockSize - 1) / detail::kBlockSize;
+    queue_kernel<<<blocks, detail::kBlockSize>>>(q, upper, body);
+    check(cudaGetLastError(), "kernel launch");
+  }
+  void zero(void* p, size_t bytes) { check(cudaMemsetAsync(p, 0, bytes), "cudaMemsetAsync"); }
+  void write(uint32_t* p, uint32_t v) {
+    check(cudaMemcpy(p, &v, sizeof v, cudaMemcpyHostToDevice), "cudaMemcpy");
+  }
+  void copy(uint32_t* to, const uint32_t* from) {
+    check(cudaMemcpyAsync(to, from, sizeof(uint32_t), cudaMemcpyDeviceToDevice), "cudaMemcpy");
+  }
+  template <typename T>
+  T read(const T* p) {
+    T v;
+    check(cudaMemcpy(&v, p, sizeof(T), cudaMemcpyDeviceToHost), "cudaMemcpy");
+    return v;
+  }
+  // The kernels' time by CUDA events; the end of a pass (host work and copies) by the wall clock.
+  template <typename Fn>
+  void timed(WavefrontStage stage, const Fn& fn) {
+    if (!m_times) return fn();
+    if (stage == WavefrontStage::EndPass) {
+      const auto t0 = std::chrono::steady_clock::now();
+      fn();
+      (*m_times)[stage] +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      return;
+    }
+    m_timer.start();
+    fn();
+    (*m_times)[stage] += m_timer.stop_ms() * 1e-3;
+  }
+  size_t bytes() const { return m_memory.bytes(); }
+
+ private:
+  DeviceMirror m_memory;
+  WavefrontTimes* m_times;
+  EventTimer m_timer;
+};
+
+// A light tree's arrays in device memory.
+LightTreeView mirror_tree(DeviceMirror& m, const LightTreeView& t) {
+  LightTreeView d = t;
+  d.nodes = m.mirror(t.nodes);
+  d.importance = m.mirror(t.importance);
+  d.leaf_of = m.mirror(t.leaf_of);
+  return d;
+}
+
+// A light sampler's view with its arrays in device memory; what the kernels write (RLL's cell
+// table, point sums, rewards) copied back to the sampler's own arrays on demand.
+class DeviceSampler {
+ public:
+  void upload(const SamplerView& h) {
+    m_memory.clear();
+    m_view = h;
+    switch (h.kind) {
+      case SamplerKind::Power:
+        m_view.power.pmf = m_memory.mirror(h.power.pmf);
+        m_view.power.cdf = m_memory.mirror(h.power.cdf);
+        m_view.power.guide = m_memory.mirror(h.power.guide);
+        break;
+      case SamplerKind::Tree:
+        m_view.tree = mirror_tree(m_memory, h.tree);
+        break;
+      case SamplerKind::Rll: {
+        RllView r = *h.rll;
+        r.tree = mirror_tree(m_memory, r.tree);
+        r.table.slots = m_memory.mirror(r.table.slots);
+        r.table.key_of = m_memory.mirror(r.table.key_of);
+        r.table.free = m_memory.mirror(r.table.free);
+        r.table.next_free = m_memory.mirror_one(r.table.next_free);
+        r.table.failed = m_memory.mirror_one(r.table.failed);
+        CutStoreView& c = r.cuts;
+        c.size = m_memory.mirror(c.size);
+        c.node = m_memory.mirror(c.node);
+        c.end = m_memory.mirror(c.end);
+        c.cdf = m_memory.mirror(c.cdf);
+        c.gl = m_memory.mirror(c.gl);
+        c.gr = m_memory.mirror(c.gr);
+        c.eps = m_memory.mirror(c.eps);
+        c.initial = m_memory.mirror(c.initial);
+        c.initial_ends = m_memory.mirror(c.initial_ends);
+        c.anchor = m_memory.mirror(c.anchor);
+        c.inv_unit = m_memory.mirror(c.inv_unit);
+        c.sum = m_memory.mirror(c.sum);
+        c.sq = m_memory.mirror(c.sq);
+        c.count = m_memory.mirror(c.count);
+        r.last_used = m_memory.mirror(r.last_used);
+        r.points = m_memory.mirror(r.points);
+        r.power_prefix = m_memory.mirror(r.power_prefix);
+        m_view.rll = m_memory.mirror(View<const RllView>{&r, 1}).data;
+        break;
+      }
+      case SamplerKind::Uniform:
+      case SamplerKind::None:
+        break;
+    }
+  }
+  void copy_back() const { m_memory.copy_back(); }
+  const SamplerView& view() const { return m_view; }
+  size_t bytes() const { return m_memory.bytes(); }
+
+ private:
+  DeviceMirror m_memory;
+  SamplerView m_view;
+};
+
+ViewSampler view_sampler(const DeviceSampler& d, const LightSampler& s) {
+  return {d.view(), s.prepares(), s.learns()};
+}
+
+}  // namespace
+
+struct GpuRenderer::Impl {
+  std::string name;
+  Bvh bvh;
+  std::optional<SceneData> data;
+  std::optional<DeviceScene> scene;
+  DeviceMirror tables;  // BVH and Sobol' tables
+  BvhView bvh_view;
+  SobolView sobol;
+  size_t render_bytes = 0;  // the most the last render took besides the above
+
+  void upload(const Scene& s) {
+    data.reset();
+    scene.reset();
+    tables.clear();
+    data.emplace(s);
+    scene.emplace(data->view());
+    bvh_view.nodes = tables.mirror(bvh.view().nodes);
+    bvh_view.triangles = tables.mirror(bvh.view().triangles);
+    const SobolTables& t = host_sobol_tables();
+    sobol.tables = tables.mirror(View<const uint32_t>{t.view().tables, t.size()}).data;
+  }
+};
+
+GpuRenderer::GpuRenderer(const Scene& scene) : m_impl(std::make_unique<Impl>()) {
+  require_gpu();
+  const std::vector<GpuInfo> all = gpus();
+  for (const GpuInfo& g : all)
+    if (g.sm_major >= 9) {
+      m_impl->name = g.name;
+      break;
+    }
+  m_impl->bvh = build_bvh(scene.mesh);
+  m_impl->upload(scene);
+}
+
+GpuRenderer::~GpuRenderer() = default;
+
+void GpuRenderer::update(const Scene& scene) {
+  m_impl->bvh.refit(scene.mesh);
+  m_impl->upload(scene);
+}
+
+size_t GpuRenderer::device_bytes() const {
+  return m_impl->tables.bytes() + (m_impl->scene ? m_impl->scene->bytes() : 0) +
+         m_impl->render_bytes;
+}
+
+const std::string& GpuRenderer::device_name() const {
+  return m_impl->name;
+}
+
+RenderProgress GpuRenderer::render(
+    const Scene& scene, LightSampler& sampler, const IntegratorSettings& integrator, Film& film,
+    const RenderSettings& settings, const std::atomic<bool>* cancel,
+    const std::function<void(const RenderProgress&, const Film&)>& after_pass,
+    const WavefrontSettings& wavefront) {
+  if (sampler.sampler_view().kind == SamplerKind::None)
+    fail(
+        "sampler '{}' has no device version: --device cuda renders with uniform, power, tree, "
+        "rll and fermat",
+        sampler.name());
+  if (wavefront.path_slots < 1) fail("the wavefront renderer needs at least one path slot");
+  const auto t_start = std::chrono::steady_clock::now();
+  Impl& m = *m_impl;
+  DeviceSampler device_sampler;
+  device_sampler.upload(sampler.sampler_view());
+
+  // The film's sums and counts on the device, starting from the host film's.
+  FilmView host_film = film.view();
+  DeviceMirror film_memory;
+  WavefrontKernels<BvhTracer, ViewSampler> k;
+  k.film = {film_memory.mirror(host_film.sum), film_memory.mirror(host_film.count), film.width()};
+  k.c = make_path_constants(scene, m.scene->view(), integrator);
+  k.camera = scene.camera;
+  k.width = film.width();
+  k.sobol = m.sobol;
+  k.tracer = BvhTracer{m.bvh_view};
+  k.sampler = view_sampler(device_sampler, sampler);
+  k.mis = k.c.strategy == LightStrategy::Mis;
+
+  CudaBackend backend(wavefront.times);
+  WavefrontDriver<CudaBackend, BvhTracer, ViewSampler> driver(
+      backend, k, wavefront_slot_count(wavefront.path_slots, film, settings.spp));
+  m.render_bytes = 0;
+  auto note_bytes = [&] {
+    m.render_bytes =
+        std::max(m.render_bytes, backend.bytes() + device_sampler.bytes() + film_memory.bytes());
+  };
+  note_bytes();
+  auto end_pass = [&] {
+    backend.timed(WavefrontStage::EndPass, [&] {
+      device_sampler.copy_back();
+      sampler.end_pass();
+      device_sampler.upload(sampler.sampler_view());
+    });
+    note_bytes();
+    driver.set_sampler(view_sampler(device_sampler, sampler));
+  };
+  const RenderProgress progress = run_wavefront_passes(
+      scene, driver, end_pass, [&] { film_memory.copy_back(); }, film, settings, cancel,
+      after_pass);
+  // What the last pass learnt, for a state saved after the render.
+  device_sampler.copy_back();
+  if (wavefront.times)
+    wavefront.times->total_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return progress;
+}
+
+}  // namespace rll::cuda

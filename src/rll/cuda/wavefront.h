@@ -1,0 +1,59 @@
+// The wavefront renderer on the GPU (`rll render --device cuda`): the stages of wavefront/kernels.h
+// launched by CUDA through the driver the CPU runs (wavefront/driver.h), rays traced by rll's own
+// BVH (bvh/traverse.h), the scene, BVH and Sobol' tables in device memory, the light sampler's
+// tables mirrored there. Plain C++: callers need no nvcc. Where CUDA is not built or no usable GPU
+// is present, constructing a GpuRenderer throws rll::Error saying why.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "rll/lights/light_sampler.h"
+#include "rll/render/film.h"
+#include "rll/render/integrator.h"
+#include "rll/render/render.h"
+#include "rll/scene/scene.h"
+#include "rll/wavefront/wavefront.h"
+
+namespace rll::cuda {
+
+class GpuRenderer {
+ public:
+  // Checks for a GPU (require_gpu), builds rll's BVH over the scene's mesh on the host and uploads
+  // the scene, the BVH and the Sobol' tables.
+  explicit GpuRenderer(const Scene& scene);
+  ~GpuRenderer();
+  GpuRenderer(const GpuRenderer&) = delete;
+  GpuRenderer& operator=(const GpuRenderer&) = delete;
+
+  // After the scene's vertices or lights moved (an animated scene's next frame): refits the BVH
+  // and uploads the scene and the BVH again.
+  void update(const Scene& scene);
+  // Device memory in bytes: what is held between renders (scene, BVH, tables) and the most the
+  // last render took besides (path slots, film, the sampler's tables).
+  size_t device_bytes() const;
+  // The GPU's name, as CUDA gives it.
+  const std::string& device_name() const;
+
+  // As render_wavefront (wavefront/wavefront.h) on the GPU; throws rll::Error for a sampler
+  // without a device version (sampler_view(): uniform, power, tree, rll and fermat have one). The
+  // sampler's view is uploaded at the start and after each end of pass; what the kernels learnt is
+  // copied back before each end of pass (which runs on the host) and at the end. `wavefront.tracer`
+  // is ignored (the GPU traces with rll's BVH); `wavefront.times` receives the stages' times by
+  // CUDA events.
+  RenderProgress render(
+      const Scene& scene, LightSampler& sampler, const IntegratorSettings& integrator, Film& film,
+      const RenderSettings& settings, const std::atomic<bool>* cancel = nullptr,
+      const std::function<void(const RenderProgress&, const Film&)>& after_pass = {},
+      const WavefrontSettings& wavefront = {});
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace rll::cuda
