@@ -3,7 +3,8 @@
 # .gpu-debs/ (scripts/gpu/fetch-debs.sh fetches them on a Debian 12 machine; they are unpacked
 # into a prefix under the build folder, never into /), runs the GPU tests (ctest -L gpu), then
 # the unit, cli, render and stat tests (not slurm; those needing Chromium skip themselves), then
-# every GPU benchmark program that was built. Logs go to $OUT (else <build>/gpu-logs); a short
+# every GPU benchmark program that was built and 1080p frames of the GPU wavefront renderer
+# (rll interactive --device cuda). Logs go to $OUT (else <build>/gpu-logs); a short
 # summary comes last. Exit status: 0 when everything built and passed.
 #   --system-packages  use the libraries installed on this machine instead of .gpu-debs/
 #   --build DIR        the build folder (default build-gpu)
@@ -104,6 +105,24 @@ for b in "${benches[@]}"; do
   fi
 done
 [ ${#benches[@]} -gt 0 ] || note "no GPU benchmark programs built yet (bench/rll_gpu_*)"
+
+# Frames of 1 spp at 1080p on the GPU (issue 31's table): per sampler, scene and depth, the median
+# of the frames after the warm-up and the per-stage medians (CUDA events), from rll interactive.
+for scene in cornell-boxes-room arch-interior; do
+  for depth in 1 5; do
+    for sampler in power tree rll; do
+      name="frames-$scene-$sampler-d$depth"
+      if "$build/rll" interactive "builtin:$scene" --device cuda --sampler "$sampler" \
+          --max-depth "$depth" --frames 12 --warmup 4 --stats "$logs/$name.json" \
+          > "$logs/$name.log" 2>&1; then
+        note "$name: $(grep '^median of' "$logs/$name.log" | head -1)"
+      else
+        failed=1
+        note "$name: FAILED (log: $logs/$name.log)"
+      fi
+    done
+  done
+done
 
 echo
 echo "== rll GPU run: summary"
