@@ -153,15 +153,11 @@ RLL_HD inline void cut_values(const CutStoreEndView& v, uint32_t cell, size_t K,
       K, [&](size_t k) { return q[k] >= 0; }, &v.n[b], &v.pool[b], v.s.pool_weight, out);
 }
 
-// Guided descent: bakes the cell's guide_left/right from its values and prior (CutStore's
-// guide_left says what they are). The inner nodes above the cut are visited from the root as a
-// recursion would (children's sums first, left then right), on a stack as deep as the tree.
-RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint32_t K,
-                                  const double* pri, const float* val, double eps) {
-  const size_t b = v.base(cell);
-  // g(k) = (1 - e) rho(k) / mean rho + e: the learnt ratios relative to their prior-weighted
-  // mean, mixed with 1 (the tree's own step) by the defensive weight, so that g >= e > 0.
-  double g[kMaxCutSize];
+// Guided descent: each cluster's factor g(k) = (1 - e) rho(k) / mean rho + e: the learnt ratios
+// (val) relative to their prior-weighted mean, mixed with 1 (the tree's own step) by the
+// defensive weight e, so that g >= e > 0.
+RLL_HD inline void guide_factors(size_t K, const double* pri, const float* val, double eps,
+                                 double* g) {
   double wsum = 0, wv = 0;
   for (size_t k = 0; k < K; ++k) {
     wsum += pri[k];
@@ -169,6 +165,16 @@ RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint3
   }
   const double mean = wsum > 0 ? wv / wsum : 0.0;
   for (size_t k = 0; k < K; ++k) g[k] = mean > 0 ? (1 - eps) * double(val[k]) / mean + eps : 1.0;
+}
+
+// Guided descent: bakes the cell's guide_left/right from its values and prior (CutStore's
+// guide_left says what they are). The inner nodes above the cut are visited from the root as a
+// recursion would (children's sums first, left then right), on a stack as deep as the tree.
+RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint32_t K,
+                                  const double* pri, const float* val, double eps) {
+  const size_t b = v.base(cell);
+  double g[kMaxCutSize];
+  guide_factors(K, pri, val, eps, g);
   // Every inner node above the cut: its children's factors are the prior-weighted means of
   // their clusters' g (the unweighted mean where no cluster has prior).
   struct Frame {
