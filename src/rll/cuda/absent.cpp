@@ -1,6 +1,7 @@
 // The CUDA backend where rll was built without nvcc: no GPUs, and a check that says why.
 #include "rll/core/error.h"
 #include "rll/cuda/cuda.h"
+#include "rll/cuda/endpass_check.h"
 #include "rll/cuda/onesource_check.h"
 #include "rll/cuda/sampler_check.h"
 #include "rll/cuda/trace.h"
@@ -81,6 +82,12 @@ std::vector<OneSourceResult> onesource_probe_gpu(const SceneView&, const std::ve
 // cuda/sampler_check.h: the same for the light samplers' dispatch.
 std::vector<SamplerProbeResult> sampler_probe_gpu(const SamplerView&,
                                                   const std::vector<SamplerProbe>&) {
+  cuda::require_gpu();
+  return {};
+}
+
+// cuda/endpass_check.h: the end of pass on the GPU.
+std::vector<CutPassStats> cut_end_pass_gpu(const CutStoreEndView&, const std::vector<uint32_t>&) {
   cuda::require_gpu();
   return {};
 }

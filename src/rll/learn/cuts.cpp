@@ -5,44 +5,10 @@
 #include <queue>
 
 #include "rll/core/error.h"
+#include "rll/learn/cut_end_pass.h"
 #include "rll/scene/scene.h"
 
 namespace rll {
-
-namespace {
-// Shares of the prior that follow power, and that are uniform over the clusters with power,
-// so that every cluster with power keeps a probability the float CDF can represent, even where
-// the importance at the anchor is zero (a cluster's power can be 1e-7 of a sky dome's).
-constexpr double kPowerShare = 0.04;
-constexpr double kUniformShare = 0.01;
-
-// prior = (1 - power_share - uniform) * weight + power_share * power + uniform / count, with
-// power(k) and weight(k) given by the caller.
-template <typename Power, typename Weight>
-void mix_prior(size_t K, double power_share, const Power& power, const Weight& weight,
-               std::vector<double>& out) {
-  double psum = 0, wsum = 0;
-  size_t with_power = 0;
-  for (size_t k = 0; k < K; ++k) {
-    double p = std::max(0.0, double(power(k)));
-    psum += p;
-    wsum += std::max(0.0, double(weight(k)));
-    with_power += p > 0;
-  }
-  out.resize(K);
-  if (!(psum > 0)) {  // nothing emits: uniform
-    std::fill(out.begin(), out.end(), 1.0 / double(K));
-    return;
-  }
-  const double ps = wsum > 0 ? power_share : 1.0 - kUniformShare;
-  const double ws = (1 - ps - kUniformShare) / (wsum > 0 ? wsum : 1.0);
-  const double us = kUniformShare / double(with_power);
-  for (size_t k = 0; k < K; ++k) {
-    double p = std::max(0.0, double(power(k)));
-    out[k] = ws * std::max(0.0, double(weight(k))) + ps * p / psum + (p > 0 ? us : 0.0);
-  }
-}
-}  // namespace
 
 std::vector<uint32_t> refine_cut(const LightTree& tree, int size,
                                  double (*priority)(const LightTree&, uint32_t)) {
@@ -107,7 +73,8 @@ bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes) {
 
 CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, double reward_scale)
     : m_tree(tree), m_s(s), m_m(s.cut_size) {
-  if (m_m < 2 || m_m > 4096) fail("rll.cut_size must be in [2, 4096] (got {})", m_m);
+  if (m_m < 2 || m_m > kMaxCutSize)
+    fail("rll.cut_size must be in [2, {}] (got {})", kMaxCutSize, m_m);
   if (s.initial_size < 1 || s.initial_size > m_m)
     fail("rll.initial_cut must be in [1, rll.cut_size = {}] (got {})", m_m, s.initial_size);
   if (!(s.alpha > 0 && s.alpha <= 1)) fail("rll.alpha must be in (0, 1] (got {})", s.alpha);
@@ -187,93 +154,50 @@ size_t CutStore::bytes() const {
   return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided, m_s.pool_tiers());
 }
 
-float CutStore::weight_of(uint32_t cell, uint32_t node) const {
-  if (m_s.prior == ClusterWeight::Power) return m_tree.node(node).bounds.power;
-  if (m_s.prior == ClusterWeight::Uniform) return 1.0f;
-  return m_tree.importance(node, m_anchor[cell].p, m_anchor[cell].n);
+CutStoreEndView CutStore::end_view() {
+  CutStoreEndView v;
+  v.s = m_s;
+  v.tree = m_tree.view();
+  v.m = uint32_t(m_m);
+  v.scale = m_scale;
+  v.log_keep = m_log_keep;
+  v.initial = view_of(m_initial);
+  v.initial_ends = view_of(m_initial_ends);
+  v.size = view_of(m_size);
+  v.node = view_of(m_node);
+  v.end = view_of(m_end);
+  v.q = view_of(m_q);
+  v.m2 = view_of(m_m2);
+  v.n = view_of(m_n);
+  v.weight = view_of(m_weight);
+  v.cdf = view_of(m_cdf);
+  v.gl = view_of(m_gl);
+  v.gr = view_of(m_gr);
+  v.learnt = view_of(m_learnt);
+  v.seen = view_of(m_seen);
+  v.eps = view_of(m_eps);
+  v.anchor = view_of(m_anchor);
+  v.pool = view_of(m_pool);
+  v.has_pool = view_of(m_has_pool);
+  v.inv_unit = view_of(m_inv_unit);
+  const size_t n = m_size.size() * size_t(m_m);
+  v.sum = {m_sum.get(), n};
+  v.sq = {m_sq.get(), n};
+  v.count = {m_count.get(), n};
+  return v;
 }
 
-double CutStore::power_floor() const {
-  return m_s.prior == ClusterWeight::Power ? 1.0 - kUniformShare : kPowerShare;
-}
-
-void CutStore::prior(const Cut& cut, std::vector<double>& out) const {
-  if (m_s.prior == ClusterWeight::Uniform) {  // Fermat's: no floor, every cluster alike
-    out.assign(cut.nodes.size(), 1.0 / double(cut.nodes.size()));
-    return;
-  }
-  mix_prior(
-      cut.nodes.size(), power_floor(),
-      [&](size_t k) { return double(m_tree.node(cut.nodes[k]).bounds.power); },
-      [&](size_t k) { return double(cut.weight[k]); }, out);
-}
-
-void CutStore::values(const Cut& cut, const std::vector<double>& pri,
-                      std::vector<float>& out) const {
-  const size_t K = cut.nodes.size();
-  const bool moment = m_s.target == LearnTarget::Moment;
-  out.resize(K);
-  // What the visited clusters say the cell's total is: their values over their prior share (a
-  // share below a quarter is taken as a quarter, so that one bright, rarely chosen cluster
-  // does not inflate every unvisited one).
-  double v_sum = 0, p_sum = 0;
-  for (size_t k = 0; k < K; ++k) {
-    if (cut.q[k] < 0) continue;
-    out[k] = moment ? std::sqrt(std::max(cut.m2[k], 0.0f)) : cut.q[k];
-    v_sum += out[k];
-    p_sum += pri[k];
-  }
-  if (m_s.guided) {
-    // Ratios to the tree's importance: a cluster never visited gets the visited clusters' mean
-    // ratio, weighted by prior.
-    double wv = 0;
-    for (size_t k = 0; k < K; ++k)
-      if (cut.q[k] >= 0) wv += pri[k] * out[k];
-    const float mean = p_sum > 0 ? float(wv / p_sum) : 0.0f;
-    for (size_t k = 0; k < K; ++k)
-      if (cut.q[k] < 0) out[k] = mean;
-    return;
-  }
-  const double total = v_sum / std::max(p_sum, 0.25);
-  for (size_t k = 0; k < K; ++k)
-    if (cut.q[k] < 0) out[k] = m_s.q_init >= 0 ? m_s.q_init : float(total * pri[k]);
-}
-
-void CutStore::values(uint32_t cell, const Cut& cut, const std::vector<double>& pri,
-                      std::vector<float>& out) const {
-  values(cut, pri, out);
-  if (m_has_pool.empty() || !m_has_pool[cell]) return;
-  const size_t K = cut.nodes.size();
-  shrink_toward(
-      K, [&](size_t k) { return cut.q[k] >= 0; }, cut.n.data(), &m_pool[size_t(cell) * m_m],
-      m_s.pool_weight, out.data());
+CutStoreEndView CutStore::end_view() const {
+  return const_cast<CutStore*>(this)->end_view();  // (only for functions that read)
 }
 
 void CutStore::add_pass_rewards(uint32_t cell, double* sum, double* sq, uint64_t* count) const {
-  const size_t base = size_t(cell) * m_m;
-  const double unit = 1 / m_inv_unit[cell];
-  thread_local std::vector<double> pri;
-  if (m_s.pool_ratio) cell_prior(cell, pri);
-  for (size_t k = 0; k < m_initial.size(); ++k) {
-    const uint32_t n = m_count[base + k];
-    if (n == 0) continue;
-    const double u = m_s.pool_ratio ? unit / pri[k] : unit;
-    count[k] += n;
-    sum[k] += m_sum[base + k].value() * u;
-    sq[k] += m_sq[base + k].value() * u * u;
-  }
+  cut_pass_rewards(end_view(), cell, sum, sq, count);
 }
 
 void CutStore::cell_prior(uint32_t cell, std::vector<double>& out) const {
-  thread_local Cut cut;
-  if (active(cell)) {
-    load(cell, cut);
-  } else {  // no cut yet (new in this pass): the initial cut's, at the cell's anchor
-    cut.nodes = m_initial;
-    cut.weight.resize(m_initial.size());
-    for (size_t k = 0; k < m_initial.size(); ++k) cut.weight[k] = weight_of(cell, m_initial[k]);
-  }
-  prior(cut, out);
+  out.resize(active(cell) ? m_size[cell] : m_initial.size());
+  cut_cell_prior(end_view(), cell, out.data());
 }
 
 void CutStore::set_pool(uint32_t cell, const float* shares) {
@@ -284,224 +208,44 @@ void CutStore::set_pool(uint32_t cell, const float* shares) {
 
 std::vector<double> CutStore::learnt_shares(uint32_t cell) const {
   if (!active(cell) || !learnt(cell)) return {};
-  Cut cut;
-  load(cell, cut);
-  std::vector<double> pri;
-  std::vector<float> val;
-  prior(cut, pri);
-  values(cell, cut, pri, val);
+  const CutStoreEndView v = end_view();
+  const size_t K = m_size[cell];
+  std::vector<double> pri(K);
+  std::vector<float> val(K);
+  cut_cell_prior(v, cell, pri.data());
+  cut_values(v, cell, K, pri.data(), val.data());
   double sum = 0;
-  for (float v : val) sum += v;
-  std::vector<double> out(val.size());
-  for (size_t k = 0; k < val.size(); ++k) out[k] = val[k] / sum;
+  for (float x : val) sum += x;
+  std::vector<double> out(K);
+  for (size_t k = 0; k < K; ++k) out[k] = val[k] / sum;
   return out;
 }
 
-void CutStore::load(uint32_t cell, Cut& cut) const {
-  const size_t base = size_t(cell) * m_m, K = m_size[cell];
-  auto take = [&](const auto& from, auto& to) {
-    to.assign(from.begin() + long(base), from.begin() + long(base + K));
-  };
-  take(m_node, cut.nodes);
-  take(m_q, cut.q);
-  take(m_m2, cut.m2);
-  take(m_n, cut.n);
-  take(m_weight, cut.weight);
-}
-
-void CutStore::store(uint32_t cell, const Cut& cut) {
-  thread_local std::vector<double> pri;
-  thread_local std::vector<float> val;
-  const size_t base = size_t(cell) * m_m, K = cut.nodes.size();
-  m_size[cell] = uint32_t(K);
-  prior(cut, pri);
-  values(cell, cut, pri, val);
-  // The baked table: P(s) = (1 - e) V(s) / sum V + e prior(s), e the cell's defensive weight
-  // (folded in here when the prior lives in the CDF); without any learnt value, the prior alone.
-  double v_sum = 0;
-  for (size_t k = 0; k < K; ++k) v_sum += val[k];
-  m_learnt[cell] = v_sum > 0;
-  // (trust = 0: the configured weight from the start, also for a cell without rewards yet.)
-  const float distrust = m_s.trust > 0 ? m_s.trust / (m_s.trust + m_seen[cell]) : 0.0f;
-  m_eps[cell] = v_sum > 0 ? m_s.epsilon + (1 - m_s.epsilon) * distrust : 1.0f;
-  const double eps = v_sum > 0 ? (m_s.prior_in_cdf ? m_eps[cell] : 0.0) : 1.0;
-  double acc = 0;
-  for (size_t k = 0; k < K; ++k) {
-    acc += (1 - eps) * (v_sum > 0 ? val[k] / v_sum : 0.0) + eps * pri[k];
-    m_cdf[base + k] = float(acc);
-    m_end[base + k] = m_tree.node(cut.nodes[k]).end;
-    m_node[base + k] = cut.nodes[k];
-    m_q[base + k] = cut.q[k];
-    m_m2[base + k] = cut.m2[k];
-    m_n[base + k] = cut.n[k];
-    m_weight[base + k] = cut.weight[k];
-  }
-  for (size_t k = 0; k < K; ++k)
-    m_cdf[base + k] = float(std::min(1.0, double(m_cdf[base + k]) / acc));
-  m_cdf[base + K - 1] = 1.0f;
-  if (m_s.guided) bake_guide(cell, cut, pri, val, v_sum > 0 ? m_eps[cell] : 1.0);
-}
-
-void CutStore::bake_guide(uint32_t cell, const Cut& cut, const std::vector<double>& pri,
-                          const std::vector<float>& val, double eps) {
-  const size_t base = size_t(cell) * m_m, K = cut.nodes.size();
-  // g(k) = (1 - e) rho(k) / mean rho + e: the learnt ratios relative to their prior-weighted
-  // mean, mixed with 1 (the tree's own step) by the defensive weight, so that g >= e > 0.
-  thread_local std::vector<double> g;
-  g.resize(K);
-  double wsum = 0, wv = 0;
-  for (size_t k = 0; k < K; ++k) {
-    wsum += pri[k];
-    wv += pri[k] * val[k];
-  }
-  const double mean = wsum > 0 ? wv / wsum : 0.0;
-  for (size_t k = 0; k < K; ++k) g[k] = mean > 0 ? (1 - eps) * double(val[k]) / mean + eps : 1.0;
-  // Every inner node above the cut, by recursion from the root: its children's factors are the
-  // prior-weighted means of their clusters' g (the unweighted mean where no cluster has prior).
-  struct Sums {
-    double w = 0, wg = 0, g = 0, count = 0;
-    double factor() const { return w > 0 ? wg / w : g / count; }
-  };
-  const uint32_t* ends = &m_end[base];
-  auto visit = [&](auto&& self, uint32_t node, uint32_t k0, uint32_t k1) -> Sums {
-    if (k1 - k0 == 1) return {pri[k0], pri[k0] * g[k0], g[k0], 1};
-    const LightTreeNode& nd = m_tree.node(node);
-    const uint32_t j = children_boundary(m_tree, nd, ends, k0, k1);
-    Sums a = self(self, nd.child, k0, j + 1), b = self(self, nd.child + 1, j + 1, k1);
-    m_gl[base + j] = float(a.factor());
-    m_gr[base + j] = float(b.factor());
-    return {a.w + b.w, a.wg + b.wg, a.g + b.g, a.count + b.count};
-  };
-  visit(visit, LightTree::kRoot, 0u, uint32_t(K));
-}
-
 void CutStore::clear(uint32_t cell) {
-  const size_t base = size_t(cell) * m_m;
-  m_size[cell] = 0;
-  m_learnt[cell] = 0;
-  m_seen[cell] = 0;
-  m_eps[cell] = 1;
-  if (!m_has_pool.empty()) m_has_pool[cell] = 0;
-  m_inv_unit[cell] = 1 / m_scale;
-  for (int k = 0; k < m_m; ++k) {
-    m_sum[base + k].reset();
-    m_sq[base + k].reset();
-    m_count[base + k] = 0;
-  }
+  cut_clear(end_view(), cell);
 }
 
 void CutStore::assign(uint32_t cell, const std::vector<uint32_t>& nodes,
                       const std::vector<float>& q) {
-  Cut cut;
-  cut.nodes = nodes;
-  cut.q = q;
-  cut.m2.resize(nodes.size());
-  cut.n.assign(nodes.size(), 1.0f / m_s.alpha);
-  cut.weight.resize(nodes.size());
+  const CutStoreEndView v = end_view();
+  const size_t base = size_t(cell) * m_m;
   for (size_t k = 0; k < nodes.size(); ++k) {
-    cut.weight[k] = weight_of(cell, nodes[k]);
-    cut.m2[k] = q[k] * q[k];  // known exactly: the mean is the target whatever rll.target says
+    m_node[base + k] = nodes[k];
+    m_q[base + k] = q[k];
+    m_m2[base + k] = q[k] * q[k];  // known exactly: the mean is the target whatever rll.target says
+    m_n[base + k] = 1.0f / m_s.alpha;
+    m_weight[base + k] = cut_weight_of(v, cell, nodes[k]);
   }
   m_seen[cell] = 1e30f;  // only the configured defensive weight
-  store(cell, cut);
+  cut_bake(v, cell, uint32_t(nodes.size()));
 }
 
 void CutStore::refresh(uint32_t cell) {
-  if (!active(cell)) return;
-  thread_local Cut cut;
-  load(cell, cut);
-  for (size_t k = 0; k < cut.nodes.size(); ++k) cut.weight[k] = weight_of(cell, cut.nodes[k]);
-  store(cell, cut);
+  cut_refresh(end_view(), cell);
 }
 
 CutStore::PassStats CutStore::end_pass(uint32_t cell) {
-  PassStats st;
-  thread_local Cut cut;
-  const size_t base = size_t(cell) * m_m;
-  uint64_t n_total = 0;
-  const size_t K_now = active(cell) ? m_size[cell] : m_initial.size();
-  for (size_t k = 0; k < K_now; ++k) n_total += m_count[base + k];
-  if (active(cell) && n_total == 0) return st;  // nothing new: the cut and CDF stand
-  if (active(cell)) {
-    load(cell, cut);
-  } else {
-    cut.nodes = m_initial;
-    cut.q.assign(m_initial.size(), -1.0f);
-    cut.m2.assign(m_initial.size(), 0.0f);
-    cut.n.assign(m_initial.size(), 0.0f);
-    cut.weight.resize(m_initial.size());
-    for (size_t k = 0; k < m_initial.size(); ++k) cut.weight[k] = weight_of(cell, m_initial[k]);
-  }
-  const size_t K = cut.nodes.size();
-
-  // Fold this pass's rewards into Q and M2. Shrinkage: a running mean over at most 1/alpha
-  // rewards, started from the prior estimate counted as prior_samples rewards. Exponential: the
-  // paper's rule Q := (1-a) Q + a r once per reward, each reward replaced by the pass mean,
-  // gives Q := b Q + (1-b) mean with b = (1-a)^n. Either way the result does not depend on the
-  // order the threads delivered the rewards in.
-  if (n_total > 0) {
-    st.touched = true;
-    m_seen[cell] += float(n_total);
-    thread_local std::vector<double> pri;
-    thread_local std::vector<float> val;
-    prior(cut, pri);
-    values(cell, cut, pri, val);
-    const bool moment = m_s.target == LearnTarget::Moment;
-    const double unit = 1 / m_inv_unit[cell];
-    double largest = 0;
-    for (size_t k = 0; k < K; ++k) {
-      uint32_t n = m_count[base + k];
-      if (n == 0) continue;
-      const RewardMoments r(n, m_sum[base + k].value() * unit,
-                            m_sq[base + k].value() * unit * unit);
-      // The prior estimate of a cluster never visited: its effective value, without variance.
-      double old_q = cut.q[k] >= 0 ? cut.q[k] : val[k];
-      double old_m2 = cut.q[k] >= 0 ? cut.m2[k] : double(val[k]) * val[k];
-      if (m_s.rule == LearningRule::Exponential) {
-        double bk = std::exp(double(n) * m_log_keep);
-        cut.q[k] = float(bk * old_q + (1 - bk) * r.mean);
-        cut.m2[k] = float(bk * old_m2 + (1 - bk) * r.mean2);
-      } else {
-        double w =
-            cut.q[k] >= 0 ? std::min(double(cut.n[k]), 1.0 / m_s.alpha) : double(m_s.prior_samples);
-        shrinkage_fold(cut.q[k], cut.m2[k], cut.n[k], w, old_q, old_m2, n, r, 1.0 / m_s.alpha);
-      }
-      largest = std::max(largest, std::sqrt(double(cut.m2[k])));
-      m_sum[base + k].reset();
-      m_sq[base + k].reset();
-      m_count[base + k] = 0;
-    }
-    // The next pass's unit: the largest learnt sqrt(M2).
-    if (largest > 0 && std::isfinite(largest)) m_inv_unit[cell] = 1 / largest;
-    // Split-collapse on the new values: split by the cluster's share of the cell's variance
-    // (the standard deviation of its reward) under target=moment, by value (the paper's Q)
-    // under target=mean. (The prior is unchanged: folding touches no node or weight.)
-    values(cell, cut, pri, val);
-    thread_local std::vector<float> score;
-    score.resize(K);
-    for (size_t k = 0; k < K; ++k)
-      score[k] =
-          !moment ? val[k]
-          : cut.q[k] >= 0
-              ? float(std::sqrt(std::max(0.0, double(cut.m2[k]) - double(cut.q[k]) * cut.q[k])))
-              : val[k];
-    SplitCollapse sc(m_tree, m_m, m_s.threshold);
-    auto prior_weight = [&](uint32_t node) { return weight_of(cell, node); };
-    auto share = [&](uint32_t node) {
-      if (m_s.split == ClusterWeight::Uniform) return 1.0f;  // half and half
-      return m_s.split == ClusterWeight::Power
-                 ? m_tree.node(node).bounds.power
-                 : m_tree.importance(node, m_anchor[cell].p, m_anchor[cell].n);
-    };
-    for (int i = 0; i < m_s.splits; ++i) {
-      int r = sc.step(cut, val, score, prior_weight, share);
-      if (r == 0) break;
-      ++st.splits;
-      if (r == 1) ++st.collapses;
-    }
-  }
-  store(cell, cut);
-  return st;
+  return cut_end_pass(end_view(), cell);
 }
 
 void CutStore::save_cell(uint32_t cell, BinaryWriter& w) const {
@@ -563,13 +307,12 @@ void CutStore::load_cell(uint32_t cell, BinaryReader& r) {
     damaged("a cell value is out of range");
   m_size[cell] = K;
   if (m_s.guided && K > 0) {
-    thread_local Cut cut;
-    thread_local std::vector<double> pri;
-    thread_local std::vector<float> val;
-    load(cell, cut);
-    prior(cut, pri);
-    values(cut, pri, val);
-    bake_guide(cell, cut, pri, val, m_learnt[cell] ? m_eps[cell] : 1.0);
+    const CutStoreEndView v = end_view();
+    std::vector<double> pri(K);
+    std::vector<float> val(K);
+    cut_cell_prior(v, cell, pri.data());
+    cut_values(v, cell, K, pri.data(), val.data());
+    cut_bake_guide(v, cell, K, pri.data(), val.data(), m_learnt[cell] ? m_eps[cell] : 1.0);
   }
 }
 

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -34,8 +35,12 @@ enum class LearnTarget { Moment, Mean };
 // clusters, Q split half and half).
 enum class ClusterWeight { Importance, Power, Uniform };
 
+// The largest M (rll.cut_size) a CutStore accepts: the end of pass keeps a cell's scratch in
+// fixed-size arrays of this many clusters (learn/cut_end_pass.h), on either device.
+inline constexpr int kMaxCutSize = 4096;
+
 struct CutSettings {
-  int cut_size = 128;      // M, the most clusters of a cell
+  int cut_size = 128;      // M, the most clusters of a cell (at most kMaxCutSize)
   int initial_size = 128;  // clusters of a new cell's cut (the shared initial cut), <= M
   float alpha = 0.02f;     // floor of the per-reward learning rate
   float threshold = 2;     // T: split l_max and collapse p_min if score(l_max) > T value(p_min)
@@ -104,15 +109,15 @@ std::vector<uint32_t> initial_cut(const LightTree& tree, int size);
 // mean and second moment (E[r^2] >= E[r]^2 also where squares fell below the sums' resolution).
 struct RewardMoments {
   double mean, mean2;
-  RewardMoments(double n, double sum, double sq)
+  RLL_HD RewardMoments(double n, double sum, double sq)
       : mean(sum / n), mean2(std::max(sq / n, mean * mean)) {}
 };
 
 // The shrinkage rule (LearningRule::Shrinkage) for one cluster: values old_q and old_m2, held
 // with the weight of w rewards, and n new rewards of moments r give the weighted means; the
 // weight becomes w + n, at most cap (1 / alpha).
-inline void shrinkage_fold(float& q, float& m2, float& weight, double w, double old_q,
-                           double old_m2, double n, const RewardMoments& r, double cap) {
+RLL_HD inline void shrinkage_fold(float& q, float& m2, float& weight, double w, double old_q,
+                                  double old_m2, double n, const RewardMoments& r, double cap) {
   q = float((w * old_q + n * r.mean) / (w + n));
   m2 = float((w * old_m2 + n * r.mean2) / (w + n));
   weight = float(std::min(w + n, cap));
@@ -125,8 +130,8 @@ inline void shrinkage_fold(float& q, float& m2, float& weight, double w, double 
 // (n v + c guess) / (n + c), an unvisited one the guess (also for c = 0). Unchanged where no
 // visited value is positive.
 template <class Visited>
-void shrink_toward(size_t K, Visited visited, const float* n, const float* shares, double c,
-                   float* values) {
+RLL_HD void shrink_toward(size_t K, Visited visited, const float* n, const float* shares, double c,
+                          float* values) {
   double v_sum = 0, s_sum = 0;
   for (size_t k = 0; k < K; ++k)
     if (visited(k)) {
@@ -173,99 +178,131 @@ inline uint32_t children_boundary(const LightTree& tree, const LightTreeNode& no
 // True if the nodes partition [0, light_count) into contiguous ranges in order.
 bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes);
 
-// Split-collapse on a cut (DESIGN 2b point 4). `value[k]` is the effective target value of
-// cluster k (sqrt(M2) or Q, or for a cluster never visited its prior estimate): a collapsed pair
-// gets the sum, a split shares it. `score[k]` chooses the cluster to split: its share of the
-// cell's variance (the standard deviation of its reward) or its value. Both are kept in step.
+namespace detail {
+// Array edits of a cut held in per-cluster arrays with room for one more entry.
+template <typename T>
+RLL_HD inline void erase_at(T* a, size_t size, size_t i) {
+  for (size_t k = i; k + 1 < size; ++k) a[k] = a[k + 1];
+}
+template <typename T>
+RLL_HD inline void insert_at(T* a, size_t size, size_t i, T v) {
+  for (size_t k = size; k > i; --k) a[k] = a[k - 1];
+  a[i] = v;
+}
+}  // namespace detail
+
+// One split-collapse step (DESIGN 2b point 4) on a cut of `size` clusters held in arrays with
+// room for size + 1 (nodes, q, m2, n, weight as in Cut; value and score as SplitCollapse says):
+// returns 1 for a split with a collapse, 2 for a pure split (size < max_size), 0 if nothing
+// changed; `size` follows. `weight_of(node)` is the prior weight of a node entering the cut;
+// `share_of(node)` splits a cluster's values between its children.
+template <typename WeightOf, typename ShareOf>
+RLL_HD int split_collapse_step(const LightTreeView& tree, int max_size, float threshold,
+                               uint32_t& size, uint32_t* nodes, float* q, float* m2, float* n,
+                               float* weight, float* value, float* score, const WeightOf& weight_of,
+                               const ShareOf& share_of) {
+  size_t K = size;
+  // l_max: the splittable cluster (more than one light) with the largest score.
+  long best = -1;
+  for (size_t k = 0; k < K; ++k)
+    if (!tree.node(nodes[k]).is_leaf() && (best < 0 || score[k] > score[best])) best = long(k);
+  if (best < 0 || !(score[best] > 0)) return 0;
+  // p_min: among parents whose two children are both in the cut (the minimum over all nodes
+  // above the cut is always attained at such a parent), the one with the smallest value, not
+  // the parent of l_max: the darkest sibling pair.
+  long pmin = -1;
+  if (int(K) >= max_size) {
+    for (size_t k = 0; k + 1 < K; ++k) {
+      if (long(k) == best || long(k + 1) == best) continue;
+      const LightTreeNode& a = tree.node(nodes[k]);
+      if (a.parent == LightTree::kNone || tree.node(a.parent).child != nodes[k] ||
+          nodes[k + 1] != nodes[k] + 1)
+        continue;
+      if (pmin < 0 || value[k] + value[k + 1] < value[pmin] + value[pmin + 1]) pmin = long(k);
+    }
+    if (pmin < 0 || !(score[best] > threshold * (value[pmin] + value[pmin + 1]))) return 0;
+    // Collapse: the parent replaces its two children. Values add; the second moment is the one
+    // the parent has when its two halves are drawn in proportion to sqrt(M2):
+    // sqrt(M2_parent) = sqrt(M2_a) + sqrt(M2_b).
+    const uint32_t parent = tree.node(nodes[pmin]).parent;
+    const size_t a = size_t(pmin), b = a + 1;
+    const bool unvisited = q[a] < 0 && q[b] < 0;
+    const float qa = std::max(q[a], 0.0f), qb = std::max(q[b], 0.0f);
+    const float sa = std::sqrt(std::max(m2[a], 0.0f)), sb = std::sqrt(std::max(m2[b], 0.0f));
+    value[a] += value[b];
+    score[a] += score[b];
+    q[a] = unvisited ? -1.0f : qa + qb;
+    m2[a] = unvisited ? 0.0f : (sa + sb) * (sa + sb);
+    n[a] += n[b];
+    nodes[a] = parent;
+    weight[a] = weight_of(parent);
+    detail::erase_at(nodes, K, b);
+    detail::erase_at(q, K, b);
+    detail::erase_at(m2, K, b);
+    detail::erase_at(n, K, b);
+    detail::erase_at(weight, K, b);
+    detail::erase_at(value, K, b);
+    detail::erase_at(score, K, b);
+    --K;
+    if (best > pmin) --best;
+  }
+  // Split: l_max's two children replace it, values shared in proportion to share_of (a guess:
+  // each child keeps half the evidence behind it; sqrt(M2) is shared like Q).
+  const LightTreeNode& nd = tree.node(nodes[best]);
+  const float s0 = share_of(nd.child), s1 = share_of(nd.child + 1);
+  const float f0 = s0 + s1 > 0 ? s0 / (s0 + s1) : 0.5f, f1 = 1 - f0;
+  const size_t i = size_t(best);
+  const float qi = q[i], m2i = m2[i], v = value[i], sc = score[i];
+  const float ni = 0.5f * n[i];
+  nodes[i] = nd.child;
+  detail::insert_at(nodes, K, i + 1, nd.child + 1);
+  q[i] = qi >= 0 ? qi * f0 : -1.0f;
+  detail::insert_at(q, K, i + 1, qi >= 0 ? qi * f1 : -1.0f);
+  m2[i] = m2i * f0 * f0;
+  detail::insert_at(m2, K, i + 1, m2i * f1 * f1);
+  n[i] = ni;
+  detail::insert_at(n, K, i + 1, ni);
+  weight[i] = weight_of(nd.child);
+  detail::insert_at(weight, K, i + 1, weight_of(nd.child + 1));
+  value[i] = v * f0;
+  detail::insert_at(value, K, i + 1, v * f1);
+  score[i] = sc * f0;
+  detail::insert_at(score, K, i + 1, sc * f1);
+  size = uint32_t(K + 1);
+  return pmin < 0 ? 2 : 1;
+}
+
+// Split-collapse on a Cut being edited outside the store (split_collapse_step over its vectors).
+// `value[k]` is the effective target value of cluster k (sqrt(M2) or Q, or for a cluster never
+// visited its prior estimate): a collapsed pair gets the sum, a split shares it. `score[k]`
+// chooses the cluster to split: its share of the cell's variance (the standard deviation of its
+// reward) or its value. Both are kept in step.
 class SplitCollapse {
  public:
   SplitCollapse(const LightTree& tree, int max_size, float threshold)
       : m_tree(tree), m_max(max_size), m_t(threshold) {}
-  // One step: returns 1 for a split with a collapse, 2 for a pure split (K < M), 0 if nothing
-  // changed. `weight_of(node)` is the prior weight of a node entering the cut; `share_of(node)`
-  // splits a cluster's values between its children.
+  // One step, as split_collapse_step.
   template <typename WeightOf, typename ShareOf>
   int step(Cut& cut, std::vector<float>& value, std::vector<float>& score,
-           const WeightOf& weight_of, const ShareOf& share_of) const;
+           const WeightOf& weight_of, const ShareOf& share_of) const {
+    uint32_t K = uint32_t(cut.nodes.size());
+    auto resize = [&](size_t to) {
+      for (auto* v : {&cut.q, &cut.m2, &cut.n, &cut.weight, &value, &score}) v->resize(to);
+      cut.nodes.resize(to);
+    };
+    resize(K + 1);  // room for a split
+    const int r = split_collapse_step(m_tree.view(), m_max, m_t, K, cut.nodes.data(), cut.q.data(),
+                                      cut.m2.data(), cut.n.data(), cut.weight.data(), value.data(),
+                                      score.data(), weight_of, share_of);
+    resize(K);
+    return r;
+  }
 
  private:
   const LightTree& m_tree;
   int m_max;
   float m_t;
 };
-
-template <typename WeightOf, typename ShareOf>
-inline int SplitCollapse::step(Cut& cut, std::vector<float>& value, std::vector<float>& score,
-                               const WeightOf& weight_of, const ShareOf& share_of) const {
-  const size_t K = cut.nodes.size();
-  // l_max: the splittable cluster (more than one light) with the largest score.
-  long best = -1;
-  for (size_t k = 0; k < K; ++k)
-    if (!m_tree.node(cut.nodes[k]).is_leaf() && (best < 0 || score[k] > score[best]))
-      best = long(k);
-  if (best < 0 || !(score[best] > 0)) return 0;
-  // p_min: among parents whose two children are both in the cut (the minimum over all nodes
-  // above the cut is always attained at such a parent), the one with the smallest value, not
-  // the parent of l_max: the darkest sibling pair.
-  long pmin = -1;
-  if (int(K) >= m_max) {
-    for (size_t k = 0; k + 1 < K; ++k) {
-      if (long(k) == best || long(k + 1) == best) continue;
-      const LightTreeNode& a = m_tree.node(cut.nodes[k]);
-      if (a.parent == LightTree::kNone || m_tree.node(a.parent).child != cut.nodes[k] ||
-          cut.nodes[k + 1] != cut.nodes[k] + 1)
-        continue;
-      if (pmin < 0 || value[k] + value[k + 1] < value[pmin] + value[pmin + 1]) pmin = long(k);
-    }
-    if (pmin < 0 || !(score[best] > m_t * (value[pmin] + value[pmin + 1]))) return 0;
-    // Collapse: the parent replaces its two children. Values add; the second moment is the one
-    // the parent has when its two halves are drawn in proportion to sqrt(M2):
-    // sqrt(M2_parent) = sqrt(M2_a) + sqrt(M2_b).
-    uint32_t parent = m_tree.node(cut.nodes[pmin]).parent;
-    const size_t a = size_t(pmin), b = a + 1;
-    bool unvisited = cut.q[a] < 0 && cut.q[b] < 0;
-    float qa = std::max(cut.q[a], 0.0f), qb = std::max(cut.q[b], 0.0f);
-    float sa = std::sqrt(std::max(cut.m2[a], 0.0f)), sb = std::sqrt(std::max(cut.m2[b], 0.0f));
-    value[a] += value[b];
-    score[a] += score[b];
-    cut.q[a] = unvisited ? -1.0f : qa + qb;
-    cut.m2[a] = unvisited ? 0.0f : (sa + sb) * (sa + sb);
-    cut.n[a] += cut.n[b];
-    cut.nodes[a] = parent;
-    cut.weight[a] = weight_of(parent);
-    cut.nodes.erase(cut.nodes.begin() + long(b));
-    cut.q.erase(cut.q.begin() + long(b));
-    cut.m2.erase(cut.m2.begin() + long(b));
-    cut.n.erase(cut.n.begin() + long(b));
-    cut.weight.erase(cut.weight.begin() + long(b));
-    value.erase(value.begin() + long(b));
-    score.erase(score.begin() + long(b));
-    if (best > pmin) --best;
-  }
-  // Split: l_max's two children replace it, values shared in proportion to share_of (a guess:
-  // each child keeps half the evidence behind it; sqrt(M2) is shared like Q).
-  const LightTreeNode& nd = m_tree.node(cut.nodes[best]);
-  float s0 = share_of(nd.child), s1 = share_of(nd.child + 1);
-  float f0 = s0 + s1 > 0 ? s0 / (s0 + s1) : 0.5f, f1 = 1 - f0;
-  const size_t i = size_t(best);
-  float q = cut.q[i], m2 = cut.m2[i], v = value[i], sc = score[i];
-  float n = 0.5f * cut.n[i];
-  cut.nodes[i] = nd.child;
-  cut.nodes.insert(cut.nodes.begin() + long(i) + 1, nd.child + 1);
-  cut.q[i] = q >= 0 ? q * f0 : -1.0f;
-  cut.q.insert(cut.q.begin() + long(i) + 1, q >= 0 ? q * f1 : -1.0f);
-  cut.m2[i] = m2 * f0 * f0;
-  cut.m2.insert(cut.m2.begin() + long(i) + 1, m2 * f1 * f1);
-  cut.n[i] = n;
-  cut.n.insert(cut.n.begin() + long(i) + 1, n);
-  cut.weight[i] = weight_of(nd.child);
-  cut.weight.insert(cut.weight.begin() + long(i) + 1, weight_of(nd.child + 1));
-  value[i] = v * f0;
-  value.insert(value.begin() + long(i) + 1, v * f1);
-  score[i] = sc * f0;
-  score.insert(score.begin() + long(i) + 1, sc * f1);
-  return pmin < 0 ? 2 : 1;
-}
 
 // A sum of non-negative values that is exact and independent of the order of additions, over a
 // wide range: values are fixed point with 2^-40 of the unit per step, up to 2^36 units (larger
@@ -281,10 +318,10 @@ struct ExactSum {
     atomic_add(&hi, uint64_t(int64_t(h)));
     atomic_add(&lo, uint64_t(int64_t((x * 0x1p8 - h) * 0x1p32 + 0.5)));
   }
-  double value() const {
+  RLL_HD double value() const {
     return double(int64_t(atomic_load(&hi))) * 0x1p-8 + double(int64_t(atomic_load(&lo))) * 0x1p-40;
   }
-  void reset() { hi = lo = 0; }  // between passes
+  RLL_HD void reset() { hi = lo = 0; }  // between passes
 };
 
 // What sampling from a CutStore and recording rewards read and write (DESIGN 6): per cell, the
@@ -318,6 +355,14 @@ RLL_HD inline void cut_record(const CutStoreView& v, uint32_t cell, uint32_t k, 
   }
   atomic_add(&v.count[i], 1u);
 }
+
+// What the end of pass did to one cell (CutStore::end_pass, cut_end_pass).
+struct CutPassStats {
+  uint32_t splits = 0, collapses = 0;
+  bool touched = false;
+};
+
+struct CutStoreEndView;
 
 class CutStore {
  public:
@@ -373,10 +418,10 @@ class CutStore {
   // end_pass, clear, assign or load_cell change a cell's cut).
   CutStoreView view();
 
-  struct PassStats {
-    uint32_t splits = 0, collapses = 0;
-    bool touched = false;
-  };
+  using PassStats = CutPassStats;
+  // What the end of pass reads and writes (learn/cut_end_pass.h): every per-cell array. Valid
+  // while the store lives; the const methods pass it only to functions that read.
+  CutStoreEndView end_view();
   // End of pass for one cell (cells are independent: call in parallel). A cell without a cut
   // gets the initial one; rewards are folded into Q and M2, split-collapse runs, the CDF is
   // baked.
@@ -412,21 +457,7 @@ class CutStore {
   void load_cell(uint32_t cell, BinaryReader& r);
 
  private:
-  static constexpr double kMaxRootOfSquare = CutStoreView::kMaxRootOfSquare;
-  void load(uint32_t cell, Cut& cut) const;
-  void store(uint32_t cell, const Cut& cut);
-  float weight_of(uint32_t cell, uint32_t node) const;
-  // The normalized prior of every cluster: mostly weight, with a floor proportional to power.
-  void prior(const Cut& cut, std::vector<double>& out) const;
-  double power_floor() const;
-  // The effective target value of every cluster: sqrt(M2) or Q where visited, else the prior's
-  // share of what the visited clusters say the cell's total is.
-  void values(const Cut& cut, const std::vector<double>& pri, std::vector<float>& out) const;
-  void values(uint32_t cell, const Cut& cut, const std::vector<double>& pri,
-              std::vector<float>& out) const;
-  // Guided descent: bakes guide_left/right of a cell from its cut's values and prior.
-  void bake_guide(uint32_t cell, const Cut& cut, const std::vector<double>& pri,
-                  const std::vector<float>& val, double eps);
+  CutStoreEndView end_view() const;
 
   const LightTree& m_tree;
   CutSettings m_s;

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <utility>
 
 #include "rll/core/binary_io.h"
+#include "rll/core/device.h"
 #include "rll/core/error.h"
 #include "rll/core/hash.h"
 #include "rll/core/memory_budget.h"
@@ -218,38 +220,25 @@ void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, con
 void RllLightSampler::end_pass() {
   if (m_frozen) return;
   const uint32_t cap = m_s.capacity;
-  std::atomic<uint32_t> splits{0}, collapses{0}, touched{0};
   const std::vector<uint32_t> cells = cells_in_use();
-  parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-      const uint32_t c = cells[i];
-      uint64_t* w = &m_points[size_t(c) * kPointWords];
-      if (const int64_t count = int64_t(w[6]); count > 0 && !m_cuts->active(c)) {
-        double sum[6];
-        for (int j = 0; j < 6; ++j) sum[j] = double(int64_t(w[j])) / double(count) * 0x1p-24;
-        CellAnchor a = m_cuts->anchor(c);
-        a.p = m_origin + Vec3(float(sum[0]), float(sum[1]), float(sum[2])) * m_extent;
-        Vec3 n{float(sum[3]), float(sum[4]), float(sum[5])};
-        if (length_sq(n) > 1e-6f) a.n = normalize(n);
-        m_cuts->set_anchor(c, a);
-      }
-      for (int j = 0; j < kPointWords; ++j) w[j] = 0;
-    }
-  });
+  const CutStoreEndView ev = m_cuts->end_view();
+  {
+    const View<uint64_t> points = view_of(m_points);
+    const Vec3 origin = m_origin;
+    const float extent = m_extent;
+    host_parallel_for(cells.size(), [&](size_t i) {
+      rll_anchor_from_points(ev, cells[i], &points[size_t(cells[i]) * kPointWords], origin, extent);
+    });
+  }
   if (m_s.cut.pool_levels > 0) pool_pass(cells);
-  parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
-    uint32_t sp = 0, co = 0, to = 0;
-    for (size_t i = b; i < e; ++i) {
-      const uint32_t c = cells[i];
-      CutStore::PassStats st = m_cuts->end_pass(c);
-      sp += st.splits;
-      co += st.collapses;
-      to += st.touched;
-    }
-    splits += sp;
-    collapses += co;
-    touched += to;
-  });
+  std::vector<CutPassStats> stats(cells.size());
+  host_parallel_for(cells.size(), [&](size_t i) { stats[i] = cut_end_pass(ev, cells[i]); });
+  uint32_t splits = 0, collapses = 0, touched = 0;
+  for (const CutPassStats& st : stats) {
+    splits += st.splits;
+    collapses += st.collapses;
+    touched += st.touched;
+  }
   m_splits_per_pass.push_back(splits);
   m_collapses_per_pass.push_back(collapses);
   m_touched_per_pass.push_back(touched);
@@ -274,22 +263,23 @@ void RllLightSampler::end_pass() {
       std::stable_sort(used.begin(), used.end(),
                        [&](uint32_t a, uint32_t b) { return m_last_used[a] < m_last_used[b]; });
       evict.assign(used.begin(), used.begin() + long(used.size() - target));
-      for (uint32_t c : evict) m_cuts->clear(c);
+      host_parallel_for(evict.size(), [&](size_t i) { cut_clear(ev, evict[i]); });
       m_evictions += evict.size();
     }
   }
   // Cells whose insert lost a race, or were evicted, go back to the free list.
-  for (uint32_t c = 0; c < cap; ++c)
-    if (!m_table->in_use(c) && m_cuts->active(c)) m_cuts->clear(c);
+  host_parallel_for(cap, [&](size_t c) {
+    if (!m_table->in_use(uint32_t(c)) && ev.active(uint32_t(c))) cut_clear(ev, uint32_t(c));
+  });
   m_table->remove_and_rebuild(evict);
   ++m_pass;
   m_keyer.set_pass(m_pass, 0);
   if (m_s.reset_every > 0 && m_pass % m_s.reset_every == 0) {
     // Fermat's periodic reset: every cell starts over.
     const std::vector<uint32_t> all = cells_in_use();
-    for (uint32_t c : all) m_cuts->clear(c);
+    host_parallel_for(all.size(), [&](size_t i) { cut_clear(ev, all[i]); });
     m_table->remove_and_rebuild(all);
-    m_pool.clear();
+    clear_pool();
     ++m_resets;
   }
   refresh_view();
@@ -322,128 +312,96 @@ std::vector<uint64_t> RllLightSampler::coarse_keys(const std::vector<uint32_t>& 
   return keys;
 }
 
+RllPoolView RllLightSampler::pool_view() {
+  RllPoolView p;
+  p.k = m_cuts->initial_size();
+  p.keys = view_of(std::as_const(m_pool_keys));
+  p.q = view_of(m_pool_q);
+  p.m2 = view_of(m_pool_m2);
+  p.n = view_of(m_pool_n);
+  return p;
+}
+
+void RllLightSampler::clear_pool() {
+  m_pool_keys.clear();
+  m_pool_q.clear();
+  m_pool_m2.clear();
+  m_pool_n.clear();
+}
+
 void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
   const size_t K = m_cuts->initial_size();
-  // Sums in the order of the cells' keys, so that they do not depend on which thread created
-  // which cell id.
   const std::vector<uint64_t> coarse = coarse_keys(cells, 0);
   // Two tiers (pool_up): every cell's rewards also reach the cell pool_up levels coarser still.
-  // Keys hold the level, so both tiers live in one map; a coarse cell of either tier sums the
+  // Keys hold the level, so both tiers share one key space; a coarse cell of either tier sums the
   // cells under it.
   const std::vector<uint64_t> upper = coarse_keys(cells, 1);
-  std::vector<std::pair<uint64_t, size_t>> order;  // (cell key, index in cells)
-  order.reserve(cells.size());
-  for (size_t i = 0; i < cells.size(); ++i) order.emplace_back(m_table->key_of(cells[i]), i);
-  std::sort(order.begin(), order.end());
-  struct Pass {
-    std::vector<double> sum, sq;
-    std::vector<uint64_t> count;
-  };
-  std::map<uint64_t, Pass> pass;
-  Pass cell{std::vector<double>(K), std::vector<double>(K),
-            std::vector<uint64_t>(K)};  // one cell's
-  for (const auto& [key, i] : order) {
-    // The cell's rewards once (with pool_guess=ratio, its prior too), then into each tier.
-    std::fill(cell.sum.begin(), cell.sum.end(), 0.0);
-    std::fill(cell.sq.begin(), cell.sq.end(), 0.0);
-    std::fill(cell.count.begin(), cell.count.end(), 0);
-    m_cuts->add_pass_rewards(cells[i], cell.sum.data(), cell.sq.data(), cell.count.data());
-    for (int tier = 0; tier < (upper.empty() ? 1 : 2); ++tier) {
-      Pass& p = pass[tier == 0 ? coarse[i] : upper[i]];
-      if (p.sum.empty()) {
-        p.sum.assign(K, 0.0);
-        p.sq.assign(K, 0.0);
-        p.count.assign(K, 0);
-      }
-      for (size_t k = 0; k < K; ++k) {
-        if (cell.count[k] == 0) continue;
-        p.sum[k] += cell.sum[k];
-        p.sq[k] += cell.sq[k];
-        p.count[k] += cell.count[k];
-      }
-    }
+  // (coarse key, cell key) pairs sorted: each coarse cell's cells in the order of their keys, so
+  // that the sums do not depend on which thread created which cell id. (Host sort; a device
+  // build sorts the pairs with CUB.)
+  std::vector<PoolEntry> entries;
+  entries.reserve(cells.size() * (upper.empty() ? 1 : 2));
+  for (size_t i = 0; i < cells.size(); ++i) {
+    const uint64_t key = m_table->key_of(cells[i]);
+    entries.push_back({coarse[i], key, cells[i]});
+    if (!upper.empty()) entries.push_back({upper[i], key, cells[i]});
   }
-  // Fold into the coarse cells by the shrinkage rule without a prior (a cluster's first rewards
-  // are its values); coarse cells no cell uses any more are forgotten.
-  const double cap = 1.0 / m_s.cut.alpha;
-  std::map<uint64_t, PoolCell> kept;
-  for (auto& [key, p] : pass) {
-    PoolCell& pc = kept[key];
-    if (auto it = m_pool.find(key); it != m_pool.end()) pc = std::move(it->second);
-    if (pc.q.empty()) {
-      pc.q.assign(K, -1.0f);
-      pc.m2.assign(K, 0.0f);
-      pc.n.assign(K, 0.0f);
+  std::sort(entries.begin(), entries.end(), [](const PoolEntry& a, const PoolEntry& b) {
+    return a.coarse != b.coarse ? a.coarse < b.coarse : a.cell_key < b.cell_key;
+  });
+  // The coarse cells of this pass, each a segment of the entries; coarse cells no cell uses any
+  // more are forgotten.
+  std::vector<uint64_t> keys;
+  std::vector<size_t> first;
+  for (size_t i = 0; i < entries.size(); ++i)
+    if (i == 0 || entries[i].coarse != entries[i - 1].coarse) {
+      keys.push_back(entries[i].coarse);
+      first.push_back(i);
     }
-    for (size_t k = 0; k < K; ++k) {
-      if (p.count[k] == 0) continue;
-      const double n = double(p.count[k]), w = pc.q[k] >= 0 ? std::min(double(pc.n[k]), cap) : 0.0;
-      shrinkage_fold(pc.q[k], pc.m2[k], pc.n[k], w, std::max(pc.q[k], 0.0f), pc.m2[k], n,
-                     RewardMoments(n, p.sum[k], p.sq[k]), cap);
-    }
-  }
-  m_pool = std::move(kept);
+  first.push_back(entries.size());
+  std::vector<float> q(keys.size() * K), m2(keys.size() * K), n(keys.size() * K);
+  RllPoolView next;
+  next.k = uint32_t(K);
+  next.keys = view_of(std::as_const(keys));
+  next.q = view_of(q);
+  next.m2 = view_of(m2);
+  next.n = view_of(n);
+  std::vector<double> sum(keys.size() * K), sq(keys.size() * K);
+  std::vector<uint64_t> count(keys.size() * K);
+  const CutStoreEndView ev = m_cuts->end_view();
+  const RllPoolView old = pool_view();
+  host_parallel_for(keys.size(), [&](size_t j) {
+    pool_fold(ev, &entries[first[j]], first[j + 1] - first[j], old, next, j, &sum[j * K],
+              &sq[j * K], &count[j * K]);
+  });
+  m_pool_keys = std::move(keys);
+  m_pool_q = std::move(q);
+  m_pool_m2 = std::move(m2);
+  m_pool_n = std::move(n);
   give_pool_shares(cells, coarse, upper);
 }
 
 void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells,
                                        const std::vector<uint64_t>& coarse,
                                        const std::vector<uint64_t>& upper) {
-  const size_t K = m_cuts->initial_size();
-  const bool moment = m_s.cut.target == LearnTarget::Moment;
-  // A coarse cell's values (zero where it has none), normalized if `normalize`; false if none.
-  auto values_of = [&](const PoolCell& pc, float* out, bool normalize) {
-    double total = 0;
-    for (size_t k = 0; k < K; ++k) {
-      out[k] = pc.q[k] < 0 ? 0.0f : moment ? std::sqrt(std::max(pc.m2[k], 0.0f)) : pc.q[k];
-      total += out[k];
-    }
-    if (normalize && total > 0)
-      for (size_t k = 0; k < K; ++k) out[k] = float(out[k] / total);
-    return total > 0;
-  };
-  parallel_for(cells.size(), 64, [&](size_t b, size_t e) {
-    std::vector<float> shares(K), above(K);
-    std::vector<double> pri;
-    for (size_t i = b; i < e; ++i) {
-      const auto it = m_pool.find(coarse[i]);
-      double total = 0;
-      if (it != m_pool.end()) {
-        const PoolCell& pc = it->second;
-        values_of(pc, shares.data(), false);
-        // pool_up: the coarse cell's values shrunk toward its own coarse cell's.
-        if (!upper.empty())
-          if (const auto up = m_pool.find(upper[i]);
-              up != m_pool.end() && values_of(up->second, above.data(), true))
-            shrink_toward(
-                K, [&](size_t k) { return pc.q[k] >= 0; }, pc.n.data(), above.data(),
-                m_s.cut.pool_weight, shares.data());
-        // pool_guess=ratio: the coarse cell's factors times this cell's prior.
-        if (m_s.cut.pool_ratio) m_cuts->cell_prior(cells[i], pri);
-        for (size_t k = 0; k < K; ++k) {
-          if (m_s.cut.pool_ratio) shares[k] = float(shares[k] * pri[k]);
-          total += shares[k];
-        }
-        if (total > 0)
-          for (size_t k = 0; k < K; ++k) shares[k] = float(shares[k] / total);
-      }
-      m_cuts->set_pool(cells[i], total > 0 ? shares.data() : nullptr);
-    }
+  const CutStoreEndView ev = m_cuts->end_view();
+  const RllPoolView pool = pool_view();
+  host_parallel_for(cells.size(), [&](size_t i) {
+    pool_give_shares(ev, pool, cells[i], coarse[i], !upper.empty(), upper.empty() ? 0 : upper[i]);
   });
 }
 
 void RllLightSampler::lights_changed(const Scene& scene) {
   refresh_light_powers(scene);
   auto refresh_all = [&] {
-    parallel_for(m_s.capacity, 256, [&](size_t b, size_t e) {
-      for (size_t c = b; c < e; ++c) m_cuts->refresh(uint32_t(c));
-    });
+    const CutStoreEndView ev = m_cuts->end_view();
+    host_parallel_for(m_s.capacity, [&](size_t c) { cut_refresh(ev, uint32_t(c)); });
   };
   refresh_all();
   // pool_guess=ratio: a cell's pool shares are the coarse factors times its prior, which has just
   // changed (a lamp switched off has prior 0): give them again from the new priors and bake the
   // tables once more, instead of guessing with the old priors until the end of the next pass.
-  if (m_s.cut.pool_levels > 0 && m_s.cut.pool_ratio && !m_pool.empty()) {
+  if (m_s.cut.pool_levels > 0 && m_s.cut.pool_ratio && !m_pool_keys.empty()) {
     give_pool_shares();
     refresh_all();
   }
@@ -463,12 +421,13 @@ void RllLightSampler::save_state(BinaryWriter& w) const {
     m_cuts->save_cell(c, w);
   }
   if (m_s.cut.pool_levels > 0) {  // the coarse cells, in key order
-    w.put(uint32_t(m_pool.size()));
-    for (const auto& [key, pc] : m_pool) {
-      w.put(key);
-      w.put_array(pc.q.data(), pc.q.size());
-      w.put_array(pc.m2.data(), pc.m2.size());
-      w.put_array(pc.n.data(), pc.n.size());
+    const size_t K = m_cuts->initial_size();
+    w.put(uint32_t(m_pool_keys.size()));
+    for (size_t i = 0; i < m_pool_keys.size(); ++i) {
+      w.put(m_pool_keys[i]);
+      w.put_array(&m_pool_q[i * K], K);
+      w.put_array(&m_pool_m2[i * K], K);
+      w.put_array(&m_pool_n[i * K], K);
     }
   }
 }
@@ -498,7 +457,7 @@ void RllLightSampler::load_state(BinaryReader& r) {
     m_last_used[c] = last;
     m_cuts->load_cell(c, r);
   }
-  m_pool.clear();
+  clear_pool();
   if (m_s.cut.pool_levels > 0) {
     const size_t K = m_cuts->initial_size();
     const uint32_t count = r.get<uint32_t>();
@@ -509,16 +468,16 @@ void RllLightSampler::load_state(BinaryReader& r) {
       const uint64_t key = r.get<uint64_t>();
       if (i > 0 && key <= last) damaged("coarse cells out of order");
       last = key;
-      PoolCell& pc = m_pool[key];
-      pc.q.resize(K);
-      pc.m2.resize(K);
-      pc.n.resize(K);
-      r.get_array(pc.q.data(), K);
-      r.get_array(pc.m2.data(), K);
-      r.get_array(pc.n.data(), K);
-      for (size_t k = 0; k < K; ++k)
-        if (!((pc.q[k] >= 0 || pc.q[k] == -1) && std::isfinite(pc.q[k]) && pc.m2[k] >= 0 &&
-              std::isfinite(pc.m2[k]) && pc.n[k] >= 0 && std::isfinite(pc.n[k])))
+      m_pool_keys.push_back(key);
+      for (auto* a : {&m_pool_q, &m_pool_m2, &m_pool_n}) a->resize(m_pool_keys.size() * K);
+      const size_t at = (m_pool_keys.size() - 1) * K;
+      r.get_array(&m_pool_q[at], K);
+      r.get_array(&m_pool_m2[at], K);
+      r.get_array(&m_pool_n[at], K);
+      for (size_t k = at; k < at + K; ++k)
+        if (!((m_pool_q[k] >= 0 || m_pool_q[k] == -1) && std::isfinite(m_pool_q[k]) &&
+              m_pool_m2[k] >= 0 && std::isfinite(m_pool_m2[k]) && m_pool_n[k] >= 0 &&
+              std::isfinite(m_pool_n[k])))
           damaged("a coarse cell's value is negative or not finite");
     }
   }
@@ -588,7 +547,7 @@ nlohmann::json RllLightSampler::describe() const {
       {"evictions", m_evictions},
       {"failed_inserts", m_failed_inserts},
       {"mean_cut_size", active ? mean_cut / active : 0.0},
-      {"pool_cells", m_pool.size()},
+      {"pool_cells", m_pool_keys.size()},
       {"splits_per_pass", m_splits_per_pass},
       {"collapses_per_pass", m_collapses_per_pass},
       {"cells_touched_per_pass", m_touched_per_pass},

@@ -6,13 +6,13 @@
 // the tables are baked again.
 #pragma once
 
-#include <map>
 #include <memory>
 #include <vector>
 
 #include "rll/learn/cell_grid.h"
 #include "rll/learn/cuts.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/lights/rll_end_pass.h"
 #include "rll/lights/rll_view.h"
 #include "rll/lights/tree_sampler.h"
 
@@ -110,10 +110,12 @@ class RllLightSampler final : public LightSampler {
   // The cells in use, in id order.
   std::vector<uint32_t> cells_in_use() const;
 
-  struct PoolCell {  // a coarse cell: Q, M2 and reward weight per cluster of the shared cut
-    std::vector<float> q, m2, n;
-  };
-  std::map<uint64_t, PoolCell> m_pool;  // by coarse key (ordered: deterministic iteration)
+  // The coarse cells of pooling (rll_end_pass.h): keys ascending, and per coarse cell Q, M2 and
+  // reward weight of each cluster of the shared cut (initial_size() per coarse cell, key order).
+  std::vector<uint64_t> m_pool_keys;
+  std::vector<float> m_pool_q, m_pool_m2, m_pool_n;
+  RllPoolView pool_view();
+  void clear_pool();
 
   const LightTree& m_tree;
   RllSettings m_s;

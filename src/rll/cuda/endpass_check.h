@@ -1,0 +1,19 @@
+// The GPU side of the check that RLL's end of pass is device code (issue 31): cut_end_pass
+// (learn/cut_end_pass.h) run by a kernel over device copies of a CutStore's arrays, the arrays
+// copied back, so that a test compares them with the CPU's run of the same function (no GPU:
+// cuda/absent.cpp says why not). Plain C++: host code includes it.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "rll/learn/cut_end_pass.h"
+
+namespace rll {
+
+// The end of pass of every cell of `cells` on the GPU, over device copies of the host arrays of
+// `v`; the arrays the end of pass writes are copied back into v's host arrays. The stats per cell.
+std::vector<CutPassStats> cut_end_pass_gpu(const CutStoreEndView& v,
+                                           const std::vector<uint32_t>& cells);
+
+}  // namespace rll

@@ -1,0 +1,379 @@
+// RLL's end of pass for one cell as host-and-device functions over a mutable view of a CutStore
+// (DESIGN 2 "End of pass", DESIGN 6): the prior, the effective values, the fold of the pass's
+// rewards into Q, M2 and n, split-collapse, and the bake of the CDF and of the guided factors.
+// Cells are independent: the CPU runs cut_end_pass through host_parallel_for over the cells in
+// use, a GPU through cuda::parallel_for (cuda/endpass_check.cu); CutStore's methods forward
+// here. No allocation: a cell's cut is edited in place in its slice of the store (M clusters of
+// room), scratch lives in fixed-size arrays of kMaxCutSize.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "rll/core/device.h"
+#include "rll/learn/cuts.h"
+
+// The scratch arrays are written for the K clusters in use before anything reads them; GCC cannot
+// see that through a loop of K iterations and warns of the whole array.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+namespace rll {
+
+// Every per-cell array of a CutStore, writable: what the end of pass reads and writes.
+struct CutStoreEndView {
+  CutSettings s;
+  LightTreeView tree;
+  uint32_t m = 0;       // clusters per cell at most: the stride of the per-cluster arrays
+  double scale = 1;     // the unit of a cell's sums before it has learnt anything
+  double log_keep = 0;  // log(1 - alpha), the exponential rule's
+  View<const uint32_t> initial, initial_ends;  // the shared initial cut
+  View<uint32_t> size;                         // K per cell; 0: no cut yet
+  View<uint32_t> node, end;
+  View<float> q, m2, n, weight, cdf;
+  View<float> gl, gr;  // guided descent only (empty otherwise)
+  View<uint8_t> learnt;
+  View<float> seen, eps;
+  View<CellAnchor> anchor;
+  View<float> pool;        // pooling only: per cluster, the coarse cell's share
+  View<uint8_t> has_pool;  // pooling only: per cell
+  View<double> inv_unit;
+  View<ExactSum> sum, sq;
+  View<uint32_t> count;
+
+  RLL_HD bool active(uint32_t cell) const { return size[cell] > 0; }
+  RLL_HD size_t base(uint32_t cell) const { return size_t(cell) * m; }
+};
+
+namespace detail {
+// Shares of the prior that follow power, and that are uniform over the clusters with power,
+// so that every cluster with power keeps a probability the float CDF can represent, even where
+// the importance at the anchor is zero (a cluster's power can be 1e-7 of a sky dome's).
+inline constexpr double kPowerShare = 0.04;
+inline constexpr double kUniformShare = 0.01;
+
+// The guided bake's sums over the clusters under a node.
+struct GuideSums {
+  double w = 0, wg = 0, g = 0, count = 0;
+  RLL_HD double factor() const { return w > 0 ? wg / w : g / count; }
+};
+}  // namespace detail
+
+// The prior weight of `node` entering the cut of `cell`: its importance at the cell's anchor,
+// its power, or 1 (CutSettings::prior).
+RLL_HD inline float cut_weight_of(const CutStoreEndView& v, uint32_t cell, uint32_t node) {
+  if (v.s.prior == ClusterWeight::Power) return v.tree.node(node).bounds.power;
+  if (v.s.prior == ClusterWeight::Uniform) return 1.0f;
+  return tree_importance(v.tree, node, v.anchor[cell].p, v.anchor[cell].n);
+}
+
+// The normalized prior of K clusters (nodes, prior weights): (1 - power_share - uniform) *
+// weight + power_share * power + uniform / count over the clusters with power; uniform where
+// nothing emits; under ClusterWeight::Uniform (Fermat's) every cluster alike, no floor.
+RLL_HD inline void cut_prior(const CutStoreEndView& v, const uint32_t* nodes, const float* weight,
+                             size_t K, double* out) {
+  if (v.s.prior != ClusterWeight::Uniform) {
+    const double power_share =
+        v.s.prior == ClusterWeight::Power ? 1.0 - detail::kUniformShare : detail::kPowerShare;
+    auto power = [&](size_t k) {
+      return std::max(0.0, double(v.tree.node(nodes[k]).bounds.power));
+    };
+    double psum = 0, wsum = 0;
+    size_t with_power = 0;
+    for (size_t k = 0; k < K; ++k) {
+      const double p = power(k);
+      psum += p;
+      wsum += std::max(0.0, double(weight[k]));
+      with_power += p > 0;
+    }
+    if (psum > 0) {
+      const double ps = wsum > 0 ? power_share : 1.0 - detail::kUniformShare;
+      const double ws = (1 - ps - detail::kUniformShare) / (wsum > 0 ? wsum : 1.0);
+      const double us = detail::kUniformShare / double(with_power);
+      for (size_t k = 0; k < K; ++k) {
+        const double p = power(k);
+        out[k] = ws * std::max(0.0, double(weight[k])) + ps * p / psum + (p > 0 ? us : 0.0);
+      }
+      return;
+    }
+  }
+  for (size_t k = 0; k < K; ++k) out[k] = 1.0 / double(K);  // (nothing emits: uniform)
+}
+
+// The prior of the cell's cut as its baked table mixes it in (of the initial cut at the cell's
+// anchor while it has no cut).
+RLL_HD inline void cut_cell_prior(const CutStoreEndView& v, uint32_t cell, double* out) {
+  if (v.active(cell)) {
+    const size_t b = v.base(cell);
+    cut_prior(v, &v.node[b], &v.weight[b], v.size[cell], out);
+    return;
+  }
+  float w[kMaxCutSize];
+  for (size_t k = 0; k < v.initial.size; ++k) w[k] = cut_weight_of(v, cell, v.initial[k]);
+  cut_prior(v, v.initial.data, w, v.initial.size, out);
+}
+
+// The effective target value of the first K clusters of the cell's slice: sqrt(M2) or Q where
+// visited, else the prior's share of what the visited clusters say the cell's total is (guided:
+// ratios, the visited clusters' mean ratio); with pooling, shrunk toward the coarse cell's shares.
+RLL_HD inline void cut_values(const CutStoreEndView& v, uint32_t cell, size_t K, const double* pri,
+                              float* out) {
+  const size_t b = v.base(cell);
+  const float* q = &v.q[b];
+  const float* m2 = &v.m2[b];
+  const bool moment = v.s.target == LearnTarget::Moment;
+  // What the visited clusters say the cell's total is: their values over their prior share (a
+  // share below a quarter is taken as a quarter, so that one bright, rarely chosen cluster
+  // does not inflate every unvisited one).
+  double v_sum = 0, p_sum = 0;
+  for (size_t k = 0; k < K; ++k) {
+    if (q[k] < 0) continue;
+    out[k] = moment ? std::sqrt(std::max(m2[k], 0.0f)) : q[k];
+    v_sum += out[k];
+    p_sum += pri[k];
+  }
+  if (v.s.guided) {
+    // Ratios to the tree's importance: a cluster never visited gets the visited clusters' mean
+    // ratio, weighted by prior. (Guided excludes pooling.)
+    double wv = 0;
+    for (size_t k = 0; k < K; ++k)
+      if (q[k] >= 0) wv += pri[k] * out[k];
+    const float mean = p_sum > 0 ? float(wv / p_sum) : 0.0f;
+    for (size_t k = 0; k < K; ++k)
+      if (q[k] < 0) out[k] = mean;
+    return;
+  }
+  const double total = v_sum / std::max(p_sum, 0.25);
+  for (size_t k = 0; k < K; ++k)
+    if (q[k] < 0) out[k] = v.s.q_init >= 0 ? v.s.q_init : float(total * pri[k]);
+  if (v.has_pool.empty() || !v.has_pool[cell]) return;
+  shrink_toward(
+      K, [&](size_t k) { return q[k] >= 0; }, &v.n[b], &v.pool[b], v.s.pool_weight, out);
+}
+
+// Guided descent: each cluster's factor g(k) = (1 - e) rho(k) / mean rho + e: the learnt ratios
+// (val) relative to their prior-weighted mean, mixed with 1 (the tree's own step) by the
+// defensive weight e, so that g >= e > 0.
+RLL_HD inline void guide_factors(size_t K, const double* pri, const float* val, double eps,
+                                 double* g) {
+  double wsum = 0, wv = 0;
+  for (size_t k = 0; k < K; ++k) {
+    wsum += pri[k];
+    wv += pri[k] * val[k];
+  }
+  const double mean = wsum > 0 ? wv / wsum : 0.0;
+  for (size_t k = 0; k < K; ++k) g[k] = mean > 0 ? (1 - eps) * double(val[k]) / mean + eps : 1.0;
+}
+
+// Guided descent: bakes the cell's guide_left/right from its values and prior (CutStore's
+// guide_left says what they are). The inner nodes above the cut are visited from the root as a
+// recursion would (children's sums first, left then right), on a stack as deep as the tree.
+RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint32_t K,
+                                  const double* pri, const float* val, double eps) {
+  const size_t b = v.base(cell);
+  double g[kMaxCutSize];
+  guide_factors(K, pri, val, eps, g);
+  // Every inner node above the cut: its children's factors are the prior-weighted means of
+  // their clusters' g (the unweighted mean where no cluster has prior).
+  struct Frame {
+    uint32_t node, k0, k1, j;
+    int stage;  // 0: not begun, 1: first child done (its sums in a), 2: both done
+    detail::GuideSums a;
+  };
+  Frame stack[kMaxTreeDepth + 1];
+  const uint32_t* ends = &v.end[b];
+  detail::GuideSums done;  // the sums of the frame last finished
+  int top = 0;
+  stack[0] = {LightTree::kRoot, 0u, K, 0u, 0, {}};
+  while (top >= 0) {
+    Frame& f = stack[top];
+    if (f.stage == 0 && f.k1 - f.k0 == 1) {
+      done = {pri[f.k0], pri[f.k0] * g[f.k0], g[f.k0], 1};
+      --top;
+    } else if (f.stage == 0) {
+      const LightTreeNode& nd = v.tree.node(f.node);
+      f.j = children_boundary(v.tree, nd, ends, f.k0, f.k1);
+      f.stage = 1;
+      stack[top + 1] = {nd.child, f.k0, f.j + 1, 0u, 0, {}};
+      ++top;
+    } else if (f.stage == 1) {
+      f.a = done;
+      f.stage = 2;
+      stack[top + 1] = {v.tree.node(f.node).child + 1, f.j + 1, f.k1, 0u, 0, {}};
+      ++top;
+    } else {
+      v.gl[b + f.j] = float(f.a.factor());
+      v.gr[b + f.j] = float(done.factor());
+      done = {f.a.w + done.w, f.a.wg + done.wg, f.a.g + done.g, f.a.count + done.count};
+      --top;
+    }
+  }
+}
+
+// Bakes the cell's table from the first K clusters of its slice: P(s) = (1 - e) V(s) / sum V +
+// e prior(s), e the cell's defensive weight (folded in here when the prior lives in the CDF);
+// without any learnt value, the prior alone. Sets the cell's size, range ends, learnt flag and
+// defensive weight, and with the guided descent its factors.
+RLL_HD inline void cut_bake(const CutStoreEndView& v, uint32_t cell, uint32_t K) {
+  double pri[kMaxCutSize];
+  float val[kMaxCutSize];
+  const size_t b = v.base(cell);
+  v.size[cell] = K;
+  cut_prior(v, &v.node[b], &v.weight[b], K, pri);
+  cut_values(v, cell, K, pri, val);
+  double v_sum = 0;
+  for (size_t k = 0; k < K; ++k) v_sum += val[k];
+  v.learnt[cell] = v_sum > 0;
+  // (trust = 0: the configured weight from the start, also for a cell without rewards yet.)
+  const float distrust = v.s.trust > 0 ? v.s.trust / (v.s.trust + v.seen[cell]) : 0.0f;
+  v.eps[cell] = v_sum > 0 ? v.s.epsilon + (1 - v.s.epsilon) * distrust : 1.0f;
+  const double eps = v_sum > 0 ? (v.s.prior_in_cdf ? v.eps[cell] : 0.0) : 1.0;
+  double acc = 0;
+  for (size_t k = 0; k < K; ++k) {
+    acc += (1 - eps) * (v_sum > 0 ? val[k] / v_sum : 0.0) + eps * pri[k];
+    v.cdf[b + k] = float(acc);
+    v.end[b + k] = v.tree.node(v.node[b + k]).end;
+  }
+  for (size_t k = 0; k < K; ++k) v.cdf[b + k] = float(std::min(1.0, double(v.cdf[b + k]) / acc));
+  v.cdf[b + K - 1] = 1.0f;
+  if (v.s.guided) cut_bake_guide(v, cell, K, pri, val, v_sum > 0 ? v.eps[cell] : 1.0);
+}
+
+// Light powers or positions changed: the cell's prior weights anew, and its table.
+RLL_HD inline void cut_refresh(const CutStoreEndView& v, uint32_t cell) {
+  if (!v.active(cell)) return;
+  const size_t b = v.base(cell);
+  for (size_t k = 0; k < v.size[cell]; ++k) v.weight[b + k] = cut_weight_of(v, cell, v.node[b + k]);
+  cut_bake(v, cell, v.size[cell]);
+}
+
+// Forgets a cell (eviction).
+RLL_HD inline void cut_clear(const CutStoreEndView& v, uint32_t cell) {
+  const size_t b = v.base(cell);
+  v.size[cell] = 0;
+  v.learnt[cell] = 0;
+  v.seen[cell] = 0;
+  v.eps[cell] = 1;
+  if (!v.has_pool.empty()) v.has_pool[cell] = 0;
+  v.inv_unit[cell] = 1 / v.scale;
+  for (uint32_t k = 0; k < v.m; ++k) {
+    v.sum[b + k].reset();
+    v.sq[b + k].reset();
+    v.count[b + k] = 0;
+  }
+}
+
+// Pooling: adds the pass's rewards of `cell` (under the shared cut's indices) in absolute units
+// to sum, sq and count (each initial.size long); with pool_ratio, each divided by the cell's
+// prior share of its cluster.
+RLL_HD inline void cut_pass_rewards(const CutStoreEndView& v, uint32_t cell, double* sum,
+                                    double* sq, uint64_t* count) {
+  const size_t b = v.base(cell);
+  const double unit = 1 / v.inv_unit[cell];
+  double pri[kMaxCutSize];
+  if (v.s.pool_ratio) cut_cell_prior(v, cell, pri);
+  for (size_t k = 0; k < v.initial.size; ++k) {
+    const uint32_t n = v.count[b + k];
+    if (n == 0) continue;
+    const double u = v.s.pool_ratio ? unit / pri[k] : unit;
+    count[k] += n;
+    sum[k] += v.sum[b + k].value() * u;
+    sq[k] += v.sq[b + k].value() * u * u;
+  }
+}
+
+// End of pass for one cell (cells are independent). A cell without a cut gets the initial one;
+// the pass's rewards are folded into Q and M2, split-collapse runs, the table is baked. A cell
+// with a cut and no reward this pass keeps its cut and table.
+RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell) {
+  CutPassStats st;
+  const size_t b = v.base(cell);
+  const bool active = v.active(cell);
+  uint32_t K = active ? v.size[cell] : uint32_t(v.initial.size);
+  uint64_t n_total = 0;
+  for (size_t k = 0; k < K; ++k) n_total += v.count[b + k];
+  if (active && n_total == 0) return st;  // nothing new: the cut and CDF stand
+  float* q = &v.q[b];
+  float* m2 = &v.m2[b];
+  float* n = &v.n[b];
+  if (!active)
+    for (size_t k = 0; k < K; ++k) {
+      v.node[b + k] = v.initial[k];
+      q[k] = -1.0f;
+      m2[k] = 0.0f;
+      n[k] = 0.0f;
+      v.weight[b + k] = cut_weight_of(v, cell, v.initial[k]);
+    }
+
+  // Fold this pass's rewards into Q and M2. Shrinkage: a running mean over at most 1/alpha
+  // rewards, started from the prior estimate counted as prior_samples rewards. Exponential: the
+  // paper's rule Q := (1-a) Q + a r once per reward, each reward replaced by the pass mean,
+  // gives Q := b Q + (1-b) mean with b = (1-a)^n. Either way the result does not depend on the
+  // order the threads delivered the rewards in.
+  if (n_total > 0) {
+    st.touched = true;
+    v.seen[cell] += float(n_total);
+    double pri[kMaxCutSize];
+    float val[kMaxCutSize], score[kMaxCutSize];
+    cut_prior(v, &v.node[b], &v.weight[b], K, pri);
+    cut_values(v, cell, K, pri, val);
+    const bool moment = v.s.target == LearnTarget::Moment;
+    const double unit = 1 / v.inv_unit[cell];
+    double largest = 0;
+    for (size_t k = 0; k < K; ++k) {
+      const uint32_t count = v.count[b + k];
+      if (count == 0) continue;
+      const RewardMoments r(count, v.sum[b + k].value() * unit, v.sq[b + k].value() * unit * unit);
+      // The prior estimate of a cluster never visited: its effective value, without variance.
+      const double old_q = q[k] >= 0 ? q[k] : val[k];
+      const double old_m2 = q[k] >= 0 ? m2[k] : double(val[k]) * val[k];
+      if (v.s.rule == LearningRule::Exponential) {
+        const double bk = std::exp(double(count) * v.log_keep);
+        q[k] = float(bk * old_q + (1 - bk) * r.mean);
+        m2[k] = float(bk * old_m2 + (1 - bk) * r.mean2);
+      } else {
+        const double w =
+            q[k] >= 0 ? std::min(double(n[k]), 1.0 / v.s.alpha) : double(v.s.prior_samples);
+        shrinkage_fold(q[k], m2[k], n[k], w, old_q, old_m2, count, r, 1.0 / v.s.alpha);
+      }
+      largest = std::max(largest, std::sqrt(double(m2[k])));
+      v.sum[b + k].reset();
+      v.sq[b + k].reset();
+      v.count[b + k] = 0;
+    }
+    // The next pass's unit: the largest learnt sqrt(M2).
+    if (largest > 0 && std::isfinite(largest)) v.inv_unit[cell] = 1 / largest;
+    // Split-collapse on the new values: split by the cluster's share of the cell's variance
+    // (the standard deviation of its reward) under target=moment, by value (the paper's Q)
+    // under target=mean. (The prior is unchanged: folding touches no node or weight.)
+    cut_values(v, cell, K, pri, val);
+    for (size_t k = 0; k < K; ++k)
+      score[k] = !moment     ? val[k]
+                 : q[k] >= 0 ? float(std::sqrt(std::max(0.0, double(m2[k]) - double(q[k]) * q[k])))
+                             : val[k];
+    auto prior_weight = [&](uint32_t node) { return cut_weight_of(v, cell, node); };
+    auto share = [&](uint32_t node) {
+      if (v.s.split == ClusterWeight::Uniform) return 1.0f;  // half and half
+      return v.s.split == ClusterWeight::Power
+                 ? v.tree.node(node).bounds.power
+                 : tree_importance(v.tree, node, v.anchor[cell].p, v.anchor[cell].n);
+    };
+    for (int i = 0; i < v.s.splits; ++i) {
+      const int r = split_collapse_step(v.tree, int(v.m), v.s.threshold, K, &v.node[b], q, m2, n,
+                                        &v.weight[b], val, score, prior_weight, share);
+      if (r == 0) break;
+      ++st.splits;
+      if (r == 1) ++st.collapses;
+    }
+  }
+  cut_bake(v, cell, K);
+  return st;
+}
+
+}  // namespace rll
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
