@@ -112,3 +112,18 @@ TEST(CliErrors, AGoodSceneStillRenders) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(fs::exists(dir / "o.png"));
 }
+
+// Resampled next-event estimation: M bounded (no allocation per sample), and the wavefront
+// renderer, which has no resampling yet, refuses it rather than render one light sample.
+TEST(CliErrors, NeeCandidates) {
+  TempDir dir;
+  for (const char* m : {"0", "65", "x"})
+    expect_render_error(dir,
+                        {"builtin:cornell-box", "--res", "8x8", "--spp", "1", "--set",
+                         std::string("nee.candidates=") + m},
+                        {"nee.candidates"});
+  expect_render_error(dir,
+                      {"builtin:cornell-box", "--res", "8x8", "--spp", "1", "--wavefront", "--set",
+                       "nee.candidates=4"},
+                      {"nee.candidates=4", "wavefront"});
+}

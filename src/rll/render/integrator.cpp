@@ -43,6 +43,7 @@ IntegratorSettings make_integrator_settings(const std::string& name, int max_dep
     s.rr_depth = int(params.get_int("path.rr_depth", 3));
     if (s.rr_depth < 1) fail("--set path.rr_depth must be at least 1");
   }
+  s.nee_candidates = int(params.get_int_in("nee.candidates", 1, 1, kMaxNeeCandidates));
   return s;
 }
 
@@ -56,6 +57,7 @@ PathConstants make_path_constants(const Scene& scene, const SceneView& view,
   c.strategy = settings.strategy;
   c.max_depth = settings.type == IntegratorType::Direct ? 1 : settings.max_depth;
   c.rr_depth = settings.rr_depth;
+  c.nee_candidates = settings.nee_candidates;
   return c;
 }
 
@@ -72,15 +74,13 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sam
 
 Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
                              const Rgb& beta, SampleStream& stream, RayCounters& counters) const {
-  const LightNumbers u = light_numbers(stream, depth);
-  SampledLight sl = m_sampler.sample(ctx, u.u_light);
-  if (sl.pmf <= 0) return Rgb(0);
-  const NeeSetup n = nee_setup(m_constants, ctx, bsdf, wo, sl.light, u.u_pos);
-  if (n.counts_shadow_ray) ++counters.shadow;
-  const bool occluded = n.traces && m_accel.occluded(n.shadow);
-  const NeeResult r =
-      nee_finish(n, occluded, bsdf, wo, beta, sl.pmf, m_constants.strategy == LightStrategy::Mis);
-  if (m_learns) m_sampler.record(ctx, sl, r.record);
+  const NeeChoice ch = resample_nee(m_constants, ctx, bsdf, wo, stream, depth,
+                                    [&](double u) { return m_sampler.sample(ctx, u); });
+  if (!(ch.light.pmf > 0)) return Rgb(0);
+  if (ch.setup.counts_shadow_ray) ++counters.shadow;
+  const bool occluded = ch.setup.traces && m_accel.occluded(ch.setup.shadow);
+  const NeeResult r = nee_finish_resampled(m_constants, ch, occluded, bsdf, wo, beta);
+  if (m_learns) m_sampler.record(ctx, ch.light, r.record);
   return r.value;
 }
 

@@ -21,9 +21,11 @@ struct IntegratorSettings {
   int max_depth = 5;  // path: bounces; 1 = direct light only
   LightStrategy strategy = LightStrategy::Mis;
   int rr_depth = 3;  // Russian roulette from this bounce on
+  int nee_candidates = 1;  // resampled next-event estimation's M (docs/nee.md)
 };
 
-// Parses --integrator and the integrator's `--set` keys (path.strategy, path.rr_depth).
+// Parses --integrator and the integrator's `--set` keys (path.strategy, path.rr_depth,
+// nee.candidates).
 IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
                                             const Params& params);
 const char* integrator_name(IntegratorType t);

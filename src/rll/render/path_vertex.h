@@ -79,6 +79,7 @@ struct PathConstants {
   LightStrategy strategy = LightStrategy::Mis;
   int max_depth = 5;  // 1 for `direct`
   int rr_depth = 3;
+  int nee_candidates = 1;  // resampled next-event estimation (docs/nee.md): 1 = one light sample
 };
 
 // What a path carries from one vertex to the next.
@@ -248,6 +249,102 @@ RLL_HD inline NeeResult nee_finish(const NeeSetup& n, bool occluded, const Bsdf&
   r.record.mis_weight = w;
   r.record.max_rgb = max_component(beta * contribution) * w;
   r.value = is_black(contribution) ? contribution : contribution * (w / light_pmf);
+  return r;
+}
+
+// Resampled next-event estimation (docs/nee.md): M candidates from the light sampler's own
+// distribution, one kept by a weighted reservoir in proportion to its unshadowed contribution
+// with the MIS weight folded in, one shadow ray for it.
+inline constexpr int kMaxNeeCandidates = 64;
+// Candidate 0 draws at the vertex's own light dimensions (so that M = 1 is one light sample as
+// before, to the bit); candidates 1..M-1 each draw 4 numbers (light, point, keep) at dimensions
+// of their own, far past any path's vertices (a Sobol' stream stratifies any dimension).
+inline constexpr uint32_t kResampleBase = 1u << 24;
+inline constexpr uint32_t kCandidateDims = 4;
+RLL_HD inline uint32_t candidate_dimension(int depth, int candidate) {
+  return kResampleBase + uint32_t(depth) * (kCandidateDims * (kMaxNeeCandidates - 1)) +
+         kCandidateDims * uint32_t(candidate - 1);
+}
+struct CandidateNumbers {
+  LightNumbers light;
+  float u_keep = 0;  // the reservoir's draw: candidate 0 is kept whenever it weighs anything
+};
+RLL_HD inline CandidateNumbers candidate_numbers(SampleStream& stream, int depth, int candidate) {
+  CandidateNumbers u;
+  if (candidate == 0) {
+    u.light = light_numbers(stream, depth);
+    return u;
+  }
+  stream.seek(candidate_dimension(depth, candidate));
+  u.light.u_light = stream.next_double();
+  u.light.u_pos = stream.next2();
+  u.u_keep = stream.next();
+  return u;
+}
+
+// A candidate's resampling weight w = p_hat / q: the luminance of its unshadowed contribution
+// f cos Le / pdf(y | light) with the light strategy's MIS weight (power heuristic of the source
+// pdf pmf * pdf(y | light) against the BSDF's pdf), over its pmf.
+RLL_HD inline float resample_weight(const NeeSetup& n, const Bsdf& bsdf, const Vec3& wo,
+                                    float light_pmf, bool mis) {
+  if (!n.traces) return 0;
+  float m = 1;
+  if (mis && !n.light_delta) m = power_heuristic(light_pmf * n.light_pdf, bsdf.pdf(wo, n.wi));
+  const float w = luminance(n.unoccluded) * m / light_pmf;
+  return w > 0 && std::isfinite(w) ? w : 0;
+}
+
+// What the reservoir kept: the candidate that gets the shadow ray, its weight and the sum of all
+// weights. `light.pmf` is 0 where no candidate was drawn at all.
+struct NeeChoice {
+  NeeSetup setup;
+  SampledLight light;
+  float weight = 0;      // of the kept candidate (0: none weighs anything, nothing is traced)
+  float weight_sum = 0;  // over all M candidates
+};
+
+// Draws the M = c.nee_candidates candidates with `sample(u)` (the light sampler's
+// sample(ctx, u)) and keeps one by streaming weighted reservoir sampling. With M = 1 the weight
+// is not evaluated (it cancels): one light sample, as before resampling.
+template <class SampleLight>
+RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext& ctx,
+                                     const Bsdf& bsdf, const Vec3& wo, SampleStream& stream,
+                                     int depth, const SampleLight& sample) {
+  NeeChoice ch;
+  const bool mis = c.strategy == LightStrategy::Mis;
+  for (int i = 0; i < c.nee_candidates; ++i) {
+    const CandidateNumbers u = candidate_numbers(stream, depth, i);
+    const SampledLight sl = sample(u.light.u_light);
+    if (!(sl.pmf > 0)) continue;
+    const NeeSetup n = nee_setup(c, ctx, bsdf, wo, sl.light, u.light.u_pos);
+    const float w = c.nee_candidates == 1 ? (n.traces ? 1.0f : 0.0f)
+                                          : resample_weight(n, bsdf, wo, sl.pmf, mis);
+    if (i == 0) {  // kept even at weight 0: a learning sampler records its zero
+      ch.setup = n;
+      ch.light = sl;
+    }
+    if (!(w > 0)) continue;
+    ch.weight_sum += w;
+    if (u.u_keep * ch.weight_sum < w) {
+      ch.setup = n;
+      ch.light = sl;
+      ch.weight = w;
+    }
+  }
+  if (!(ch.weight > 0)) ch.setup.traces = false;
+  return ch;
+}
+
+// The kept candidate after the shadow ray: nee_finish's value (its contribution over its source
+// pmf, MIS-weighted) times the unbiased contribution weight's ratio (sum w / M) / w_kept; the
+// record is the kept sample's with its source pmf (docs/rll.md).
+RLL_HD inline NeeResult nee_finish_resampled(const PathConstants& c, const NeeChoice& ch,
+                                             bool occluded, const Bsdf& bsdf, const Vec3& wo,
+                                             const Rgb& beta) {
+  NeeResult r = nee_finish(ch.setup, occluded, bsdf, wo, beta, ch.light.pmf,
+                           c.strategy == LightStrategy::Mis);
+  if (ch.weight > 0 && !is_black(r.value))
+    r.value *= (ch.weight_sum / float(c.nee_candidates)) / ch.weight;
   return r;
 }
 
