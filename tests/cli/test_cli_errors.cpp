@@ -122,8 +122,4 @@ TEST(CliErrors, NeeCandidates) {
                         {"builtin:cornell-box", "--res", "8x8", "--spp", "1", "--set",
                          std::string("nee.candidates=") + m},
                         {"nee.candidates"});
-  expect_render_error(dir,
-                      {"builtin:cornell-box", "--res", "8x8", "--spp", "1", "--wavefront", "--set",
-                       "nee.candidates=4"},
-                      {"nee.candidates=4", "wavefront"});
 }

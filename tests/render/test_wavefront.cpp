@@ -33,6 +33,7 @@ struct Render {
   int threads = 0;
   uint32_t path_slots = WavefrontSettings{}.path_slots;
   WavefrontTracer tracer = WavefrontTracer::Embree;
+  int nee_candidates = 1;
   WavefrontTimes* times = nullptr;
 };
 
@@ -44,6 +45,7 @@ Image render_image(const Scene& scene, const Accel& accel, const Render& r,
   auto sampler = make_light_sampler(r.sampler, scene, params, &accel);
   IntegratorSettings is;
   is.type = r.type;
+  is.nee_candidates = r.nee_candidates;
   Film film(scene.width, scene.height);
   RenderSettings rs;
   rs.spp = r.spp;
@@ -141,11 +143,15 @@ TEST_P(WavefrontAgreement, SameSeedGivesTheMegakernelsImageToTheBit) {
   const SceneCase& sc = kScenes[std::get<0>(GetParam())];
   const Scene scene = small_builtin_scene(sc.name, sc.width / 2, sc.height / 2);
   const Accel accel(scene.mesh);
-  for (const char* sampler : {"power", "tree"}) {
+  // One light sample per vertex, and the reservoir's choice of four (nee.candidates=4).
+  for (const auto& [sampler, candidates] :
+       {std::pair{"power", 1}, std::pair{"tree", 1}, std::pair{"tree", 4}}) {
+    SCOPED_TRACE(fmt::format("{}, nee.candidates={}", sampler, candidates));
     Render r;
     r.sampler = sampler;
     r.type = std::get<1>(GetParam());
     r.spp = 4;
+    r.nee_candidates = candidates;
     r.wavefront = false;
     RenderProgress pm, pw;
     const Image megakernel = render_image(scene, accel, r, &pm);

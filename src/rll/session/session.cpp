@@ -56,13 +56,6 @@ RenderSession::RenderSession(const SessionSettings& settings)
   // Reorders the lights: everything keyed by their order (fingerprint, learnt states) follows.
   build_light_tree(m_scene);
   m_integrator = make_integrator_settings(settings.integrator, settings.max_depth, m_params);
-  // The wavefront renderer draws one light sample per vertex (render/path_vertex.h's
-  // nee_setup / nee_finish); resampling is the megakernel's so far.
-  if (settings.wavefront && m_integrator.nee_candidates > 1)
-    fail(
-        "--set nee.candidates={}: resampled next-event estimation is not in the wavefront "
-        "renderer yet (render without --wavefront, or with nee.candidates=1)",
-        m_integrator.nee_candidates);
   m_accel = std::make_unique<Accel>(m_scene.mesh);
   if (settings.device == "cuda") m_gpu = std::make_unique<cuda::GpuRenderer>(m_scene);
 }

@@ -59,6 +59,7 @@ struct PathSlots {
   // Its next-event sample.
   View<SampledLight> light;
   View<NeeSetup> nee;
+  View<Vec2> resample;  // the reservoir's kept weight and weight sum (nee.candidates > 1)
   View<uint8_t> occluded;
   View<NeeRecord> record;
 
@@ -84,6 +85,7 @@ struct PathSlots {
     p.ctx = take.template operator()<LightContext>(n);
     p.light = take.template operator()<SampledLight>(n);
     p.nee = take.template operator()<NeeSetup>(n);
+    p.resample = take.template operator()<Vec2>(n);
     p.occluded = take.template operator()<uint8_t>(n);
     p.record = take.template operator()<NeeRecord>(n);
     return p;
@@ -173,7 +175,6 @@ struct WavefrontKernels {
   uint32_t* queue_sizes = nullptr;  // kWavefrontQueues words
   WavefrontTally* tally = nullptr;
   FilmView film;
-  bool mis = true;
 
   RLL_HD WavefrontQueue queue(WavefrontQueueId q) const {
     return {queue_slots[q], &queue_sizes[q]};
@@ -225,28 +226,34 @@ struct WavefrontKernels {
     queue(kBounces).push(i);
   }
 
-  // Next-event estimation: the light, the point on it, the unoccluded contribution.
+  // Next-event estimation: the light, the point on it, the unoccluded contribution; with
+  // nee.candidates > 1 the candidate a weighted reservoir keeps of several (render/path_vertex.h).
   RLL_HD void nee_sample_stage(uint32_t i) const {
-    const LightNumbers u = light_numbers(p.stream[i], p.depth[i]);
-    const SampledLight sl = sampler.sample(p.ctx[i], u.u_light);
-    p.light[i] = sl;
-    if (sl.pmf <= 0) return;
-    const NeeSetup setup = nee_setup(c, p.ctx[i], p.bsdf[i], -p.ray[i].d, sl.light, u.u_pos);
-    p.nee[i] = setup;
+    const LightContext& ctx = p.ctx[i];
+    const NeeChoice ch = resample_nee(c, ctx, p.bsdf[i], -p.ray[i].d, p.stream[i], p.depth[i],
+                                      [&](double u) { return sampler.sample(ctx, u); });
+    p.light[i] = ch.light;
+    if (!(ch.light.pmf > 0)) return;
+    p.nee[i] = ch.setup;
+    p.resample[i] = Vec2(ch.weight, ch.weight_sum);
     p.occluded[i] = 0;
-    if (setup.counts_shadow_ray) atomic_add(&tally->shadow, uint64_t(1));
-    if (setup.traces) queue(kShadows).push(i);
+    if (ch.setup.counts_shadow_ray) atomic_add(&tally->shadow, uint64_t(1));
+    if (ch.setup.traces) queue(kShadows).push(i);
   }
 
   RLL_HD void shadow_stage(uint32_t i) const { p.occluded[i] = tracer.shadow(p.nee[i].shadow); }
 
   // The next-event sample's contribution after the shadow ray's verdict.
   RLL_HD void nee_finish_stage(uint32_t i) const {
-    const SampledLight& sl = p.light[i];
     Rgb value(0);
-    if (sl.pmf > 0) {
-      const NeeResult r = nee_finish(p.nee[i], p.nee[i].traces && p.occluded[i] != 0, p.bsdf[i],
-                                     -p.ray[i].d, p.beta[i], sl.pmf, mis);
+    if (p.light[i].pmf > 0) {
+      NeeChoice ch;
+      ch.setup = p.nee[i];
+      ch.light = p.light[i];
+      ch.weight = p.resample[i].x;
+      ch.weight_sum = p.resample[i].y;
+      const NeeResult r = nee_finish_resampled(c, ch, ch.setup.traces && p.occluded[i] != 0,
+                                               p.bsdf[i], -p.ray[i].d, p.beta[i]);
       p.record[i] = r.record;
       value = r.value;
     }

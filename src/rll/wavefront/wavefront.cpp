@@ -118,7 +118,6 @@ RenderProgress render_with(
   k.tracer = tracer;
   k.sampler = HostLightSampler::of(light_sampler);
   k.film = film.view();
-  k.mis = k.c.strategy == LightStrategy::Mis;
   HostBackend backend(wavefront.times);
   WavefrontDriver<HostBackend, Tracer, HostLightSampler> driver(
       backend, k, wavefront_slot_count(wavefront.path_slots, film, settings.spp));
