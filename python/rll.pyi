@@ -42,6 +42,7 @@ def render(
     scene: Scene,
     sampler: str = "rll",
     integrator: str = "path",
+    max_depth: int = 5,
     spp: int = 16,
     time: Optional[float] = None,
     res: _Res = None,

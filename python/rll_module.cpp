@@ -133,17 +133,19 @@ py::object to_python(const nlohmann::json& j) {
 }
 
 PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::string& integrator,
-                   long long spp, std::optional<double> time, const py::object& res, uint64_t seed,
-                   const py::dict& params, int threads, const py::object& progress) {
+                   int max_depth, long long spp, std::optional<double> time, const py::object& res,
+                   uint64_t seed, const py::dict& params, int threads, const py::object& progress) {
   if (spp < 1 || spp > kMaxSpp) fail("spp: {} is not in [1, {}]", spp, kMaxSpp);
   if (time && !(*time > 0 && *time <= kMaxSeconds))
     fail("time: {} seconds is not in (0, {}] (None: no limit)", *time, kMaxSeconds);
+  if (max_depth < 1) fail("max_depth: {} is not at least 1", max_depth);
   if (threads < 0 || threads > kMaxThreads)
     fail("threads: {} is not in [0, {}] (0: all cores)", threads, kMaxThreads);
   if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
     fail("progress: expected a callable or None");
   SessionSettings settings = scene.settings;
   settings.integrator = integrator;
+  settings.max_depth = max_depth;
   const std::string resolution = resolution_arg(res);
   if (!resolution.empty()) settings.resolution = resolution;
   for (const auto& [k, v] : params)
@@ -157,6 +159,7 @@ PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::s
     lock.lock();
   }
   const bool own = settings.integrator != scene.settings.integrator ||
+                   settings.max_depth != scene.settings.max_depth ||
                    settings.resolution != scene.settings.resolution || !settings.set.empty();
   std::shared_ptr<RenderSession> session = own ? make_session(settings) : scene.session;
   std::unique_ptr<LightSampler> sampler;
@@ -209,6 +212,7 @@ PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::s
   r.stats["scene"] = settings.scene;
   r.stats["resolution"] = py::make_tuple(sc.width, sc.height);
   r.stats["integrator"] = integrator;
+  r.stats["max_depth"] = session->integrator().max_depth;
   r.stats["renderer"] = session->renderer_name();
   r.stats["sampler"] = to_python(sampler->describe());
   r.stats["spp"] = p.spp_done;
@@ -323,12 +327,13 @@ PYBIND11_MODULE(rll, m) {
         "`res` ('WIDTHxHEIGHT' or (width, height); None: the scene's own). Raises rll.Error\n"
         "with rll's message when the scene cannot be read.");
   m.def("render", &py_render, py::arg("scene"), py::arg("sampler") = "rll",
-        py::arg("integrator") = "path", py::arg("spp") = 16, py::arg("time") = py::none(),
-        py::arg("res") = py::none(), py::arg("seed") = 1, py::arg("params") = py::dict(),
-        py::arg("threads") = 0, py::arg("progress") = py::none(),
+        py::arg("integrator") = "path", py::arg("max_depth") = 5, py::arg("spp") = 16,
+        py::arg("time") = py::none(), py::arg("res") = py::none(), py::arg("seed") = 1,
+        py::arg("params") = py::dict(), py::arg("threads") = 0, py::arg("progress") = py::none(),
         "Renders `scene` with a light sampler (see samplers()) as `rll render` does with the\n"
         "same settings, to the same image: `spp` samples per pixel, or fewer when `time`\n"
-        "seconds run out; `params` are `--set` parameters (key: value); `threads` 0 uses every\n"
+        "seconds run out; `max_depth` bounds the path length (`--max-depth`); `params` are `--set` "
+        "parameters (key: value); `threads` 0 uses every\n"
         "core. `progress(dict)` is called after every pass (passes, spp, spp_target, seconds,\n"
         "samples). The GIL is released while rendering; Ctrl-C stops the render and returns\n"
         "what it has (Render.interrupted is then True).");

@@ -97,27 +97,29 @@ ROOM = "builtin:cornell-boxes-room"
 
 
 @pytest.mark.parametrize(
-    "scene,sampler,integrator,params,seed",
-    [(BOX, "rll", "path", {}, 1), (BOX, "power", "direct", {}, 7),
-     (ROOM, "rll", "path", {"rll.cut_size": 4, "path.strategy": "nee"}, 3)],
+    "scene,sampler,integrator,depth,params,seed",
+    [(BOX, "rll", "path", 5, {}, 1), (BOX, "power", "direct", 5, {}, 7),
+     (ROOM, "rll", "path", 3, {"rll.cut_size": 4, "path.strategy": "nee"}, 3)],
 )
-def test_render_equals_the_cli(tmp_path, scene, sampler, integrator, params, seed):
+def test_render_equals_the_cli(tmp_path, scene, sampler, integrator, depth, params, seed):
     out = tmp_path / "cli.exr"
     sets = [a for k, v in params.items() for a in ("--set", f"{k}={v}")]
     cli("render", scene, "--res", "40x30", "--spp", "6", "--seed", str(seed), "--sampler", sampler,
-        "--integrator", integrator, "--quiet", "-o", str(out), *sets)
+        "--integrator", integrator, "--max-depth", str(depth), "--quiet", "-o", str(out), *sets)
     loaded = rll.load(scene, res=(40, 30))
-    r = rll.render(loaded, sampler=sampler, integrator=integrator, spp=6, seed=seed, params=params)
+    r = rll.render(loaded, sampler=sampler, integrator=integrator, max_depth=depth, spp=6,
+                   seed=seed, params=params)
     ref = rll.read_exr(out)
     assert r.image.shape == ref.shape
     assert np.array_equal(r.image, ref)  # to the bit
     # Another seed, or leaving the parameters out, gives another image: the comparison can fail.
-    other = rll.render(loaded, sampler=sampler, integrator=integrator, spp=6, seed=seed + 1,
-                       params=params)
+    other = rll.render(loaded, sampler=sampler, integrator=integrator, max_depth=depth, spp=6,
+                       seed=seed + 1, params=params)
     assert not np.array_equal(other.image, ref)
     if params:
         plain = rll.render(loaded, sampler=sampler, integrator=integrator, spp=6, seed=seed)
         assert not np.array_equal(plain.image, ref)
+        assert r.stats["max_depth"] == depth and plain.stats["max_depth"] == 5
 
 
 def test_render_errors_name_the_parameter(box):
@@ -129,6 +131,8 @@ def test_render_errors_name_the_parameter(box):
         rll.render(box, spp=1, params={"nee.candidates": 0})
     with pytest.raises(rll.Error, match="integrator"):
         rll.render(box, spp=1, integrator="bdpt")
+    with pytest.raises(rll.Error, match="max_depth"):
+        rll.render(box, spp=1, max_depth=0)
     with pytest.raises(rll.Error, match="spp"):
         rll.render(box, spp=0)
     with pytest.raises(rll.Error, match="time"):
