@@ -255,6 +255,7 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
   run.mse = last.mse;
   run.trimmed_relmse = last.trimmed_relmse;
   run.mrse = last.mrse;
+  run.visible_ratio = p.rays.visible_ratio();
   run.describe = sampler->describe();
   if (run.describe.is_object() && run.describe.contains("bytes") &&
       run.describe["bytes"].is_number())

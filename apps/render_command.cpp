@@ -206,7 +206,9 @@ void run(const RenderOptions& o) {
     j["rays"] = {{"camera", total.rays.camera},
                  {"bounce", total.rays.bounce},
                  {"shadow", total.rays.shadow},
+                 {"shadow_visible", total.rays.shadow_visible},
                  {"total", total.rays.total()}};
+    j["visible_sample_ratio"] = total.rays.visible_ratio();
     j["rays_per_second"] = total.seconds > 0 ? total.rays.total() / total.seconds : 0.0;
     j["lights"] = scene.lights.size();
     j["triangles"] = scene.mesh.triangle_count();

@@ -162,6 +162,8 @@ TEST_P(WavefrontAgreement, SameSeedGivesTheMegakernelsImageToTheBit) {
     EXPECT_EQ(pw.rays.camera, pm.rays.camera) << sampler;
     EXPECT_EQ(pw.rays.bounce, pm.rays.bounce) << sampler;
     EXPECT_EQ(pw.rays.shadow, pm.rays.shadow) << sampler;
+    EXPECT_EQ(pw.rays.shadow_visible, pm.rays.shadow_visible) << sampler;
+    EXPECT_LE(pm.rays.shadow_visible, pm.rays.shadow) << sampler;
     EXPECT_EQ(pw.spp_done, pm.spp_done);
     EXPECT_EQ(pw.passes, pm.passes);
   }

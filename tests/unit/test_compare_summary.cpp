@@ -70,10 +70,14 @@ TEST(CompareSummary, InconsistentRunsAreErrors) {
 TEST(CompareSummary, JsonHasEveryField) {
   std::vector<RunResult> runs = {run("a", 0, 0.2, 2), run("a", 1, 0.4, 2)};
   runs[0].checkpoints = {{0.5, 2, 0.8, 0.08}, {2, 10, 0.2, 0.02}};
+  runs[0].visible_ratio = 0.25;
+  runs[1].visible_ratio = 0.75;
   auto s = summarize({"a"}, runs);
   nlohmann::json j = sampler_summary_json(s[0]);
-  for (const char* k :
-       {"spp", "seconds", "setup_seconds", "relmse", "mse", "efficiency", "relmse_ratio"}) {
+  EXPECT_EQ(j["visible_sample_ratio"]["median"], 0.5);
+  EXPECT_EQ(j["runs"][1]["visible_sample_ratio"], 0.75);
+  for (const char* k : {"spp", "seconds", "setup_seconds", "relmse", "mse", "efficiency",
+                        "relmse_ratio", "visible_sample_ratio"}) {
     ASSERT_TRUE(j.contains(k)) << k;
     for (const char* f : {"median", "min", "max", "values"})
       EXPECT_TRUE(j[k].contains(f)) << k << "." << f;
@@ -98,6 +102,7 @@ TEST(CompareSummary, TableShowsMedianRangeRatioAndEfficiency) {
   EXPECT_EQ(cells[0][9], "efficiency");
   EXPECT_EQ(cells[2][9], "5");
   EXPECT_EQ(cells[2][10], "5");  // no setup time
+  EXPECT_EQ(cells[0][11], "visible");
 }
 
 TEST(CompareSummary, CheckpointsAreSpacedLogarithmicallyAndEndAtTheFinalImage) {

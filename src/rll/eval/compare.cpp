@@ -77,7 +77,7 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
     SamplerSummary s;
     s.name = name;
     std::vector<double> spp, seconds, setup, rel, trimmed, mrse_v, mse_v, eff, eff_setup, ratio,
-        trimmed_ratio;
+        trimmed_ratio, visible;
     for (const auto& [repeat, run] : mine) {
       s.runs.push_back(run);
       spp.push_back(run->spp);
@@ -87,12 +87,14 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
       trimmed.push_back(run->trimmed_relmse);
       mrse_v.push_back(run->mrse);
       mse_v.push_back(run->mse);
+      visible.push_back(run->visible_ratio);
       if (auto e = efficiency(run->relmse, run->seconds)) eff.push_back(*e);
       if (auto e = efficiency(run->relmse, run->seconds + run->setup_seconds))
         eff_setup.push_back(*e);
       const RunResult& base = *first.at(repeat);
       if (base.relmse > 0) ratio.push_back(run->relmse / base.relmse);
-      if (base.trimmed_relmse > 0) trimmed_ratio.push_back(run->trimmed_relmse / base.trimmed_relmse);
+      if (base.trimmed_relmse > 0)
+        trimmed_ratio.push_back(run->trimmed_relmse / base.trimmed_relmse);
       if (run->sampler_bytes)
         s.sampler_bytes = std::max(s.sampler_bytes.value_or(0.0), *run->sampler_bytes);
       s.peak_rss_bytes = std::max(s.peak_rss_bytes, run->peak_rss_bytes);
@@ -109,6 +111,7 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
     s.efficiency_with_setup = spread_of(eff_setup);
     s.relmse_ratio = spread_of(ratio);
     s.trimmed_ratio = spread_of(trimmed_ratio);
+    s.visible_ratio = spread_of(visible);
     out.push_back(std::move(s));
   }
   return out;
@@ -148,13 +151,15 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
   j["efficiency_with_setup"] = spread_json(s.efficiency_with_setup);
   j["relmse_ratio"] = spread_json(s.relmse_ratio);
   j["trimmed_ratio"] = spread_json(s.trimmed_ratio);
+  j["visible_sample_ratio"] = spread_json(s.visible_ratio);
   j["memory"] = {{"sampler_bytes",
                   s.sampler_bytes ? nlohmann::json(*s.sampler_bytes) : nlohmann::json(nullptr)},
                  {"peak_rss_bytes", s.peak_rss_bytes}};
   nlohmann::json runs = nlohmann::json::array();
   for (const RunResult* r : s.runs) {
     nlohmann::json cps = nlohmann::json::array();
-    for (const auto& c : r->checkpoints) cps.push_back({c.seconds, c.spp, c.relmse, c.trimmed_relmse, c.mrse, c.mse});
+    for (const auto& c : r->checkpoints)
+      cps.push_back({c.seconds, c.spp, c.relmse, c.trimmed_relmse, c.mrse, c.mse});
     runs.push_back({{"repeat", r->repeat},
                     {"seed", r->seed},
                     {"spp", r->spp},
@@ -164,6 +169,7 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
                     {"trimmed_relmse", r->trimmed_relmse},
                     {"mrse", r->mrse},
                     {"mse", r->mse},
+                    {"visible_sample_ratio", r->visible_ratio},
                     {"checkpoints", std::move(cps)}});
   }
   j["runs"] = std::move(runs);
@@ -175,7 +181,7 @@ std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSumma
   std::vector<std::vector<std::string>> rows;
   rows.push_back({"sampler", "spp", "seconds", "setup s", "relMSE median [min, max]",
                   "trimmed relMSE", "MRSE", "ratio", "trimmed ratio", "efficiency",
-                  "eff. with setup"});
+                  "eff. with setup", "visible"});
   auto median = [](const Spread& s, const char* format) {
     return s.values.empty() ? std::string("-") : fmt::format(fmt::runtime(format), s.median);
   };
@@ -184,7 +190,8 @@ std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSumma
                     median(s.setup_seconds, "{:.2f}"), with_range(s.relmse, sci),
                     median(s.trimmed_relmse, "{:.3e}"), median(s.mrse, "{:.3e}"),
                     median(s.relmse_ratio, "{:.3f}"), median(s.trimmed_ratio, "{:.3f}"),
-                    median(s.efficiency, "{:.4g}"), median(s.efficiency_with_setup, "{:.4g}")});
+                    median(s.efficiency, "{:.4g}"), median(s.efficiency_with_setup, "{:.4g}"),
+                    median(s.visible_ratio, "{:.3f}")});
   }
   return rows;
 }

@@ -55,6 +55,8 @@ struct RunResult {
   double setup_seconds = 0;  // making the sampler (e.g. an oracle's estimates), not in `seconds`
   // Errors of the final image (metrics.h), the reference's noise subtracted when it is known.
   double relmse = 0, mse = 0, trimmed_relmse = 0, mrse = 0;
+  // The share of light samples whose shadow ray reached the light (RayCounters::visible_ratio).
+  double visible_ratio = 0;
   std::optional<double> sampler_bytes;  // the sampler's describe()["bytes"], when it reports one
   size_t peak_rss_bytes = 0;            // of the whole process, after this run
   nlohmann::json describe;              // the sampler's describe()
@@ -81,6 +83,7 @@ struct SamplerSummary {
   // Per repeat, relMSE (trimmed relMSE) over the first sampler's in the same repeat: ratios taken
   // within one repeat cancel machine noise that hits all samplers of that repeat alike.
   Spread relmse_ratio, trimmed_ratio;
+  Spread visible_ratio;                 // RunResult::visible_ratio
   std::optional<double> sampler_bytes;  // largest over repeats
   size_t peak_rss_bytes = 0;            // largest over repeats
   nlohmann::json describe;
@@ -97,7 +100,7 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s);
 
 // The table printed at the end of a compare: sampler, spp, seconds, setup seconds, relMSE median
 // [min-max], trimmed relMSE, MRSE, both ratios to the first sampler, efficiency without and
-// with setup time.
+// with setup time, the visible-sample ratio.
 std::string format_table(const std::vector<SamplerSummary>& summaries);
 // The same table as rows of cells (header first), for the HTML report.
 std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSummary>& summaries);

@@ -20,7 +20,7 @@ struct IntegratorSettings {
   IntegratorType type = IntegratorType::Path;
   int max_depth = 5;  // path: bounces; 1 = direct light only
   LightStrategy strategy = LightStrategy::Mis;
-  int rr_depth = 3;  // Russian roulette from this bounce on
+  int rr_depth = 3;        // Russian roulette from this bounce on
   int nee_candidates = 1;  // resampled next-event estimation's M (docs/nee.md)
 };
 
@@ -34,11 +34,18 @@ const char* strategy_name(LightStrategy s);
 // Rays traced by one worker; summed after each tile.
 struct RayCounters {
   uint64_t camera = 0, bounce = 0, shadow = 0;
+  // Light samples whose shadow ray reached the light (traced, unoccluded; one facing away from
+  // the point reaches nothing): over `shadow`, the visible-sample ratio (Kvasnica & Havran).
+  uint64_t shadow_visible = 0;
   uint64_t total() const { return camera + bounce + shadow; }
+  double visible_ratio() const {
+    return shadow > 0 ? double(shadow_visible) / double(shadow) : 0.0;
+  }
   RayCounters& operator+=(const RayCounters& o) {
     camera += o.camera;
     bounce += o.bounce;
     shadow += o.shadow;
+    shadow_visible += o.shadow_visible;
     return *this;
   }
 };

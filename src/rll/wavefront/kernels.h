@@ -115,7 +115,7 @@ struct PathSlots {
 
 // Counts of a batch, added to by the stages with integer atomics.
 struct WavefrontTally {
-  uint64_t bounce = 0, shadow = 0, nonfinite = 0;
+  uint64_t bounce = 0, shadow = 0, shadow_visible = 0, nonfinite = 0;
 };
 
 // The batch of paths a launch works on: items [first_item, first_item + n) of a pass, item k being
@@ -252,8 +252,10 @@ struct WavefrontKernels {
       ch.light = p.light[i];
       ch.weight = p.resample[i].x;
       ch.weight_sum = p.resample[i].y;
-      const NeeResult r = nee_finish_resampled(c, ch, ch.setup.traces && p.occluded[i] != 0,
-                                               p.bsdf[i], -p.ray[i].d, p.beta[i]);
+      const bool occluded = ch.setup.traces && p.occluded[i] != 0;
+      if (ch.setup.counts_shadow_ray && ch.setup.traces && !occluded)
+        atomic_add(&tally->shadow_visible, uint64_t(1));
+      const NeeResult r = nee_finish_resampled(c, ch, occluded, p.bsdf[i], -p.ray[i].d, p.beta[i]);
       p.record[i] = r.record;
       value = r.value;
     }

@@ -46,6 +46,7 @@ RenderProgress run_wavefront_passes(
       rays.camera += b.n;
       rays.bounce += t.bounce;
       rays.shadow += t.shadow;
+      rays.shadow_visible += t.shadow_visible;
       nonfinite += t.nonfinite;
     }
     pass_done();
