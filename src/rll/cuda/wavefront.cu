@@ -100,32 +100,35 @@ struct GpuRenderer::Impl {
   Bvh bvh;
   std::optional<SceneData> data;
   std::optional<DeviceScene> scene;
-  DeviceMirror tables;  // BVH and Sobol' tables
+  DeviceMirror bvh_memory;    // the BVH, uploaded again after each refit
+  DeviceMirror sobol_memory;  // the Sobol' tables, uploaded once
   BvhView bvh_view;
   SobolView sobol;
   size_t render_bytes = 0;  // the most the last render took besides the above
 
+  // The scene and the BVH (again after a frame's refit).
   void upload(const Scene& s) {
     data.reset();
     scene.reset();
-    tables.clear();
+    bvh_memory.clear();
     data.emplace(s);
     scene.emplace(data->view());
-    bvh_view.nodes = tables.mirror(bvh.view().nodes);
-    bvh_view.triangles = tables.mirror(bvh.view().triangles);
-    const SobolTables& t = host_sobol_tables();
-    sobol.tables = tables.mirror(View<const uint32_t>{t.view().tables, t.size()}).data;
+    bvh_view.nodes = bvh_memory.mirror(bvh.view().nodes);
+    bvh_view.triangles = bvh_memory.mirror(bvh.view().triangles);
   }
 };
 
 GpuRenderer::GpuRenderer(const Scene& scene) : m_impl(std::make_unique<Impl>()) {
   require_gpu();
-  const std::vector<GpuInfo> all = gpus();
-  for (const GpuInfo& g : all)
-    if (g.sm_major >= 9) {
-      m_impl->name = g.name;
-      break;
-    }
+  // The name of the device the kernels run on (CUDA's current one).
+  int device = 0;
+  cudaDeviceProp props{};
+  check(cudaGetDevice(&device), "cudaGetDevice");
+  check(cudaGetDeviceProperties(&props, device), "cudaGetDeviceProperties");
+  m_impl->name = props.name;
+  const SobolTables& t = host_sobol_tables();
+  m_impl->sobol.tables =
+      m_impl->sobol_memory.mirror(View<const uint32_t>{t.view().tables, t.size()}).data;
   m_impl->bvh = build_bvh(scene.mesh);
   m_impl->upload(scene);
 }
@@ -138,8 +141,8 @@ void GpuRenderer::update(const Scene& scene) {
 }
 
 size_t GpuRenderer::device_bytes() const {
-  return m_impl->tables.bytes() + (m_impl->scene ? m_impl->scene->bytes() : 0) +
-         m_impl->render_bytes;
+  return m_impl->bvh_memory.bytes() + m_impl->sobol_memory.bytes() +
+         (m_impl->scene ? m_impl->scene->bytes() : 0) + m_impl->render_bytes;
 }
 
 const std::string& GpuRenderer::device_name() const {
@@ -151,12 +154,7 @@ RenderProgress GpuRenderer::render(
     const RenderSettings& settings, const std::atomic<bool>* cancel,
     const std::function<void(const RenderProgress&, const Film&)>& after_pass,
     const WavefrontSettings& wavefront) {
-  if (sampler.sampler_view().kind == SamplerKind::None)
-    fail(
-        "sampler '{}' has no device version: --device cuda renders with uniform, power, tree, "
-        "rll and fermat",
-        sampler.name());
-  if (wavefront.path_slots < 1) fail("the wavefront renderer needs at least one path slot");
+  require_device_version(sampler, sampler.name());
   const auto t_start = std::chrono::steady_clock::now();
   Impl& m = *m_impl;
   DeviceSampler device_sampler;
@@ -165,14 +163,10 @@ RenderProgress GpuRenderer::render(
   // The film's sums and counts on the device, starting from the host film's.
   FilmView host_film = film.view();
   DeviceMirror film_memory;
-  WavefrontKernels<BvhTracer, ViewSampler> k;
-  k.film = {film_memory.mirror(host_film.sum), film_memory.mirror(host_film.count), film.width()};
-  k.c = make_path_constants(scene, m.scene->view(), integrator);
-  k.camera = scene.camera;
-  k.width = film.width();
-  k.sobol = m.sobol;
-  k.tracer = BvhTracer{m.bvh_view};
-  k.sampler = view_sampler(device_sampler, sampler);
+  const FilmView device_film = {film_memory.mirror(host_film.sum),
+                                film_memory.mirror(host_film.count), film.width()};
+  const auto k = wavefront_kernels(scene, m.scene->view(), integrator, device_film, m.sobol,
+                                   BvhTracer{m.bvh_view}, view_sampler(device_sampler, sampler));
 
   CudaBackend backend(wavefront.times);
   WavefrontDriver<CudaBackend, BvhTracer, ViewSampler> driver(

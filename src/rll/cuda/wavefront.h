@@ -11,6 +11,8 @@
 #include <memory>
 #include <string>
 
+#include "rll/core/error.h"
+
 #include "rll/lights/light_sampler.h"
 #include "rll/render/film.h"
 #include "rll/render/integrator.h"
@@ -19,6 +21,16 @@
 #include "rll/wavefront/wavefront.h"
 
 namespace rll::cuda {
+
+// Throws rll::Error naming `label` (the sampler as the user gave it) unless the sampler has a
+// device version (sampler_view(): uniform, power, tree, rll and fermat have one).
+inline void require_device_version(const LightSampler& sampler, const std::string& label) {
+  if (sampler.sampler_view().kind == SamplerKind::None)
+    fail(
+        "sampler '{}' has no device version: --device cuda renders with uniform, power, tree, "
+        "rll and fermat (use --device cpu for it)",
+        label);
+}
 
 class GpuRenderer {
  public:
@@ -39,7 +51,7 @@ class GpuRenderer {
   const std::string& device_name() const;
 
   // As render_wavefront (wavefront/wavefront.h) on the GPU; throws rll::Error for a sampler
-  // without a device version (sampler_view(): uniform, power, tree, rll and fermat have one). The
+  // without a device version (require_device_version). The
   // sampler's view is uploaded at the start and after each end of pass; what the kernels learnt is
   // copied back before each end of pass (which runs on the host) and at the end. `wavefront.tracer`
   // is ignored (the GPU traces with rll's BVH); `wavefront.times` receives the stages' times by

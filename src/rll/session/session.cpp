@@ -68,11 +68,7 @@ const char* RenderSession::renderer_name() const {
 
 std::unique_ptr<LightSampler> RenderSession::make_sampler(const std::string& spec) const {
   std::unique_ptr<LightSampler> s = make_sampler_on_host(spec);
-  if (m_gpu && s->sampler_view().kind == SamplerKind::None)
-    fail(
-        "sampler '{}' has no device version: --device cuda renders with uniform, power, tree, "
-        "rll and fermat (use --device cpu for it)",
-        spec);
+  if (m_gpu) cuda::require_device_version(*s, spec);
   return s;
 }
 

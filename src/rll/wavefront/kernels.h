@@ -166,7 +166,6 @@ template <typename Tracer, typename Sampler>
 struct WavefrontKernels {
   PathConstants c;
   Camera camera;
-  int width = 1;  // of the film
   SobolView sobol;
   Tracer tracer;
   Sampler sampler;
@@ -185,8 +184,8 @@ struct WavefrontKernels {
     const uint64_t item = b.first_item + i, pixel = item / uint64_t(b.count);
     const int s = b.first + int(item % uint64_t(b.count));
     SampleStream stream(sobol, b.frame_seed, pixel, b.first_sample + uint64_t(s), b.points);
-    p.ray[i] =
-        camera_ray(camera, int(pixel % uint64_t(width)), int(pixel / uint64_t(width)), stream);
+    const uint64_t width = uint64_t(film.width);
+    p.ray[i] = camera_ray(camera, int(pixel % width), int(pixel / width), stream);
     p.stream[i] = stream;
     p.depth[i] = 0;
     p.store(i, start_path(c));

@@ -8,17 +8,38 @@
 #include <cstdint>
 #include <functional>
 
+#include "rll/core/error.h"
 #include "rll/render/film.h"
+#include "rll/render/integrator.h"
 #include "rll/render/render.h"
 #include "rll/scene/scene.h"
 #include "rll/wavefront/kernels.h"
 
 namespace rll {
 
-// The path slots of a render: at most `path_slots`, and no more than the first pass can fill.
+// The path slots of a render: at most `path_slots` (at least one), and no more than the first
+// pass can fill.
 inline size_t wavefront_slot_count(uint32_t path_slots, const Film& film, int spp) {
+  if (path_slots < 1) fail("the wavefront renderer needs at least one path slot");
   const size_t pixels = size_t(film.width()) * film.height();
   return std::min<size_t>(path_slots, pixels * size_t(std::clamp(spp, 1, 1 << 10)));
+}
+
+// What every stage of a render reads, on either device: `scene_view`, `film`, `sobol`, `tracer` and
+// `sampler` in the memory of the device that runs the stages.
+template <typename Tracer, typename Sampler>
+WavefrontKernels<Tracer, Sampler> wavefront_kernels(const Scene& scene, const SceneView& scene_view,
+                                                    const IntegratorSettings& integrator,
+                                                    const FilmView& film, const SobolView& sobol,
+                                                    const Tracer& tracer, const Sampler& sampler) {
+  WavefrontKernels<Tracer, Sampler> k;
+  k.c = make_path_constants(scene, scene_view, integrator);
+  k.camera = scene.camera;
+  k.sobol = sobol;
+  k.tracer = tracer;
+  k.sampler = sampler;
+  k.film = film;
+  return k;
 }
 
 // Runs the passes with `driver`; `end_pass` between passes (the sampler's), `pass_done` after

@@ -110,14 +110,8 @@ RenderProgress render_with(
     const std::function<void(const RenderProgress&, const Film&)>& after_pass,
     const WavefrontSettings& wavefront) {
   const SceneData data(scene);
-  WavefrontKernels<Tracer, HostLightSampler> k;
-  k.c = make_path_constants(scene, data.view(), integrator);
-  k.camera = scene.camera;
-  k.width = film.width();
-  k.sobol = host_sobol_view();
-  k.tracer = tracer;
-  k.sampler = HostLightSampler::of(light_sampler);
-  k.film = film.view();
+  const auto k = wavefront_kernels(scene, data.view(), integrator, film.view(), host_sobol_view(),
+                                   tracer, HostLightSampler::of(light_sampler));
   HostBackend backend(wavefront.times);
   WavefrontDriver<HostBackend, Tracer, HostLightSampler> driver(
       backend, k, wavefront_slot_count(wavefront.path_slots, film, settings.spp));
@@ -143,7 +137,6 @@ RenderProgress render_wavefront(
     const std::atomic<bool>* cancel,
     const std::function<void(const RenderProgress&, const Film&)>& after_pass,
     const WavefrontSettings& wavefront) {
-  if (wavefront.path_slots < 1) fail("the wavefront renderer needs at least one path slot");
   const auto t_start = std::chrono::steady_clock::now();
   RenderProgress progress;
   if (wavefront.tracer == WavefrontTracer::Bvh) {
