@@ -79,7 +79,7 @@ Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Ve
   if (!(ch.light.pmf > 0)) return Rgb(0);
   if (ch.setup.counts_shadow_ray) ++counters.shadow;
   const bool occluded = ch.setup.traces && m_accel.occluded(ch.setup.shadow);
-  if (ch.setup.counts_shadow_ray && ch.setup.traces && !occluded) ++counters.shadow_visible;
+  if (reaches_light(ch.setup, occluded)) ++counters.shadow_visible;
   const NeeResult r = nee_finish_resampled(m_constants, ch, occluded, bsdf, wo, beta);
   if (m_learns) m_sampler.record(ctx, ch.light, r.record);
   return r.value;

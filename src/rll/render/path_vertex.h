@@ -202,6 +202,12 @@ struct NeeSetup {
   Ray shadow;
 };
 
+// Whether a next-event sample's shadow ray reached its light: counted, traced and not occluded (a
+// sample facing away from the point is never traced). RayCounters::shadow_visible counts these.
+RLL_HD inline bool reaches_light(const NeeSetup& n, bool occluded) {
+  return n.counts_shadow_ray && n.traces && !occluded;
+}
+
 RLL_HD inline NeeSetup nee_setup(const PathConstants& c, const LightContext& ctx, const Bsdf& bsdf,
                                  const Vec3& wo, uint32_t light_index, Vec2 u_pos) {
   NeeSetup n;

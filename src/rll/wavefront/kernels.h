@@ -252,8 +252,7 @@ struct WavefrontKernels {
       ch.weight = p.resample[i].x;
       ch.weight_sum = p.resample[i].y;
       const bool occluded = ch.setup.traces && p.occluded[i] != 0;
-      if (ch.setup.counts_shadow_ray && ch.setup.traces && !occluded)
-        atomic_add(&tally->shadow_visible, uint64_t(1));
+      if (reaches_light(ch.setup, occluded)) atomic_add(&tally->shadow_visible, uint64_t(1));
       const NeeResult r = nee_finish_resampled(c, ch, occluded, p.bsdf[i], -p.ray[i].d, p.beta[i]);
       p.record[i] = r.record;
       value = r.value;
