@@ -4,6 +4,7 @@
 #include "rll/core/params.h"
 #include "rll/lights/ltc_sampler.h"
 #include "rll/lights/oracle_sampler.h"
+#include "rll/lights/rht_sampler.h"
 #include "rll/lights/rll_sampler.h"
 #include "rll/lights/simple_samplers.h"
 #include "rll/lights/tree_sampler.h"
@@ -11,7 +12,7 @@
 namespace rll {
 
 const std::vector<std::string>& light_sampler_names() {
-  static const std::vector<std::string> names = {"uniform", "power", "tree", "fermat", "ltc", "rll", "oracle"};
+  static const std::vector<std::string> names = {"uniform", "power", "tree", "fermat", "ltc", "rht", "rll", "oracle"};
   return names;
 }
 
@@ -25,6 +26,7 @@ std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const 
     return std::make_unique<RllLightSampler>(
         scene, rll_settings_from(params, "fermat", fermat_settings()));
   if (name == "ltc") return std::make_unique<LtcLightSampler>(scene, ltc_settings_from(params));
+  if (name == "rht") return std::make_unique<RhtLightSampler>(scene, rht_settings_from(params));
   if (name == "oracle") {
     if (!accel) fail("the oracle sampler traces rays before rendering and needs the scene's ray tracer");
     // The oracle samples with RLL's settings (rll.*), so that only the learning differs.

@@ -2,6 +2,7 @@
 
 #include "rll/core/error.h"
 #include "rll/core/params.h"
+#include "rll/render/rht_nee.h"
 
 namespace rll {
 
@@ -69,11 +70,29 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sam
       m_settings(settings),
       m_learns(sampler.learns()),
       m_prepares(sampler.prepares()),
+      m_rht(sampler.rht_view()),
       m_data(scene),
-      m_constants(make_path_constants(scene, m_data.view(), settings)) {}
+      m_constants(make_path_constants(scene, m_data.view(), settings)) {
+  if (m_rht && settings.nee_candidates != 1)
+    fail("--set nee.candidates={}: sampler '{}' resamples its own candidates (leave it at 1)",
+         settings.nee_candidates, sampler.name());
+}
 
 Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
                              const Rgb& beta, SampleStream& stream, RayCounters& counters) const {
+  if (m_rht) {
+    RhtNeeSamples samples;
+    rht_nee(m_constants, *m_rht, ctx, bsdf, wo, stream, depth, samples);
+    Rgb sum(0);
+    for (int i = 0; i < samples.count; ++i) {
+      const RhtNeeSample& s = samples.sample[i];
+      if (s.setup.counts_shadow_ray) ++counters.shadow;
+      const bool occluded = s.setup.traces && m_accel.occluded(s.setup.shadow);
+      if (reaches_light(s.setup, occluded)) ++counters.shadow_visible;
+      sum += rht_nee_finish(m_constants, s, occluded, bsdf, wo, beta);
+    }
+    return sum;
+  }
   const NeeChoice ch = resample_nee(m_constants, ctx, bsdf, wo, stream, depth,
                                     [&](double u) { return m_sampler.sample(ctx, u); });
   if (!(ch.light.pmf > 0)) return Rgb(0);

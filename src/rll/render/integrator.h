@@ -60,8 +60,9 @@ class Integrator {
   const PathConstants& constants() const { return m_constants; }
 
  private:
-  // One next-event sample at a vertex: returns its contribution (MIS-weighted for `path`),
-  // already divided by the light pmf, before the path throughput.
+  // The next-event estimate at a vertex: its contribution (MIS-weighted for `path`), already
+  // divided by the light pmf, before the path throughput. One sample (resampled from
+  // nee.candidates), or a multi-sample sampler's several (rht_view()), each with a shadow ray.
   Rgb sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
                    const Rgb& beta, SampleStream& stream, RayCounters& counters) const;
 
@@ -70,6 +71,7 @@ class Integrator {
   LightSampler& m_sampler;
   IntegratorSettings m_settings;
   bool m_learns, m_prepares;
+  const RhtView* m_rht;  // the sampler's, where it draws several samples per vertex
   SceneData m_data;  // the hot data the functions below read, as flat views
   PathConstants m_constants;
 };

@@ -137,6 +137,13 @@ RenderProgress render_wavefront(
     const std::atomic<bool>* cancel,
     const std::function<void(const RenderProgress&, const Film&)>& after_pass,
     const WavefrontSettings& wavefront) {
+  // Its next-event stages trace one shadow ray a vertex (docs/rht.md).
+  if (sampler.rht_view())
+    fail(
+        "sampler '{}' draws several light samples per vertex, with a shadow ray each: the "
+        "wavefront renderer traces one; render it with the megakernel (no --wavefront, --device "
+        "cpu)",
+        sampler.name());
   const auto t_start = std::chrono::steady_clock::now();
   RenderProgress progress;
   if (wavefront.tracer == WavefrontTracer::Bvh) {

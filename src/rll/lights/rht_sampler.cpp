@@ -1,0 +1,54 @@
+#include "rll/lights/rht_sampler.h"
+
+#include "rll/core/error.h"
+#include "rll/core/params.h"
+#include "rll/lighttree/light_tree.h"
+#include "rll/scene/scene.h"
+
+namespace rll {
+
+RhtSettings rht_settings_from(const Params& p) {
+  RhtSettings s;
+  s.gamma = p.get_float("rht.gamma", s.gamma);
+  if (!(s.gamma > 0 && s.gamma <= 1000))
+    fail("--set rht.gamma={}: must be in (0, 1000] (the split probability's width)", s.gamma);
+  s.reservoirs = int(p.get_int_in("rht.reservoirs", s.reservoirs, 1, kRhtMaxReservoirs));
+  s.samples = int(p.get_int_in("rht.samples", s.samples, 1, kRhtMaxSamples));
+  return s;
+}
+
+RhtLightSampler::RhtLightSampler(const Scene& scene, const RhtSettings& settings) {
+  const LightTree& tree = light_tree_of(scene);
+  if (tree.depth() >= kMaxTreeDepth)
+    fail("{}: light tree too deep ({})", scene.source, tree.depth());
+  m_view.tree = tree.view();
+  m_view.gamma = settings.gamma;
+  m_view.reservoirs = settings.reservoirs;
+  m_view.samples = settings.samples;
+  const uint32_t dir = tree.group_root(LightGroup::Directional);
+  if (dir != LightTree::kNone) {
+    m_view.dir_begin = tree.node(dir).begin;
+    m_view.dir_count = tree.node(dir).light_count();
+  }
+  m_view.has_tree_lights = tree.light_count() > m_view.dir_count;
+}
+
+SampledLight RhtLightSampler::sample(const LightContext&, double) const {
+  fail(
+      "sampler 'rht' draws several light samples per vertex, with a shadow ray each: this "
+      "renderer draws one (render rht with the CPU megakernel: --device cpu, no --wavefront)");
+}
+
+float RhtLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
+  return rht_pmf(m_view, ctx.p, ctx.n, light);
+}
+
+nlohmann::json RhtLightSampler::describe() const {
+  return {{"name", name()},
+          {"gamma", m_view.gamma},
+          {"reservoirs", m_view.reservoirs},
+          {"samples", m_view.samples},
+          {"directional_lights", m_view.dir_count}};
+}
+
+}  // namespace rll

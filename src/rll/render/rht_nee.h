@@ -1,0 +1,180 @@
+// Next-event estimation with several weighted samples per vertex, each with its own shadow ray:
+// the resampled hierarchical tree's two reservoir stages over the split descent's candidates
+// (lights/rht_view.h; docs/rht.md). RLL_HD, with fixed-size arrays and nothing allocated, for the
+// megakernel (Integrator::sample_light) and any renderer that traces several shadow rays a vertex.
+#pragma once
+
+#include <bit>
+#include <cstdint>
+
+#include "rll/lights/rht_view.h"
+#include "rll/render/path_vertex.h"
+
+namespace rll {
+
+// One of the vertex's samples: the light sample before its shadow ray, the light with its
+// candidate probability (the MIS weight's density, rht_pmf), and the reservoirs' factor
+// 1 / (P(first stage kept it) P(second stage kept it)).
+struct RhtNeeSample {
+  NeeSetup setup;
+  SampledLight light;
+  float scale = 1;
+};
+struct RhtNeeSamples {
+  RhtNeeSample sample[kRhtMaxSamples];
+  int count = 0;
+};
+
+// The numbers of rht's draw beyond the vertex's own light numbers (which choose a directional
+// light or the descent's children, and the first light point): the split number and a key for
+// the hashed numbers (the descent's scrambles, the reservoirs' slots and decisions). They lie at
+// the dimensions of resampled NEE's first extra candidate (rht runs with nee.candidates = 1).
+struct RhtNumbers {
+  LightNumbers light;
+  float u_split = 0;
+  uint64_t key = 0;
+};
+RLL_HD inline RhtNumbers rht_numbers(SampleStream& stream, int depth) {
+  RhtNumbers u;
+  u.light = light_numbers(stream, depth);
+  stream.seek(candidate_dimension(depth, 1));
+  u.u_split = stream.next();
+  const uint32_t a = std::bit_cast<uint32_t>(stream.next());
+  const uint32_t b = std::bit_cast<uint32_t>(stream.next());
+  u.key = mix64((uint64_t(a) << 32 | b) + 0x9e3779b97f4a7c15ull * uint64_t(depth + 1));
+  return u;
+}
+
+namespace detail {
+// A set of `count` streaming weighted reservoirs: the k-th item of each batch of `count` goes to
+// reservoir (k + offset) mod count, the batch's offset hashed from the key, and a reservoir keeps
+// an item with probability weight / (its weights' sum so far), by a number hashed from the key
+// and the item's index. Which reservoir an item goes to never depends on its weight, and the
+// decisions' numbers are independent, so each reservoir ends with one item of its share, kept
+// with probability weight / its weight sum. (The public code steps one number along the
+// golden-ratio sequence for every decision: the decisions of a reservoir then depend on each
+// other, and with three or more items the kept one's probability is not weight / sum.)
+struct RhtReservoirs {
+  int count = 1, local = 0;
+  uint64_t key = 0, batch = 0, items = 0;
+  uint32_t offset = 0;
+  RLL_HD RhtReservoirs(int n, uint64_t k) : count(n), key(k) {
+    offset = uint32_t(mix64(key) % uint64_t(count));
+  }
+  // The reservoir of the next item.
+  RLL_HD int slot() {
+    if (local == count) {
+      local = 0;
+      offset = uint32_t(mix64(key + ++batch) % uint64_t(count));
+    }
+    return int((uint32_t(local++) + offset) % uint32_t(count));
+  }
+  // Adds an item of weight w > 0 to a reservoir whose weight sum is `sum`: whether it replaces
+  // the one kept there.
+  RLL_HD bool keeps(float w, float& sum) {
+    sum += w;
+    const uint64_t h = mix64(key ^ (0xd1b54a32d192ed03ull * ++items));
+    return u32_to_unit_float(uint32_t(h >> 32)) * sum < w;  // never 1: a first item is kept
+  }
+};
+// The public code's offsets between the light points of the first stage's reservoirs (the R2
+// sequence).
+inline constexpr float kR2x = 0.75487767f, kR2y = 0.56984029f;
+}  // namespace detail
+
+// Draws the vertex's samples into `out`: with probability rht_directional_probability a
+// directional light (one sample), else the split descent's candidates, kept by the first stage's
+// reservoirs by tree importance over candidate probability, each survivor's light sample weighed
+// by its unshadowed contribution with the MIS weight against BSDF sampling folded in, and kept by
+// the second stage's reservoirs (v.samples of them).
+RLL_HD inline void rht_nee(const PathConstants& c, const RhtView& v, const LightContext& ctx,
+                           const Bsdf& bsdf, const Vec3& wo, SampleStream& stream, int depth,
+                           RhtNeeSamples& out) {
+  out.count = 0;
+  const RhtNumbers u = rht_numbers(stream, depth);
+  const float p_dir = rht_directional_probability(v);
+  double u_light = u.light.u_light;
+  if (u_light < p_dir) {
+    const uint32_t i = std::min(v.dir_count - 1, uint32_t(u_light / p_dir * v.dir_count));
+    RhtNeeSample& s = out.sample[out.count++];
+    s.light.light = v.dir_begin + i;
+    s.light.pmf = p_dir / float(v.dir_count);
+    s.setup = nee_setup(c, ctx, bsdf, wo, s.light.light, u.light.u_pos);
+    return;
+  }
+  if (!v.has_tree_lights) return;
+  u_light = std::min((u_light - p_dir) / (1 - p_dir), detail::kBelowOne);
+
+  // First stage: the descent's candidates by tree importance over candidate probability.
+  struct Kept {
+    uint32_t light;
+    float pdf, weight, sum;
+  };
+  Kept first[kRhtMaxReservoirs];
+  for (int i = 0; i < v.reservoirs; ++i) first[i] = Kept{0, 0, 0, 0};
+  detail::RhtReservoirs h(v.reservoirs, mix64(u.key + 1));
+  rht_descend(v, ctx.p, ctx.n, u_light, u.u_split, u.key, 1 - p_dir,
+              [&](uint32_t light, float pdf, float importance) {
+                const float w = importance / pdf;
+                if (!(w > 0) || !(w < 3e38f)) return;
+                Kept& k = first[h.slot()];
+                if (h.keeps(w, k.sum)) {
+                  k.light = light;
+                  k.pdf = pdf;
+                  k.weight = w;
+                }
+              });
+
+  // Second stage: each survivor's light sample, weighed by f Le G / (its density as the light
+  // strategy draws it + the BSDF's pdf), the balance heuristic's MIS weight folded in.
+  const bool mis = c.strategy == LightStrategy::Mis;
+  struct Second {
+    RhtNeeSample s;
+    float weight, sum;
+  };
+  Second second[kRhtMaxSamples];
+  for (int i = 0; i < v.samples; ++i) second[i].weight = second[i].sum = 0;
+  detail::RhtReservoirs f(v.samples, mix64(u.key + 2));
+  Vec2 u_pos = u.light.u_pos;
+  for (int i = 0; i < v.reservoirs; ++i) {
+    const Vec2 u_here = u_pos;
+    u_pos.x += detail::kR2x;
+    u_pos.y += detail::kR2y;
+    if (u_pos.x >= 1) u_pos.x -= 1;
+    if (u_pos.y >= 1) u_pos.y -= 1;
+    const Kept& k = first[i];
+    if (!(k.weight > 0)) continue;
+    const float h_prob = k.weight / k.sum;
+    const NeeSetup n = nee_setup(c, ctx, bsdf, wo, k.light, u_here);
+    if (!n.traces) continue;
+    const float bsdf_pdf = mis && !n.light_delta ? bsdf.pdf(wo, n.wi) : 0.0f;
+    const float w = max_component(n.unoccluded) * n.light_pdf /
+                    std::max(k.pdf * n.light_pdf * h_prob + bsdf_pdf, 1e-30f);
+    if (!(w > 0) || !(w < 3e38f)) continue;
+    Second& s = second[f.slot()];
+    if (f.keeps(w, s.sum)) {
+      s.s.setup = n;
+      s.s.light.light = k.light;
+      s.s.light.pmf = k.pdf;
+      s.s.scale = 1 / h_prob;
+      s.weight = w;
+    }
+  }
+  for (int i = 0; i < v.samples; ++i) {
+    if (!(second[i].weight > 0)) continue;
+    RhtNeeSample& s = out.sample[out.count++];
+    s = second[i].s;
+    s.scale /= second[i].weight / second[i].sum;
+  }
+}
+
+// One sample's contribution after its shadow ray (before the path throughput): nee_finish's
+// value, f Le G V m_L / (candidate probability x pdf of the point), times the reservoirs' factor.
+RLL_HD inline Rgb rht_nee_finish(const PathConstants& c, const RhtNeeSample& s, bool occluded,
+                                 const Bsdf& bsdf, const Vec3& wo, const Rgb& beta) {
+  const NeeResult r = nee_finish(s.setup, occluded, bsdf, wo, beta, s.light.pmf,
+                                 c.strategy == LightStrategy::Mis);
+  return is_black(r.value) ? r.value : r.value * s.scale;
+}
+
+}  // namespace rll
