@@ -26,7 +26,7 @@ parts=${BENCH_PARTS:-"equal-time equal-spp ablation seed-to-seed rays samplers"}
 want() { [[ " $parts " == *" $1 "* ]]; }
 ref_direct=${BENCH_REF_DIRECT:-$ref_direct}; ref_path=${BENCH_REF_PATH:-$ref_path}
 res=${BENCH_RES:-$res}; seconds=${BENCH_SECONDS:-$seconds}; ref_sampler=${BENCH_REF_SAMPLER:-rll}
-samplers=power,tree,fermat,ltc,rll,oracle
+samplers=power,tree,fermat,ltc,rht,rll,oracle
 V1_COMMIT=a3cbdd4
 v1="build-v1/rll"
 if [ "${BENCH_V1:-1}" = 1 ] && [ ! -x "$v1" ]; then

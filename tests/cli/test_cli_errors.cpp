@@ -123,3 +123,32 @@ TEST(CliErrors, NeeCandidates) {
                          std::string("nee.candidates=") + m},
                         {"nee.candidates"});
 }
+
+// rht's parameters are checked against their ranges, the error naming the key; rht draws several
+// samples per vertex, which the wavefront renderer and resampled NEE do not take: both refuse it
+// by name.
+TEST(CliErrors, RhtParameters) {
+  TempDir dir;
+  const std::vector<std::string> base = {"builtin:cornell-box", "--res", "8x8", "--spp", "1",
+                                         "--sampler", "rht"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> a = base;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  for (const char* g : {"0", "-1", "nan", "inf", "2000", "x"})
+    expect_render_error(dir, with({"--set", std::string("rht.gamma=") + g}), {"rht.gamma"});
+  for (const char* r : {"0", "33", "x"})
+    expect_render_error(dir, with({"--set", std::string("rht.reservoirs=") + r}),
+                        {"rht.reservoirs"});
+  for (const char* n : {"0", "9"})
+    expect_render_error(dir, with({"--set", std::string("rht.samples=") + n}), {"rht.samples"});
+  expect_render_error(dir, with({"--set", "nee.candidates=4"}), {"nee.candidates", "rht"});
+  expect_render_error(dir, with({"--wavefront"}), {"rht", "wavefront"});
+  // The counterpart: good values render.
+  CommandResult r = run_rll({"render", "builtin:cornell-box", "--res", "8x8", "--spp", "2",
+                             "--sampler", "rht", "--set", "rht.gamma=0.5", "--set",
+                             "rht.reservoirs=4", "--set", "rht.samples=2", "--quiet", "-o",
+                             (dir / "ok.png").string()});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}

@@ -22,9 +22,9 @@ inline constexpr int kRhtMaxSamples = 8;
 
 struct RhtView {
   LightTreeView tree;
-  float gamma = 0.2f;  // width of the split probability's Cauchy bell
-  int reservoirs = 16;
-  int samples = 1;
+  float gamma = 0.05f;  // width of the split probability's Cauchy bell
+  int reservoirs = 8;
+  int samples = 4;
   // The directional lights [dir_begin, dir_begin + dir_count) in tree order: chosen first, with
   // probability dir_count / (dir_count + 1) where other lights exist, as the public code chooses
   // its infinite lights; everything else (local lights and sky-dome triangles) is descended.
