@@ -29,9 +29,12 @@ bool is_side_file(const std::string& name, const std::string& stem, const std::s
         rest.substr(prefix.size(), rest.size() - prefix.size() - suffix.size());
     return std::all_of(digits.begin(), digits.end(), [](char c) { return std::isdigit(c); });
   };
-  if (ext == ".json") return rest == ".obj" || rest == ".mtl" || numbered("_tex", ".exr");
+  if (ext == ".json")
+    return rest == ".obj" || rest == ".mtl" || numbered("_tex", ".exr") ||
+           numbered("_light", ".exr");
   if (ext == ".gltf") return numbered("_tex", ".png");
-  return rest == "_sky.exr" || numbered("_tex", ".exr") || numbered("_mesh", ".ply");
+  return rest == "_sky.exr" || numbered("_tex", ".exr") || numbered("_mesh", ".ply") ||
+         numbered("_light", ".exr");
 }
 
 void convert(const std::string& in, const std::string& out) {

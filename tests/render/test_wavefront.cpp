@@ -139,9 +139,7 @@ TEST_P(WavefrontAgreement, EqualsMegakernelWithinNoiseByRegion) {
 
 // Where the sampler learns nothing within a pass, the wavefront takes each path through the same
 // functions with the same numbers as the megakernel: the same film, to the bit.
-TEST_P(WavefrontAgreement, SameSeedGivesTheMegakernelsImageToTheBit) {
-  const SceneCase& sc = kScenes[std::get<0>(GetParam())];
-  const Scene scene = small_builtin_scene(sc.name, sc.width / 2, sc.height / 2);
+void expect_megakernels_image_to_the_bit(const Scene& scene, IntegratorType type) {
   const Accel accel(scene.mesh);
   // One light sample per vertex, and the reservoir's choice of four (nee.candidates=4).
   for (const auto& [sampler, candidates] :
@@ -149,7 +147,7 @@ TEST_P(WavefrontAgreement, SameSeedGivesTheMegakernelsImageToTheBit) {
     SCOPED_TRACE(fmt::format("{}, nee.candidates={}", sampler, candidates));
     Render r;
     r.sampler = sampler;
-    r.type = std::get<1>(GetParam());
+    r.type = type;
     r.spp = 4;
     r.nee_candidates = candidates;
     r.wavefront = false;
@@ -166,6 +164,21 @@ TEST_P(WavefrontAgreement, SameSeedGivesTheMegakernelsImageToTheBit) {
     EXPECT_LE(pm.rays.shadow_visible, pm.rays.shadow) << sampler;
     EXPECT_EQ(pw.spp_done, pm.spp_done);
     EXPECT_EQ(pw.passes, pm.passes);
+  }
+}
+
+TEST_P(WavefrontAgreement, SameSeedGivesTheMegakernelsImageToTheBit) {
+  const SceneCase& sc = kScenes[std::get<0>(GetParam())];
+  expect_megakernels_image_to_the_bit(small_builtin_scene(sc.name, sc.width / 2, sc.height / 2),
+                                      std::get<1>(GetParam()));
+}
+
+// Spot lights (and a point light, a lamp and a sun beside them): the same film, to the bit.
+TEST(Wavefront, SpotLightsGiveTheMegakernelsImageToTheBit) {
+  const Scene scene = small_builtin_scene("spot-hall-small", 32, 24);
+  for (const IntegratorType type : {IntegratorType::Direct, IntegratorType::Path}) {
+    SCOPED_TRACE(integrator_name(type));
+    expect_megakernels_image_to_the_bit(scene, type);
   }
 }
 

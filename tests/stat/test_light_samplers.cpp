@@ -58,8 +58,10 @@ const std::vector<SamplerCase>& sampler_cases() {
   return cases;
 }
 
+// spot-hall-small: spot lights (whose cones exclude most points), a point light, a lamp and a
+// sun in one tree.
 const std::vector<std::string> kScenes = {"cornell-box", "cornell-boxes-room", "arch-interior",
-                                          "many-lights-open", "furnace"};
+                                          "many-lights-open", "furnace", "spot-hall-small"};
 constexpr int kContexts = 200;
 constexpr int kChiContexts = 6;
 constexpr int kChiSamples = 20000;

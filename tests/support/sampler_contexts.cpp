@@ -57,6 +57,18 @@ bool light_can_contribute(const Light& l, const Vec3& p, const Vec3& n) {
   if (luminance(l.radiance) <= 0) return false;
   if (l.type == LightType::Directional) return dot(l.p0, n) > 0;
   if (l.type == LightType::Point) return dot(l.p0 - p, n) > 0;
+  if (l.type == LightType::Goniometric) return dot(l.p0 - p, n) > 0;  // images positive here
+  if (l.type == LightType::Projection) {
+    // Inside the frustum (the tests' projection images have no black texel).
+    const Vec3 w = p - l.p0;
+    const float z = dot(l.n, w);
+    return dot(-w, n) > 0 && z > 1e-3f * length(w) && std::abs(dot(l.p1, w)) < z &&
+           std::abs(dot(l.p2, w)) < z;
+  }
+  if (l.type == LightType::Spot) {
+    const Vec3 d = p - l.p0;
+    return dot(-d, n) > 0 && length_sq(d) > 0 && spot_falloff(l, normalize(d)) > 0;
+  }
   // Some point of the triangle (probe points) above the surface and facing p.
   Pcg32 rng(17);
   for (int i = 0; i < 64; ++i) {

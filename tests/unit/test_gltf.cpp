@@ -188,11 +188,17 @@ TEST(GltfReader, MaterialsEmissionAndLights) {
   EXPECT_TRUE(near(metal.specular, Rgb(0.9f, 0.6f, 0.3f)));
   EXPECT_TRUE(near(metal.emission, Rgb(8, 4, 2)));
   EXPECT_TRUE(metal.two_sided_emission);
-  ASSERT_EQ(s.lights.size(), 2u);
+  ASSERT_EQ(s.lights.size(), 3u);
   EXPECT_TRUE(near(s.lights[0].p0, Vec3(1, 2, 3)));
   EXPECT_TRUE(near(s.lights[0].radiance, Rgb(4, 2, 2)));
   EXPECT_TRUE(near(s.lights[1].p0, Vec3(0, 1, 0)));
   EXPECT_TRUE(near(s.lights[1].radiance, Rgb(2)));
+  // glTF's default spot: inner 0, outer pi/4, shining along the node's -z; its falloff is read
+  // as pbrt-v4's smoothstep, with a warning.
+  ASSERT_EQ(s.lights[2].type, LightType::Spot);
+  EXPECT_TRUE(near(s.lights[2].n, Vec3(0, 0, -1)));
+  EXPECT_FLOAT_EQ(s.lights[2].p1.x, 1.0f);
+  EXPECT_NEAR(s.lights[2].p1.y, std::cos(M_PI / 4), 1e-6);
   EXPECT_TRUE(has_warning(s, "spot"));
   ASSERT_TRUE(s.has_camera);
   EXPECT_TRUE(near(s.camera.position, Vec3(0, 0, 7)));

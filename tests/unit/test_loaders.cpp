@@ -466,8 +466,8 @@ TEST(JsonLoader, WrongTypesLengthsAndValuesNameThePointer) {
           dir,
           R"({"lights": [{"type": "directional", "direction": [0,0,0], "irradiance": [1,1,1]}]})"),
       {"/lights/0/direction must be a non-zero vector"});
-  expect_mentions(json_error(dir, R"({"lights": [{"type": "spot"}]})"),
-                  {"/lights/0/type", "unknown light type 'spot'"});
+  expect_mentions(json_error(dir, R"({"lights": [{"type": "area"}]})"),
+                  {"/lights/0/type", "unknown light type 'area'"});
   expect_mentions(json_error(dir, R"({"sky": {"type": "dome", "radiance": [-1, 0, 0]}})"),
                   {"/sky/radiance/0 must not be negative"});
   expect_mentions(json_error(dir, R"({"sky": {"type": "infinite"}})"),

@@ -293,13 +293,13 @@ TEST(PbrtReader, UnsupportedDirectivesWarnOnceAndAreSkipped) {
                          "Shape \"curve\" \"point3 P\" [ 0 0 0 1 1 1 2 2 2 3 3 3 ]\n"
                          "Shape \"curve\" \"point3 P\" [ 0 0 0 1 1 1 2 2 2 3 3 3 ]\n"
                          "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
-                         "LightSource \"spot\" \"point3 from\" [0 1 0]\n" +
+                         "LightSource \"goniometric\" \"point3 from\" [0 1 0]\n" +
                          kTriangle);
   EXPECT_EQ(s.mesh.triangle_count(), 1u);
   EXPECT_TRUE(has_warning(s, {"s.pbrt:1:", "Sampler", "not supported"}));
   EXPECT_TRUE(has_warning(s, {"s.pbrt:7:", "Shape \"curve\"", "1 more"}));
   EXPECT_TRUE(has_warning(s, {"s.pbrt:9:", "MakeNamedMedium"}));
-  EXPECT_TRUE(has_warning(s, {"s.pbrt:10:", "LightSource \"spot\""}));
+  EXPECT_TRUE(has_warning(s, {"s.pbrt:10:", "LightSource \"goniometric\""}));
 }
 
 TEST(PbrtReader, SyntaxErrorsNameFileAndLine) {
@@ -515,7 +515,7 @@ TEST(PbrtReader, SummaryWarningListsEverythingLeftOut) {
                                "Shape \"curve\" \"point3 P\" [ 0 0 0 1 1 1 2 2 2 3 3 3 ]\n"
                                "Shape \"curve\" \"point3 P\" [ 0 0 0 1 1 1 2 2 2 3 3 3 ]\n"
                                "Shape \"hyperboloid\"\n"
-                               "LightSource \"spot\" \"point3 from\" [0 1 0]\n"
+                               "LightSource \"goniometric\" \"point3 from\" [0 1 0]\n"
                                "Material \"hair\"\n" +
                                kTriangle + "Material \"measured\"\n" + kTriangle);
   EXPECT_EQ(s.mesh.triangle_count(), 2u);
@@ -524,7 +524,7 @@ TEST(PbrtReader, SummaryWarningListsEverythingLeftOut) {
   EXPECT_TRUE(has_warning(s, {"s.pbrt:10:", "Material \"hair\""}));
   // ... and one at the end that adds them up.
   EXPECT_TRUE(has_warning(s, {"s.pbrt: summary: 3 shapes skipped (curve x2, hyperboloid x1)",
-                              "1 light skipped (spot x1)",
+                              "1 light skipped (goniometric x1)",
                               "materials not supported: hair, measured (rendered as diffuse "
                               "grey)"}));
   Scene clean = read_pbrt(dir, std::string(kCamera) + kTriangle);

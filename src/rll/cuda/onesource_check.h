@@ -60,7 +60,7 @@ RLL_HD inline OneSourceResult onesource_probe(const SceneView& scene, const Hit&
   if (!scene.lights.empty()) {
     const Light& light = scene.lights[rng.next_bounded(uint32_t(scene.lights.size))];
     const Vec2 ul = {rng.next_float(), rng.next_float()};
-    const LightLiSample ls = sample_li(light, sh.p, ul);
+    const LightLiSample ls = sample_li(scene, light, sh.p, ul);
     r.li = ls.L;
     r.li_pdf = ls.pdf;
     if (ls.pdf > 0) {

@@ -13,8 +13,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Drops the materials no triangle uses and the textures no remaining material uses: an OBJ
-// brings its whole MTL, and a JSON scene may replace some of those materials.
+// Drops the materials no triangle uses and the textures no remaining material or image light
+// uses: an OBJ brings its whole MTL, and a JSON scene may replace some of those materials.
 void drop_unused_materials(Scene& scene) {
   std::vector<int64_t> material_id(scene.materials.size(), -1);
   for (uint32_t m : scene.mesh.material)
@@ -38,6 +38,15 @@ void drop_unused_materials(Scene& scene) {
         textures.push_back(std::move(scene.textures[size_t(*tex)]));
       }
       *tex = id;
+    }
+  for (Light& l : scene.lights)
+    if (l.has_image() && l.triangle < scene.textures.size()) {
+      int& id = texture_id[l.triangle];
+      if (id < 0) {
+        id = int(textures.size());
+        textures.push_back(std::move(scene.textures[l.triangle]));
+      }
+      l.triangle = uint32_t(id);
     }
   scene.materials = std::move(kept);
   scene.textures = std::move(textures);

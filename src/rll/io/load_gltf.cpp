@@ -1,6 +1,6 @@
 // glTF 2.0 scenes (.gltf, .glb) through tinygltf: meshes under their node transforms,
 // metallic-roughness materials mapped to rll's (docs/scene-format.md), base-colour and emissive
-// textures, KHR_materials_emissive_strength, KHR_materials_clearcoat, KHR_lights_punctual point
+// textures, KHR_materials_emissive_strength, KHR_materials_clearcoat, KHR_lights_punctual point, spot
 // and directional lights, and the first camera. tinygltf parses the JSON and the buffers; every
 // index, count and byte range it leaves unchecked is checked here before it is read.
 #include <tiny_gltf.h>
@@ -934,6 +934,19 @@ class GltfReader {
       if (!(length_sq(towards) > 0) || !is_finite(towards))
         fail("{}: the directional light's transform is degenerate", where);
       m_scene.lights.push_back(make_directional_light(normalize(towards), value));
+    } else if (l.type == "spot") {
+      const double inner = l.spot.innerConeAngle, outer = l.spot.outerConeAngle;
+      if (!(inner >= 0 && inner < outer && outer <= 0.5 * kPi + 1e-6))
+        fail("{}: spot light {} needs 0 <= innerConeAngle < outerConeAngle <= pi/2 (got {} and {})",
+             where, index, inner, outer);
+      const Vec3 axis = world.apply_vector(Vec3(0, 0, -1));  // the light shines along -z
+      if (!(length_sq(axis) > 0) || !is_finite(axis))
+        fail("{}: the spot light's transform is degenerate", where);
+      m_scene.lights.push_back(make_spot_light(world.t, axis, value, float(std::cos(inner)),
+                                               float(std::cos(outer))));
+      warn(fmt::format("{}: spot lights' falloff between their inner and outer cones is pbrt-v4's "
+                       "smoothstep in rll (glTF suggests a squared linear ramp)",
+                       m_name));
     } else {
       warn(fmt::format("{}: a {} light is not supported; skipped", where, l.type));
     }

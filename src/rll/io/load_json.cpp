@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -104,6 +105,13 @@ Vec3 to_direction(const json& v, const std::string& ptr) {
   if (!(length_sq(d) > 0) || !std::isfinite(length_sq(d)))
     fail("{} must be a non-zero vector", ptr);
   return d;
+}
+
+// Three non-zero vec3 rows.
+std::array<Vec3, 3> to_rows(const json& v, const std::string& ptr) {
+  if (!v.is_array() || v.size() != 3) fail("{} must be an array of 3 vec3 rows", ptr);
+  return {to_direction(v[0], child(ptr, size_t(0))), to_direction(v[1], child(ptr, size_t(1))),
+          to_direction(v[2], child(ptr, size_t(2)))};
 }
 
 Rgb to_colour(const json& v, const std::string& ptr) {
@@ -509,8 +517,54 @@ class JsonSceneReader {
       check_object(v, ptr, {"type", "position", "intensity"});
       m_scene.lights.push_back(make_point_light(required_field(v, ptr, "position", to_vec3),
                                                 required_field(v, ptr, "intensity", to_colour)));
+    } else if (type == "spot") {
+      check_object(v, ptr, {"type", "position", "direction", "intensity", "cone_angle",
+                            "cone_delta_angle"});
+      // pbrt-v4's spot: full intensity within cone_angle - cone_delta_angle of the direction,
+      // a smoothstep falloff (in the cosine) to nothing at cone_angle.
+      const float cone = required_field(v, ptr, "cone_angle", to_number);
+      const float delta = optional_field(v, ptr, "cone_delta_angle", to_number).value_or(0.0f);
+      if (!(cone > 0 && cone <= 180))
+        fail("{}: must be in (0, 180] degrees (got {})", child(ptr, "cone_angle"), cone);
+      if (!(delta >= 0 && delta <= cone))
+        fail("{}: must be in [0, cone_angle = {}] degrees (got {})", child(ptr, "cone_delta_angle"),
+             cone, delta);
+      m_scene.lights.push_back(make_spot_light(
+          required_field(v, ptr, "position", to_vec3),
+          required_field(v, ptr, "direction", to_direction),
+          required_field(v, ptr, "intensity", to_colour), std::cos(radians(cone - delta)),
+          std::cos(radians(cone))));
+    } else if (type == "goniometric" || type == "projection") {
+      check_object(v, ptr, {"type", "position", "scale", "image", "to_light"});
+      const bool gonio = type == "goniometric";
+      const std::string file = required_field(v, ptr, "image", to_string);
+      Image image;
+      try {
+        image = read_image(referenced_file(v["image"], child(ptr, "image")));
+      } catch (const Error& e) {
+        fail("{}: {}", child(ptr, "image"), e.what());
+      }
+      if (gonio) {
+        if (image.width() != image.height())
+          fail("{}: '{}' is {}x{}: a goniometric image must be square (equal-area)",
+               child(ptr, "image"), printable(file), image.width(), image.height());
+        for (Rgb& c : image.pixels()) c = Rgb((c.x + c.y + c.z) / 3);
+      }
+      for (const Rgb& c : image.pixels())
+        if (!is_finite(c) || min_component(c) < 0)
+          fail("{}: '{}' has a negative or non-finite pixel", child(ptr, "image"), printable(file));
+      const std::array<Vec3, 3> to_light = required_field(v, ptr, "to_light", to_rows);
+      Light l = make_image_light(gonio ? LightType::Goniometric : LightType::Projection,
+                                 required_field(v, ptr, "position", to_vec3), to_light.data(),
+                                 optional_field(v, ptr, "scale", to_colour).value_or(Rgb(1)),
+                                 uint32_t(m_scene.textures.size()), 0);
+      l.area = image_light_power_factor(l, image);
+      m_scene.textures.push_back(std::move(image));
+      m_scene.lights.push_back(l);
     } else {
-      fail("{}: unknown light type '{}' (rll knows directional, point)", child(ptr, "type"), printable(type));
+      fail("{}: unknown light type '{}' (rll knows directional, point, spot, goniometric, "
+           "projection)",
+           child(ptr, "type"), printable(type));
     }
   }
 

@@ -3,6 +3,7 @@
 #include <array>
 #include <cctype>
 
+#include "rll/core/parallel.h"
 #include "rll/io/pbrt_internal.h"
 
 namespace rll::pbrt {
@@ -400,6 +401,22 @@ void PbrtReader::film(const Token& t) {
   p.warn_unused();
 }
 
+// pbrt-v4's "power" (and "illuminance"): a positive value normalizes the light to it; pbrt-v4
+// ignores any other value (its default is -1), and so does rll, saying so.
+std::optional<float> PbrtReader::normalization(const Token& t, const Params& p, const char* name) {
+  const Param* q = p.typed(name, {"float"});
+  if (!q) return std::nullopt;
+  const float v = float(p.one_number(*q));
+  if (!std::isfinite(v)) p.bad(*q, "is not finite");
+  if (v > 0) return v;
+  if (v != -1)
+    warn(fmt::format("{} {}", name, v),
+         fmt::format("{}: \"float {}\" [ {} ] is not positive: ignored, as pbrt-v4 does (the light "
+                     "keeps its stated emission)",
+                     where(t.file, q->line), name, v));
+  return std::nullopt;
+}
+
 void PbrtReader::area_light(const Token& t) {
   std::string type = expect_string(t);
   Params p(*this, t, fmt::format("AreaLightSource \"{}\"", type));
@@ -414,8 +431,10 @@ void PbrtReader::area_light(const Token& t) {
   m_state.emissive = true;
   m_state.emission = L * s;
   m_state.two_sided = p.get_bool("twosided", false);
+  // pbrt-v4 normalizes each of its shapes to the power: the whole of a sphere or disk, each
+  // triangle of a mesh (see add_mesh).
+  m_state.area_power = normalization(t, p, "power").value_or(0.0f);
   if (p.find("filename")) unsupported(t, "AreaLightSource \"filename\" (an image emitter)");
-  if (p.find("power")) unsupported(t, "light \"power\" (normalization to a power)");
   p.warn_unused();
 }
 
@@ -423,15 +442,39 @@ void PbrtReader::light(const Token& t) {
   std::string type = expect_string(t);
   Params p(*this, t, fmt::format("LightSource \"{}\"", type));
   const float s = p.get_float("scale", 1);
-  if (!(s >= 0)) syntax(t, "LightSource: scale must not be negative");
-  if (p.find("power") || p.find("illuminance"))
-    unsupported(t, "light \"power\"/\"illuminance\" (normalization)");
-  if (type == "point") {
+  if (!(s >= 0) || !std::isfinite(s)) syntax(t, "LightSource: scale must not be negative");
+  // Every spectrum is read as linear sRGB of one nit per unit (spectra.h): pbrt-v4's division by
+  // the spectrum's photometric value is already made, and its normalizations below are in those
+  // units (they ignore the colour's own luminance, as pbrt-v4's do).
+  if (type == "point" || type == "spot") {
     Rgb I = p.get_spectrum("I").value_or(Rgb(1)) * s;
-    Vec3 from = p.get_point("from").value_or(Vec3(0));
-    m_lights.push_back(make_point_light(apply_point(m_state.ctm, from), I));
+    const Vec3 from = p.get_point("from").value_or(Vec3(0));
+    const Vec3 pos = apply_point(m_state.ctm, from);
+    if (!is_finite(pos)) syntax(t, fmt::format("LightSource \"{}\": the position is not finite", type));
+    const auto power = normalization(t, p, "power");
+    if (type == "point") {
+      if (power) I *= *power / (4 * kPi);
+      m_lights.push_back(make_point_light(pos, I));
+    } else {
+      const Vec3 to = p.get_point("to").value_or(Vec3(0, 0, 1));
+      const float cone = p.get_float("coneangle", 30), delta = p.get_float("conedeltaangle", 5);
+      if (!(cone > 0 && cone <= 180))
+        syntax(t, fmt::format("LightSource \"spot\": coneangle must be in (0, 180] degrees (got {})",
+                              cone));
+      if (!(delta >= 0 && delta <= cone))
+        syntax(t, fmt::format("LightSource \"spot\": conedeltaangle must be in [0, coneangle = {}] "
+                              "degrees (got {})",
+                              cone, delta));
+      const Vec3 axis = apply_vector(m_state.ctm, to - from);
+      if (!(length_sq(axis) > 0) || !is_finite(axis))
+        syntax(t, "LightSource \"spot\": from and to are the same point");
+      const float cos_end = std::cos(radians(cone)), cos_start = std::cos(radians(cone - delta));
+      if (power) I *= *power / spot_solid_angle(cos_start, cos_end);
+      m_lights.push_back(make_spot_light(pos, axis, I, cos_start, cos_end));
+    }
   } else if (type == "distant") {
     Rgb L = p.get_spectrum("L").value_or(Rgb(1)) * s;
+    if (const auto e = normalization(t, p, "illuminance")) L *= *e;
     Vec3 from = p.get_point("from").value_or(Vec3(0)),
          to = p.get_point("to").value_or(Vec3(0, 0, 1));
     Vec3 d = apply_vector(m_state.ctm, from - to);
@@ -440,28 +483,32 @@ void PbrtReader::light(const Token& t) {
     m_lights.push_back(make_directional_light(normalize(d), L));
   } else if (type == "infinite") {
     infinite_light(t, p, s);
+  } else if (type == "goniometric" || type == "projection") {
+    if (!image_light(t, p, type, s)) return;
   } else {
     unsupported(t, fmt::format("LightSource \"{}\"", type));
     ++m_skipped_lights[type];
     return;
   }
-  p.find("portal");
   p.warn_unused();
 }
 
 void PbrtReader::infinite_light(const Token& t, const Params& p, float s) {
-  if (m_scene.sky) {
-    warn("second infinite",
-         fmt::format("{}: a second infinite light is not supported; skipped", where(t)));
-    return;
-  }
   auto L = p.get_spectrum("L");
   auto file = p.get_string("filename");
   if (L && file) syntax(t, "LightSource \"infinite\": give either \"L\" or \"filename\", not both");
+  if (p.get_array("portal", {"point3", "point"}, 3))
+    warn("portal", fmt::format("{}: LightSource \"infinite\" \"portal\" is ignored: rll lights the "
+                               "scene with the whole environment (pbrt-v4 samples it through the "
+                               "portal and emits only from the portal's front side)",
+                               where(t)));
+  const auto illuminance = normalization(t, p, "illuminance");
   SkyDome sky;
   sky.full_sphere = true;
   sky.triangles = kInfiniteLightTriangles;
   sky.radiance = L.value_or(Rgb(1)) * s;
+  // pbrt-v4: a constant sky of unit radiance gives an upward-facing patch pi of illuminance.
+  if (illuminance && !file) sky.radiance *= *illuminance / kPi;
   if (file) {
     const fs::path path = referenced_file(t, "LightSource \"infinite\"", *file);
     auto map = std::make_shared<EnvironmentMap>();
@@ -484,11 +531,137 @@ void PbrtReader::infinite_light(const Token& t, const Params& p, float s) {
                             "square (equal-area) or 2:1 (equirectangular)",
                             *file, w, h));
     }
-    m_map_light_from_world = inverse(m_state.ctm);
-    if (!m_map_light_from_world) syntax(t, "LightSource \"infinite\": singular transform");
+    if (illuminance) {
+      // pbrt-v4's illuminance of the map on a patch facing the map's +z: its sum of luminance x
+      // cos over the upper half's pixels, times 2 pi / pixels (pbrt-v4's factor, kept).
+      if (map->mapping != EnvironmentMap::Mapping::EqualArea)
+        syntax(t, "LightSource \"infinite\": \"illuminance\" needs a square (equal-area) map");
+      double e = 0;
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const Vec3 d = equal_area_square_to_sphere({(x + 0.5f) / float(w), (y + 0.5f) / float(h)});
+          if (d.z > 0) e += double(luminance(map->image.at(x, y))) * d.z;
+        }
+      e *= 2 * kPi / (double(w) * h);
+      if (!(e > 0))
+        syntax(t, "LightSource \"infinite\": \"illuminance\" asks to normalize a map that is black "
+                  "over its upper half");
+      sky.radiance *= float(*illuminance / e);
+    }
     sky.map = map;
   }
-  m_scene.sky = sky;
+  const auto light_from_world = inverse(m_state.ctm);
+  if (sky.map && !light_from_world) syntax(t, "LightSource \"infinite\": singular transform");
+  m_infinite.push_back({sky.radiance, std::const_pointer_cast<EnvironmentMap>(sky.map),
+                        light_from_world.value_or(Mat4())});
+  if (m_infinite.size() == 2)
+    warn("several infinite",
+         fmt::format("{}: several infinite lights are summed into one sky{}", where(t),
+                     sky.map || m_infinite[0].map
+                         ? " (their maps resampled into one equal-area map in the world's frame)"
+                         : ""));
+  if (!m_scene.sky) m_scene.sky = sky;
+}
+
+// pbrt-v4's goniometric light (an equal-area image of intensity around the light's +y, after
+// pbrt-v4's swap of y and z) and projection light (an image projected along the light's +z
+// through a perspective of `fov` degrees across the image's shorter side, flipped to stand
+// upright), both at the light's origin. False where the light is skipped.
+bool PbrtReader::image_light(const Token& t, const Params& p, const std::string& type, float s) {
+  const std::string what = fmt::format("LightSource \"{}\"", type);
+  const bool gonio = type == "goniometric";
+  Rgb I = gonio ? p.get_spectrum("I").value_or(Rgb(1)) * s : Rgb(s);
+  const float fov = gonio ? 0.0f : p.get_float("fov", 90);
+  if (!gonio && !(fov > 0 && fov < 180))
+    syntax(t, fmt::format("{}: fov must be in (0, 180) degrees (got {})", what, fov));
+  const auto power = normalization(t, p, "power");
+  const auto file = p.get_string("filename");
+  if (!file) {
+    if (!gonio) syntax(t, fmt::format("{} needs a \"string filename\"", what));
+    // pbrt-v4 warns and renders an imageless goniometric light as black.
+    warn(what, fmt::format("{}: {} has no \"filename\": it emits nothing (as in pbrt-v4); skipped",
+                           where(t), what));
+    ++m_skipped_lights[type];
+    return false;
+  }
+  const fs::path path = referenced_file(t, what, *file);
+  Image image;
+  try {
+    image = read_image(path);
+  } catch (const Error& e) {
+    fail("{}: {}: {}", where(t), what, e.what());
+  }
+  for (const Rgb& c : image.pixels())
+    if (!is_finite(c) || min_component(c) < 0)
+      syntax(t, fmt::format("{}: '{}' has a negative or non-finite pixel", what, *file));
+  const auto inv = inverse(m_state.ctm);
+  if (!inv) syntax(t, fmt::format("{}: singular transform", what));
+  Vec3 row[3];
+  for (int i = 0; i < 3; ++i)
+    row[i] = Vec3(to_float(inv->m[i][0]), to_float(inv->m[i][1]), to_float(inv->m[i][2]));
+  Vec3 to_light[3];
+  if (gonio) {
+    if (image.width() != image.height())
+      syntax(t, fmt::format("{}: '{}' is {}x{}: a goniometric image must be square (equal-area)",
+                            what, *file, image.width(), image.height()));
+    // pbrt-v4 reads the mean of R, G and B.
+    for (Rgb& c : image.pixels()) c = Rgb((c.x + c.y + c.z) / 3);
+    to_light[0] = row[0];
+    to_light[1] = row[2];
+    to_light[2] = row[1];
+  } else {
+    const float aspect = float(image.width()) / float(image.height()),
+                tan_half = std::tan(radians(fov) / 2);
+    const float xmax = aspect > 1 ? aspect : 1, ymax = aspect > 1 ? 1 : 1 / aspect;
+    to_light[0] = row[0] / (tan_half * xmax);
+    to_light[1] = -row[1] / (tan_half * ymax);
+    to_light[2] = row[2];
+  }
+  const uint32_t index = uint32_t(m_scene.textures.size());
+  Light l = make_image_light(gonio ? LightType::Goniometric : LightType::Projection,
+                             apply_point(m_state.ctm, Vec3(0)), to_light, I, index, 0);
+  l.area = image_light_power_factor(l, image);
+  if (power) {
+    if (!(l.area > 0)) syntax(t, fmt::format("{}: \"power\" asks to normalize a black image", what));
+    l.radiance *= *power / l.area;
+  }
+  m_scene.textures.push_back(std::move(image));
+  m_lights.push_back(l);
+  return true;
+}
+
+// Several infinite lights as one sky: constant ones sum exactly; with maps, their sum is
+// resampled into one equal-area map in the world's frame, as fine as the finest of them (within
+// 64 and 2048 pixels a side).
+void PbrtReader::combine_infinite_lights() {
+  SkyDome& sky = *m_scene.sky;
+  int res = 0;
+  Rgb constant(0);
+  for (const InfiniteLight& l : m_infinite)
+    if (l.map)
+      res = std::max({res, l.map->image.width(), l.map->image.height()});
+    else
+      constant += l.radiance;
+  if (res == 0) {
+    sky.radiance = constant;
+    sky.map = nullptr;
+    return;
+  }
+  res = std::clamp(res, 64, 2048);
+  auto map = std::make_shared<EnvironmentMap>();
+  map->mapping = EnvironmentMap::Mapping::EqualArea;
+  map->image = Image(res, res);
+  parallel_for_each(size_t(res), [&](size_t y) {
+    for (int x = 0; x < res; ++x) {
+      const Vec3 d = equal_area_square_to_sphere({(x + 0.5f) / float(res), (float(y) + 0.5f) / float(res)});
+      Rgb v = constant;
+      for (const InfiniteLight& l : m_infinite)
+        if (l.map) v += l.radiance * l.map->lookup(d);
+      map->image.at(x, int(y)) = v;
+    }
+  });
+  sky.radiance = Rgb(1);
+  sky.map = std::move(map);
 }
 
 void PbrtReader::end_object() {
@@ -545,6 +718,7 @@ void PbrtReader::finish() {
       m_scene.materials[i].emission *= ratio;
     for (auto& l : m_lights) l.radiance *= ratio;
     if (m_scene.sky) m_scene.sky->radiance *= ratio;
+    for (auto& l : m_infinite) l.radiance *= ratio;
   }
   m_scene.lights.insert(m_scene.lights.end(), m_lights.begin(), m_lights.end());
   if (m_has_camera) {
@@ -576,10 +750,12 @@ void PbrtReader::finish() {
     const Vec3 rll_right = normalize(cross(fwd, up));
     if (dot(rll_right, right) < 0) mirror_world(pos, rll_right);
   }
-  if (m_scene.sky && m_scene.sky->map) {
-    auto map = std::make_shared<EnvironmentMap>(*m_scene.sky->map);
-    // World directions to the light's frame (pbrt looks maps up in the light's space).
-    const Mat4& lw = *m_map_light_from_world;
+  // World directions to each map's frame (pbrt looks maps up in the light's space, and rll's
+  // world may have been mirrored).
+  for (InfiniteLight& l : m_infinite) {
+    if (!l.map) continue;
+    auto map = std::make_shared<EnvironmentMap>(*l.map);
+    const Mat4& lw = l.light_from_world;
     double h[3][3];
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
@@ -591,7 +767,12 @@ void PbrtReader::finish() {
         for (int k = 0; k < 3; ++k) s += lw.m[i][k] * h[k][j];
         map->world_to_map[i][j] = to_float(s);
       }
-    m_scene.sky->map = std::move(map);
+    l.map = std::move(map);
+  }
+  if (m_infinite.size() == 1) {
+    m_scene.sky->map = m_infinite[0].map;
+  } else if (m_infinite.size() > 1) {
+    combine_infinite_lights();
   }
   summarize_skipped();
   for (const auto& [message, count] : m_warnings)
@@ -645,7 +826,14 @@ void PbrtReader::mirror_world(const Vec3& origin, const Vec3& n) {
   for (auto& v : mesh.normals) v = vector(v);
   for (auto& tri : mesh.triangles) std::swap(tri[1], tri[2]);
   for (auto& l : m_scene.lights) {
-    if (l.type == LightType::Point) l.p0 = point(l.p0);
+    if (l.type == LightType::Point || l.type == LightType::Spot) l.p0 = point(l.p0);
+    if (l.type == LightType::Spot) l.n = vector(l.n);
+    if (l.has_image()) {
+      l.p0 = point(l.p0);
+      l.p1 = vector(l.p1);
+      l.p2 = vector(l.p2);
+      l.n = vector(l.n);
+    }
     if (l.type == LightType::Directional) l.p0 = vector(l.p0);
   }
   if (m_scene.sky) m_scene.sky->up = vector(m_scene.sky->up);

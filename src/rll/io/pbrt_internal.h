@@ -112,6 +112,7 @@ struct GraphicsState {
   bool emissive = false;  // an AreaLightSource is active
   Rgb emission;
   bool two_sided = false;
+  float area_power = 0;  // the AreaLightSource's "power" (> 0), or 0
 };
 
 // A texture as materials see it: an image (index into Scene::textures) times `scale`, or, with
@@ -336,13 +337,17 @@ class PbrtReader {
   void light(const Token& t);
 
   void infinite_light(const Token& t, const Params& p, float s);
+  std::optional<float> normalization(const Token& t, const Params& p, const char* name);
+  void combine_infinite_lights();
+  bool image_light(const Token& t, const Params& p, const std::string& type, float s);
 
   // --- shapes ---
 
   static constexpr int kInvisible = -2;
 
   // The material of the next shape, with the active area light's emission.
-  uint32_t shape_material();
+  uint32_t shape_material(float k = 1);
+  static constexpr size_t kMaxEmissiveMaterials = 1 << 16;
 
   void shape(const Token& t);
 
@@ -428,7 +433,16 @@ class PbrtReader {
   size_t m_first_material = 0;  // the scene's materials before this file's
   Mat4 m_world_from_camera;
   std::vector<Light> m_lights;
-  std::optional<Mat4> m_map_light_from_world;
+  // The bilinear patch of each triangle of the shape being read (bilinear meshes only).
+  std::vector<uint32_t> m_shape_of_triangle;
+  // Every infinite light read: its radiance scale, map (or none) and, with a map, the light's
+  // frame from world space. finish() makes the scene's one sky of them.
+  struct InfiniteLight {
+    Rgb radiance;
+    std::shared_ptr<EnvironmentMap> map;
+    Mat4 light_from_world;
+  };
+  std::vector<InfiniteLight> m_infinite;
   bool m_mirrored = false;
   Vec3 m_mirror_normal;
 

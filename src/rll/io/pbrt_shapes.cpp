@@ -7,8 +7,8 @@
 
 namespace rll::pbrt {
 
-// The material of the next shape, with the active area light's emission.
-uint32_t PbrtReader::shape_material() {
+// The material of the next shape, with the active area light's emission times `k`.
+uint32_t PbrtReader::shape_material(float k) {
   int base = m_state.material;
   if (base == -1) {
     if (m_default_material < 0) {
@@ -21,12 +21,16 @@ uint32_t PbrtReader::shape_material() {
     base = m_default_material;
   }
   if (!m_state.emissive) return uint32_t(base);
-  auto key = std::make_tuple(base, m_state.emission.x, m_state.emission.y, m_state.emission.z,
-                             m_state.two_sided);
+  const Rgb e = m_state.emission * k;
+  auto key = std::make_tuple(base, e.x, e.y, e.z, m_state.two_sided);
   auto it = m_emissive.find(key);
   if (it != m_emissive.end()) return it->second;
+  if (m_emissive.size() >= kMaxEmissiveMaterials)
+    fail("{}: more than {} different emissive materials (area lights normalized to a \"power\" "
+         "give each triangle of a mesh of unequal triangles its own emission, as pbrt-v4 does)",
+         m_names[0], kMaxEmissiveMaterials);
   Material m = m_scene.materials[size_t(base)];
-  m.emission = m_state.emission;
+  m.emission = e;
   m.two_sided_emission = m_state.two_sided;
   m.name += " (emitting)";
   m_scene.materials.push_back(m);
@@ -37,6 +41,7 @@ void PbrtReader::shape(const Token& t) {
   std::string type = expect_string(t);
   Params p(*this, t, fmt::format("Shape \"{}\"", type));
   Mesh mesh;
+  m_shape_of_triangle.clear();
   bool quadric = false;  // pbrt orients quadrics by their parametrization, meshes by N
   if (type == "trianglemesh") {
     triangle_mesh(t, p, mesh);
@@ -100,8 +105,30 @@ void PbrtReader::add_mesh(const Token& t, Mesh mesh, bool quadric) {
           triangle_budget_problem(double(triangles_so_far() + mesh.triangle_count()), m_policy);
       !why.empty())
     syntax(t, why);
-  mesh.material.assign(mesh.triangle_count(), shape_material());
   mesh.light.assign(mesh.triangle_count(), -1);
+  if (m_state.emissive && m_state.area_power > 0) {
+    // pbrt-v4 normalizes each of its shapes to the power: a sphere or disk as a whole, each
+    // triangle of a mesh on its own. k_e = pi A (x2 two-sided): the power of unit radiance.
+    const double sides = m_state.two_sided ? 2.0 : 1.0;
+    auto factor = [&](double area) {
+      return area > 0 ? float(m_state.area_power / (kPi * sides * area)) : 0.0f;
+    };
+    // pbrt-v4's shape of each triangle: the whole quadric, a bilinear patch, or itself.
+    const uint32_t n = uint32_t(mesh.triangle_count());
+    auto shape_of = [&](uint32_t i) {
+      return quadric ? 0u : m_shape_of_triangle.size() == n ? m_shape_of_triangle[i] : i;
+    };
+    std::vector<double> area;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t k = shape_of(i);
+      if (k >= area.size()) area.resize(k + 1, 0.0);
+      area[k] += mesh.area(i);
+    }
+    mesh.material.resize(n);
+    for (uint32_t i = 0; i < n; ++i) mesh.material[i] = shape_material(factor(area[shape_of(i)]));
+  } else {
+    mesh.material.assign(mesh.triangle_count(), shape_material());
+  }
   m_scene.mesh.append(mesh, 0);
 }
 
@@ -259,6 +286,7 @@ void PbrtReader::bilinear_mesh(const Token& t, const Params& p, Mesh& mesh) {
         // Front face along dp/du x dp/dv, as pbrt's patch normal.
         mesh.triangles.push_back({a, b, d});
         mesh.triangles.push_back({a, d, c});
+        m_shape_of_triangle.insert(m_shape_of_triangle.end(), 2, uint32_t(i / 4));
       }
   }
   if (!has_n) mesh.normals.clear();

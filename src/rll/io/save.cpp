@@ -193,6 +193,23 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
     else if (l.type == LightType::Directional)
       lights.push_back(
           {{"type", "directional"}, {"direction", vec(l.p0)}, {"irradiance", vec(l.radiance)}});
+    else if (l.has_image()) {
+      const std::string file = fmt::format("{}_light{}.exr", stem, &l - scene.lights.data());
+      write_image(dir / file, scene.textures.at(l.triangle));
+      lights.push_back({{"type", l.type == LightType::Goniometric ? "goniometric" : "projection"},
+                        {"position", vec(l.p0)},
+                        {"scale", vec(l.radiance)},
+                        {"image", file},
+                        {"to_light", json::array({vec(l.p1), vec(l.p2), vec(l.n)})}});
+    } else if (l.type == LightType::Spot) {
+      const SpotAngles a = spot_angles(l);
+      lights.push_back({{"type", "spot"},
+                        {"position", vec(l.p0)},
+                        {"direction", vec(l.n)},
+                        {"intensity", vec(l.radiance)},
+                        {"cone_angle", a.cone},
+                        {"cone_delta_angle", a.delta}});
+    }
   }
   if (!lights.empty()) j["lights"] = lights;
   if (scene.sky) {

@@ -59,8 +59,15 @@ class GltfWriter {
     }
     if (m_scene.has_camera) nodes.push_back(camera());
     json lights = json::array();
+    bool spot_warned = false;
     for (const Light& l : m_scene.lights) {
       if (l.type == LightType::Triangle) continue;
+      if (l.has_image()) {
+        m_warnings.push_back(fmt::format(
+            "glTF has no {} light: light {} is not written",
+            l.type == LightType::Goniometric ? "goniometric" : "projection", &l - m_scene.lights.data()));
+        continue;
+      }
       json light;
       const float scale = std::max(max_component(l.radiance), 1e-30f);
       light["color"] = vec(l.radiance / scale);
@@ -69,6 +76,27 @@ class GltfWriter {
       if (l.type == LightType::Point) {
         light["type"] = "point";
         node["translation"] = vec(l.p0);
+      } else if (l.type == LightType::Spot) {
+        light["type"] = "spot";
+        const SpotAngles a = spot_angles(l);
+        double outer = radians(float(a.cone)), inner = radians(float(a.cone - a.delta));
+        if (outer > 0.5 * kPi) {
+          m_warnings.push_back(fmt::format(
+              "a spot light's cone of {} degrees is written as glTF's widest, 90", a.cone));
+          outer = 0.5 * kPi;
+          inner = std::min(inner, outer);
+        }
+        if (!(inner < outer)) {
+          inner = outer * (1 - 1e-6);  // glTF needs inner < outer: a sharp edge
+        }
+        if (!spot_warned)
+          m_warnings.push_back(
+              "spot lights' smoothstep falloff (pbrt-v4's) is written as glTF's cone angles; glTF "
+              "viewers ramp between them differently");
+        spot_warned = true;
+        light["spot"] = {{"innerConeAngle", inner}, {"outerConeAngle", outer}};
+        const Frame f(-l.n);  // the light shines along the node's -z
+        node["matrix"] = matrix(f.s, f.t, f.n, l.p0);
       } else {
         light["type"] = "directional";
         const Frame f(normalize(l.p0));  // the light shines along the node's -z

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <functional>
 #include <set>
 
 #include "rll/core/error.h"
@@ -35,6 +36,51 @@ Image sky_image(const SkyDome& sky, int size) {
       img.at(x, y) = sky.radiance * (sky.map ? sky.map->lookup(d) : Rgb(1));
     }
   return img;
+}
+
+// A goniometric or projection light: its image beside the file, under the transform whose
+// inverse gives its rows back (see Light; a projection's fov from its first row, its frame taken
+// as rigid).
+std::string image_light(const Scene& scene, const Light& l, const fs::path& dir,
+                        const std::string& file, const std::function<void(std::string)>& warn) {
+  const Image& image = scene.textures.at(l.triangle);
+  write_image(dir / file, image);
+  Vec3 rows[3];
+  std::string params;
+  if (l.type == LightType::Goniometric) {
+    rows[0] = l.p1;  // pbrt-v4 swaps y and z
+    rows[1] = l.n;
+    rows[2] = l.p2;
+    params = fmt::format("LightSource \"goniometric\" \"rgb I\" {} \"string filename\" \"{}\"",
+                         rgb(l.radiance), file);
+  } else {
+    const float aspect = float(image.width()) / float(image.height());
+    const float xmax = aspect > 1 ? aspect : 1, ymax = aspect > 1 ? 1 : 1 / aspect;
+    const float kx = 1 / length(l.p1), ky = 1 / length(l.p2);
+    if (std::abs(kx / xmax - ky / ymax) > 1e-4f * (kx / xmax))
+      warn("a projection light's image is stretched (a non-uniform transform): pbrt-v4's fov "
+           "cannot say so; written with the horizontal one");
+    rows[0] = l.p1 * kx;
+    rows[1] = -l.p2 * ky;
+    rows[2] = l.n;
+    const float fov = 2 * std::atan(kx / xmax) * (180 / kPi);
+    params = fmt::format("LightSource \"projection\" \"float scale\" [ {} ] \"float fov\" [ {} ] "
+                         "\"string filename\" \"{}\"",
+                         l.radiance.x, fov, file);
+    if (!grey(l.radiance))
+      warn("a projection light's colour scale is written as its red channel (pbrt-v4's has one "
+           "scale)");
+  }
+  Affine to_light;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) to_light.a[i][j] = rows[i][j];
+  Affine m = inverse(to_light);
+  m.t = l.p0;
+  return fmt::format(
+      "AttributeBegin\n  Transform [ {} {} {} 0  {} {} {} 0  {} {} {} 0  {} {} {} 1 ]\n  {}\n"
+      "AttributeEnd\n",
+      m.a[0][0], m.a[1][0], m.a[2][0], m.a[0][1], m.a[1][1], m.a[2][1], m.a[0][2], m.a[1][2],
+      m.a[2][2], m.t.x, m.t.y, m.t.z, params);
 }
 
 }  // namespace
@@ -89,6 +135,16 @@ std::vector<std::string> save_pbrt_scene(const Scene& scene, const fs::path& pat
       out += fmt::format(
           "LightSource \"distant\" \"rgb L\" {} \"point3 from\" {} \"point3 to\" [ 0 0 0 ]\n",
           rgb(l.radiance), rgb(l.p0));
+    else if (l.has_image())
+      out += image_light(scene, l, dir, fmt::format("{}_light{}.exr", stem, &l - scene.lights.data()),
+                         warn);
+    else if (l.type == LightType::Spot) {
+      const SpotAngles a = spot_angles(l);
+      out += fmt::format(
+          "LightSource \"spot\" \"rgb I\" {} \"point3 from\" {} \"point3 to\" {} "
+          "\"float coneangle\" [ {} ] \"float conedeltaangle\" [ {} ]\n",
+          rgb(l.radiance), rgb(l.p0), rgb(l.p0 + l.n), a.cone, a.delta);
+    }
   }
   if (scene.sky) {
     const SkyDome& sky = *scene.sky;

@@ -50,6 +50,9 @@ double reward_scale(const Scene& scene) {
         s = std::max(s, kPi * lum * (l.two_sided ? 2 : 1));
         break;
       case LightType::Point:
+      case LightType::Spot:
+      case LightType::Goniometric:
+      case LightType::Projection:
         s = std::max(s, 4 * kPi * lum / double(scene.radius * scene.radius));
         break;
       case LightType::Directional:

@@ -50,7 +50,9 @@ double estimate(const Scene& scene, const Accel& accel, uint32_t node, const std
       Vec2 u{rng.next_float(), rng.next_float()};
       if (!(t.pmf > 0)) continue;
       const Light& light = scene.lights[t.light];
-      LightLiSample ls = sample_li(light, x.p, u);
+      const TexelView image =
+          light.has_image() ? scene.textures[light.triangle].texel_view() : TexelView{};
+      LightLiSample ls = sample_li(light, x.p, u, &image);
       if (!(ls.pdf > 0)) continue;
       float cos = dot(ls.wi, x.ns);
       if (cos <= 0 || dot(ls.wi, x.n) <= 0) continue;

@@ -73,6 +73,45 @@ LightBounds light_bounds(const Light& l) {
       b.power = b.side_power = 4 * kPi * luminance(l.radiance);
       b.max_radiance = kInf;
       break;
+    case LightType::Spot: {
+      // pbrt-v4's split of the cone: the axis spread by the full-intensity cone (theta_o), the
+      // falloff as the emission spread (theta_e), so that importance is zero only outside the
+      // falloff's end, where the spot emits nothing. Both widened against rounding. theta_e
+      // stays within 90 degrees (the rest joins theta_o): beyond it importance's emitter cosine
+      // would turn negative inside the cone. The power is 4 pi I, as a point light's, so that
+      // importance compares intensities.
+      b.box.expand(l.p0);
+      b.axis = l.n;
+      const float theta_end = safe_acos(l.p1.y);
+      const float theta_e = std::min(std::max(0.0f, theta_end - safe_acos(l.p1.x)), 0.5f * kPi);
+      b.cos_theta_o = widened_cos(theta_end - theta_e);
+      b.cos_theta_e = theta_e < 0.5f * kPi ? widened_cos(theta_e) : 0.0f;
+      b.power = b.side_power = 4 * kPi * luminance(l.radiance);
+      b.max_radiance = kInf;
+      break;
+    }
+    case LightType::Goniometric:
+      // pbrt-v4 bounds it as an isotropic point light of its power.
+      b.box.expand(l.p0);
+      b.cos_theta_o = -1;
+      b.cos_theta_e = 0;
+      b.power = b.side_power = l.area * luminance(l.radiance);
+      b.max_radiance = kInf;
+      break;
+    case LightType::Projection: {
+      // Its frustum as the emission cone around its axis (the light's z, the third row of its
+      // world-to-light map); the power 4 pi times its mean intensity within the frustum, as a
+      // point light's. The image spans [-a, a] x [-b, b] at z = 1.
+      b.box.expand(l.p0);
+      const float a = 1 / length(l.p1), c = 1 / length(l.p2);
+      b.axis = normalize(l.n);
+      b.cos_theta_o = 1;
+      b.cos_theta_e = widened_cos(std::atan(std::sqrt(a * a + c * c)));
+      const float frustum = 4 * std::asin(a * c / std::sqrt((1 + a * a) * (1 + c * c)));
+      b.power = b.side_power = 4 * kPi * l.area * luminance(l.radiance) / frustum;
+      b.max_radiance = kInf;
+      break;
+    }
     case LightType::Directional:
       b.infinite = true;
       b.axis = l.p0;

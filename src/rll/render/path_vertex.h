@@ -213,7 +213,7 @@ RLL_HD inline NeeSetup nee_setup(const PathConstants& c, const LightContext& ctx
   NeeSetup n;
   const Light& light = c.scene.lights[light_index];
   n.light_delta = light.is_delta();
-  LightLiSample ls = sample_li(light, ctx.p, u_pos);
+  LightLiSample ls = sample_li(c.scene, light, ctx.p, u_pos);
   n.light_pdf = ls.pdf;
   n.wi = ls.wi;
   if (!(ls.pdf > 0)) return n;

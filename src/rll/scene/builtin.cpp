@@ -278,6 +278,97 @@ Scene many_lights_1m_scene() {
   return s;
 }
 
+// A hall of rooms_x x rooms_z roofless rooms (4 x 4 units, walls 3 high with a doorway in the
+// middle of each), each with a shelf and a grid of spots x spots spot lights hung at 2.8 that
+// point down with a random tilt and a narrow cone (12-30 degrees): each spot lights a patch of
+// its own room, and a little of the next through the doorways. `mixed` adds a point light, a
+// lamp (2 emissive triangles) and a dim sun, so that every kind of light meets in one tree.
+Scene spot_hall_scene(int rooms_x, int rooms_z, int spots, bool mixed) {
+  Scene s;
+  s.width = 400;
+  s.height = 300;
+  SceneBuilder b(s);
+  constexpr float kRoom = 4, kHeight = 3, kWall = 0.1f, kDoor = 1.0f, kDoorHeight = 2.2f;
+  uint32_t floor = b.diffuse(Rgb(0.6f), "floor"), wall = b.diffuse(Rgb(0.7f, 0.68f, 0.62f), "wall");
+  uint32_t shelf = b.diffuse(Rgb(0.45f, 0.3f, 0.2f), "shelf");
+  const float sx = rooms_x * kRoom, sz = rooms_z * kRoom;
+  b.quad(Vec3(0, 0, 0), Vec3(0, 0, sz), Vec3(sx, 0, 0), floor);
+  // Walls along x = const and z = const, each room's stretch split by a doorway (a lintel above).
+  auto wall_run = [&](bool along_z, float at, float from, float to) {
+    auto slab = [&](float a, float c, float y0, float y1) {
+      if (along_z)
+        b.box(Vec3(at - kWall / 2, y0, a), Vec3(at + kWall / 2, y1, c), wall);
+      else
+        b.box(Vec3(a, y0, at - kWall / 2), Vec3(c, y1, at + kWall / 2), wall);
+    };
+    const float mid = 0.5f * (from + to);
+    slab(from, mid - kDoor / 2, 0, kHeight);
+    slab(mid + kDoor / 2, to, 0, kHeight);
+    slab(mid - kDoor / 2, mid + kDoor / 2, kDoorHeight, kHeight);
+  };
+  for (int i = 0; i <= rooms_x; ++i)
+    for (int k = 0; k < rooms_z; ++k) wall_run(true, i * kRoom, k * kRoom, (k + 1) * kRoom);
+  for (int k = 0; k <= rooms_z; ++k)
+    for (int i = 0; i < rooms_x; ++i) wall_run(false, k * kRoom, i * kRoom, (i + 1) * kRoom);
+  Pcg32 rng(23);
+  const Rgb tints[4] = {Rgb(1.0f, 0.85f, 0.6f), Rgb(0.8f, 0.9f, 1.0f), Rgb(1.0f, 0.7f, 0.7f),
+                        Rgb(0.9f, 1.0f, 0.8f)};
+  for (int i = 0; i < rooms_x; ++i)
+    for (int k = 0; k < rooms_z; ++k) {
+      const Vec3 o(i * kRoom, 0, k * kRoom);
+      // A shelf against a random wall of the room.
+      const float along = 0.6f + 1.4f * rng.next_float();
+      if (rng.next_float() < 0.5f)
+        b.box(o + Vec3(0.3f, 0, along), o + Vec3(0.7f, 1.8f, along + 1.6f), shelf);
+      else
+        b.box(o + Vec3(along, 0, 0.3f), o + Vec3(along + 1.6f, 1.8f, 0.7f), shelf);
+      for (int a = 0; a < spots; ++a)
+        for (int c = 0; c < spots; ++c) {
+          const Vec3 pos = o + Vec3(kRoom * (a + 0.5f) / spots, 2.8f, kRoom * (c + 0.5f) / spots);
+          const Vec3 dir(1.2f * (rng.next_float() - 0.5f), -1, 1.2f * (rng.next_float() - 0.5f));
+          const float cone = 12 + 18 * rng.next_float(), delta = 2 + 6 * rng.next_float();
+          const Rgb I = tints[rng.next_bounded(4)] * (0.4f + 0.8f * rng.next_float()) *
+                        (100.0f / float(spots * spots));
+          s.lights.push_back(make_spot_light(pos, dir, I, std::cos(radians(cone - delta)),
+                                             std::cos(radians(cone))));
+        }
+    }
+  if (mixed) {
+    s.lights.push_back(make_point_light(Vec3(kRoom * 0.5f, 1.5f, kRoom * 0.5f), Rgb(2.0f)));
+    s.lights.push_back(make_directional_light(Vec3(0.3f, 1, 0.2f), Rgb(0.2f)));
+    const uint32_t lamp = b.emitter(Rgb(6, 5, 4), false, "lamp");
+    b.quad(Vec3(sx - kRoom * 0.6f, 2.9f, kRoom * 0.4f), Vec3(0.4f, 0, 0), Vec3(0, 0, 0.4f), lamp);
+    // pbrt-v4's image lights: a goniometric light whose equal-area profile (around its y axis,
+    // the map's +z) is brightest downwards, and a projector casting a 4 x 4 pattern on a floor.
+    Image profile(8, 8), slide(4, 4);
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 8; ++x)
+        profile.at(x, y) = Rgb(0.2f + 0.8f * float((x + y) % 5) / 4);
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x)
+        slide.at(x, y) = (x + y) % 2 ? Rgb(1.0f, 0.3f, 0.2f) : Rgb(0.2f, 0.4f, 1.0f);
+    const Vec3 gonio_rows[3] = {Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(0, -1, 0)};
+    Light gonio = make_image_light(LightType::Goniometric, Vec3(kRoom * 0.5f, 2.5f, sz - kRoom * 0.5f),
+                                   gonio_rows, Rgb(1.5f), uint32_t(s.textures.size()), 0);
+    gonio.area = image_light_power_factor(gonio, profile);
+    s.textures.push_back(std::move(profile));
+    s.lights.push_back(gonio);
+    // Projecting straight down (its z = world -y) with a 50 degree fov.
+    const float k = 1 / std::tan(radians(25));
+    const Vec3 slide_rows[3] = {Vec3(k, 0, 0), Vec3(0, 0, k), Vec3(0, -1, 0)};
+    Light projector = make_image_light(LightType::Projection, Vec3(sx - kRoom * 0.5f, 2.7f, sz - kRoom * 0.5f),
+                                       slide_rows, Rgb(4.0f), uint32_t(s.textures.size()), 0);
+    projector.area = image_light_power_factor(projector, slide);
+    s.textures.push_back(std::move(slide));
+    s.lights.push_back(projector);
+  }
+  s.camera.position = Vec3(0.5f * sx, 0.9f * std::max(sx, sz) + 6, sz + 0.35f * std::max(sx, sz) + 2);
+  s.camera.target = Vec3(0.5f * sx, 0, 0.5f * sz);
+  s.camera.fov = 50;
+  s.has_camera = true;
+  return s;
+}
+
 // A room lit only by a sky dome, through glazed windows: thin panes (pbrt-v4's thindielectric)
 // in the left and back walls and two smooth glass slabs in the back wall, and one open skylight
 // in the ceiling. Through the Dirac glass no light sample gets through (a shadow ray stops at the
@@ -404,6 +495,14 @@ const std::vector<Entry>& entries() {
         "a room lit only by a 1024-triangle sky dome through 7 glazed windows (thin panes and glass "
         "slabs) and an open skylight, with coated-diffuse furniture"},
        glazed_room_scene},
+      {{"spot-hall",
+        "102,400 spot lights (pbrt-v4's smoothstep cones) over a hall of 16 x 16 roofless rooms with "
+        "doorways and shelves: each spot lights a patch of its own room"},
+       [] { return spot_hall_scene(16, 16, 20, false); }},
+      {{"spot-hall-small",
+        "spot-hall's 2 x 2 rooms with 36 spots each, a point light, a 2-triangle lamp, a dim sun, a "
+        "goniometric light and a projector (every light kind in one tree; for tests)"},
+       [] { return spot_hall_scene(2, 2, 6, true); }},
       {{"furnace", "inside an emissive diffuse sphere (Le = 1, albedo 0.5): radiance sum of 0.5^k"},
        furnace_scene},
   };

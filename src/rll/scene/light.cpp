@@ -1,5 +1,6 @@
 #include "rll/scene/light.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace rll {
@@ -41,6 +42,61 @@ Light make_directional_light(const Vec3& direction_to_light, const Rgb& irradian
   return l;
 }
 
+Light make_spot_light(const Vec3& position, const Vec3& axis, const Rgb& intensity,
+                      float cos_falloff_start, float cos_falloff_end) {
+  Light l;
+  l.type = LightType::Spot;
+  l.p0 = position;
+  l.n = normalize(axis);
+  l.p1 = Vec3(cos_falloff_start, cos_falloff_end, 0);
+  l.radiance = intensity;
+  return l;
+}
+
+Light make_image_light(LightType type, const Vec3& position, const Vec3 to_light[3],
+                       const Rgb& scale, uint32_t image, float power_factor) {
+  Light l;
+  l.type = type;
+  l.p0 = position;
+  l.p1 = to_light[0];
+  l.p2 = to_light[1];
+  l.n = to_light[2];
+  l.radiance = scale;
+  l.triangle = image;
+  l.area = power_factor;
+  return l;
+}
+
+float image_light_power_factor(const Light& l, const Image& image) {
+  const int w = image.width(), h = image.height();
+  if (w <= 0 || h <= 0) return 0;
+  double sum = 0;
+  if (l.type == LightType::Goniometric) {
+    for (const Rgb& c : image.pixels()) sum += c.x;
+    return float(4 * kPi * sum / (double(w) * h));
+  }
+  // The image spans [-a, a] x [-b, b] on the plane z = 1 of the light's frame.
+  const double a = 1 / double(length(l.p1)), b = 1 / double(length(l.p2));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double s = a * (-1 + 2 * (x + 0.5) / w), t = b * (-1 + 2 * (y + 0.5) / h);
+      const double cos = 1 / std::sqrt(1 + s * s + t * t);
+      sum += double(luminance(image.at(x, y))) * cos * cos * cos;
+    }
+  return float(4 * a * b * sum / (double(w) * h));
+}
+
+SpotAngles spot_angles(const Light& l) {
+  constexpr double kDeg = 180 / 3.14159265358979323846;
+  const double end = std::acos(std::clamp(double(l.p1.y), -1.0, 1.0)) * kDeg,
+               start = std::acos(std::clamp(double(l.p1.x), -1.0, 1.0)) * kDeg;
+  return {end, std::max(0.0, end - start)};
+}
+
+float spot_solid_angle(float cos_falloff_start, float cos_falloff_end) {
+  return 2 * kPi * ((1 - cos_falloff_start) + (cos_falloff_start - cos_falloff_end) / 2);
+}
+
 float light_power(const Light& l, float scene_radius) {
   float lum = luminance(l.radiance);
   switch (l.type) {
@@ -50,6 +106,11 @@ float light_power(const Light& l, float scene_radius) {
       return 4 * kPi * lum;
     case LightType::Directional:
       return kPi * scene_radius * scene_radius * lum;
+    case LightType::Spot:
+      return spot_solid_angle(l.p1.x, l.p1.y) * lum;
+    case LightType::Goniometric:
+    case LightType::Projection:
+      return l.area * lum;
   }
   return 0;
 }

@@ -1,29 +1,40 @@
-// Lights: every emissive triangle is one, and so are point and directional (sun) lights.
+// Lights: every emissive triangle is one, and so are point, spot and directional (sun) lights.
 // Light is trivially copyable and its sampling functions are RLL_HD: kernels read an array of
 // lights (SceneView::lights).
 #pragma once
 
 #include <cstdint>
 
+#include "rll/core/image.h"
 #include "rll/core/math.h"
 #include "rll/core/sampling.h"
 
 namespace rll {
 
-enum class LightType : uint8_t { Triangle, Point, Directional };
+enum class LightType : uint8_t { Triangle, Point, Directional, Spot, Goniometric, Projection };
 
 struct Light {
   LightType type = LightType::Triangle;
-  // Triangle: the three vertices. Point: p0 is the position. Directional: p0 is the unit
-  // direction *towards* the light (the sun's direction).
+  // Triangle: the three vertices. Point and spot: p0 is the position. Directional: p0 is the
+  // unit direction *towards* the light (the sun's direction). Spot: p1.x and p1.y are the
+  // cosines of the cone's half-angles where the falloff starts and where it ends (pbrt-v4's
+  // cosFalloffStart >= cosFalloffEnd). Goniometric and projection (pbrt-v4's image lights): p0
+  // is the position; p1, p2 and n are the rows of the map from world directions to the light's
+  // frame, where a goniometric light looks its equal-area image up and a projection light
+  // projects its image onto the plane z = 1 (rows scaled so that the image spans [-1, 1]^2).
   Vec3 p0, p1, p2;
-  Vec3 n;          // triangle: unit normal of the emitting side (front face)
-  float area = 0;  // triangle area
-  Rgb radiance;    // Triangle: emitted radiance. Point: intensity. Directional: irradiance.
+  Vec3 n;          // triangle: unit normal of the emitting side (front face); spot: unit axis
+  float area = 0;  // triangle area; image lights: power per unit luminance of `radiance`
+  // Triangle: emitted radiance. Point and spot: intensity (a spot's on its axis). Directional:
+  // irradiance.
+  Rgb radiance;
   bool two_sided = false;
-  uint32_t triangle = ~0u;  // the mesh triangle of a triangle light
+  uint32_t triangle = ~0u;  // the mesh triangle of a triangle light; an image light's texture
 
   RLL_HD bool is_delta() const { return type != LightType::Triangle; }
+  RLL_HD bool has_image() const {
+    return type == LightType::Goniometric || type == LightType::Projection;
+  }
   RLL_HD bool has_position() const { return type != LightType::Directional; }
   RLL_HD Vec3 centroid() const { return type == LightType::Triangle ? (p0 + p1 + p2) / 3.0f : p0; }
 };
@@ -43,6 +54,69 @@ Light make_triangle_light(const Vec3& a, const Vec3& b, const Vec3& c, const Rgb
                           bool two_sided, uint32_t triangle);
 Light make_point_light(const Vec3& position, const Rgb& intensity);
 Light make_directional_light(const Vec3& direction_to_light, const Rgb& irradiance);
+// A spot light at `position` shining along `axis` with intensity `intensity` on the axis, full
+// within the cone of half-angle acos(cos_falloff_start), falling off smoothly (pbrt-v4's
+// smoothstep in the cosine) to nothing at acos(cos_falloff_end).
+Light make_spot_light(const Vec3& position, const Vec3& axis, const Rgb& intensity,
+                      float cos_falloff_start, float cos_falloff_end);
+
+// pbrt-v4's smoothstep: 0 at x <= a, 1 at x >= b, 3t^2 - 2t^3 between (t = (x - a) / (b - a));
+// a step at a where a == b.
+RLL_HD inline float smooth_step(float x, float a, float b) {
+  if (a == b) return x < a ? 0.0f : 1.0f;
+  const float t = clamp((x - a) / (b - a), 0.0f, 1.0f);
+  return t * t * (3 - 2 * t);
+}
+
+// pbrt-v4's equal-area octahedral map (Clarberg) from unit directions to [0, 1]^2, with +z at
+// the square's centre and -z at its corners.
+RLL_HD inline Vec2 equal_area_sphere_to_square(const Vec3& d) {
+  // The radius in the square grows as sqrt(1 - |z|) (equal area), the angle within each octant
+  // linearly; the lower hemisphere folds out to the corners.
+  const float ax = std::abs(d.x), ay = std::abs(d.y), az = std::abs(d.z);
+  const float r = safe_sqrt(1 - az);
+  const float big = std::max(ax, ay), small = std::min(ax, ay);
+  float phi = big == 0 ? 0 : std::atan(small / big) * (2 / kPi);  // in [0, 1]
+  if (ay > ax) phi = 1 - phi;
+  float sv = phi * r, su = r - sv;
+  if (d.z < 0) {
+    const float t = su;
+    su = 1 - sv;
+    sv = 1 - t;
+  }
+  su = std::copysign(su, d.x);
+  sv = std::copysign(sv, d.y);
+  return Vec2{0.5f * (su + 1), 0.5f * (sv + 1)};
+}
+
+// An image light's intensity along unit direction w (away from the light): `radiance` times the
+// nearest texel of its image (pbrt-v4's LookupNearest), v down the image. A goniometric light
+// looks the direction up in its equal-area image; a projection light projects it through the
+// image's rectangle and emits nothing outside it or behind pbrt-v4's near plane (z < 1e-3).
+RLL_HD inline Rgb image_light_intensity(const Light& l, const TexelView& image, const Vec3& w) {
+  const Vec3 wl(dot(l.p1, w), dot(l.p2, w), dot(l.n, w));
+  Vec2 uv;
+  if (l.type == LightType::Goniometric) {
+    const float len2 = length_sq(wl);
+    if (!(len2 > 0)) return Rgb(0);
+    uv = equal_area_sphere_to_square(wl / std::sqrt(len2));
+  } else {
+    if (!(wl.z >= 1e-3f)) return Rgb(0);
+    const float s = wl.x / wl.z, t = wl.y / wl.z;
+    if (!(s >= -1 && s < 1 && t >= -1 && t < 1)) return Rgb(0);
+    uv = Vec2{0.5f * (s + 1), 0.5f * (t + 1)};
+  }
+  if (image.width <= 0 || image.height <= 0) return Rgb(0);
+  const int x = std::min(std::max(int(uv.x * float(image.width)), 0), image.width - 1);
+  const int y = std::min(std::max(int(uv.y * float(image.height)), 0), image.height - 1);
+  return l.radiance * image.at(x, y);
+}
+
+// The fraction of a spot light's axial intensity it emits along unit direction w (pointing away
+// from the light).
+RLL_HD inline float spot_falloff(const Light& l, const Vec3& w) {
+  return smooth_step(dot(l.n, w), l.p1.y, l.p1.x);
+}
 
 // Radiance a triangle light emits from its surface towards direction w (pointing away).
 RLL_HD inline Rgb emitted_radiance(const Light& l, const Vec3& w) {
@@ -161,8 +235,10 @@ RLL_HD inline float spherical_solid_angle(const Light& l, const Vec3& p) {
 
 }  // namespace light_detail
 
-// Samples a point on the light as seen from p; pdf 0 when nothing is emitted towards p.
-RLL_HD inline LightLiSample sample_li(const Light& l, const Vec3& p, Vec2 u) {
+// Samples a point on the light as seen from p; pdf 0 when nothing is emitted towards p. An image
+// light needs its image (SceneView's sample_li passes it); without one it emits nothing.
+RLL_HD inline LightLiSample sample_li(const Light& l, const Vec3& p, Vec2 u,
+                                      const TexelView* image = nullptr) {
   using namespace light_detail;
   LightLiSample s;
   switch (l.type) {
@@ -197,13 +273,20 @@ RLL_HD inline LightLiSample sample_li(const Light& l, const Vec3& p, Vec2 u) {
       s.point = y;
       return s;
     }
-    case LightType::Point: {
+    case LightType::Point:
+    case LightType::Spot:
+    case LightType::Goniometric:
+    case LightType::Projection: {
       Vec3 d = l.p0 - p;
       float d2 = length_sq(d);
       if (!(d2 > 0)) return s;
       s.dist = std::sqrt(d2);
       s.wi = d / s.dist;
-      s.L = l.radiance / d2;
+      Rgb I = l.radiance;
+      if (l.type == LightType::Spot) I *= spot_falloff(l, -s.wi);
+      if (l.has_image()) I = image ? image_light_intensity(l, *image, -s.wi) : Rgb(0);
+      if (is_black(I)) return LightLiSample{};
+      s.L = I / d2;
       s.pdf = 1;
       s.point = l.p0;
       return s;
@@ -232,8 +315,28 @@ RLL_HD inline float pdf_li(const Light& l, const Vec3& p, const Vec3& y) {
 }
 
 // Total emitted power (luminance units): phi = pi * A * L (x2 if two-sided), 4 pi I for a
-// point light, pi r^2 E for a directional light over a scene of radius r.
+// point light, 2 pi I ((1 - cos_start) + (cos_start - cos_end) / 2) for a spot light (pbrt-v4's
+// integral of its smoothstep falloff), pi r^2 E for a directional light over a scene of radius r.
 float light_power(const Light& light, float scene_radius);
+// An image light of pbrt-v4 (goniometric or projection) at `position`; `to_light` holds the rows
+// of the map from world directions to its frame (see Light), `image` its texture index and
+// `power_factor` its power per unit luminance of `scale`.
+Light make_image_light(LightType type, const Vec3& position, const Vec3 to_light[3],
+                       const Rgb& scale, uint32_t image, float power_factor);
+
+// An image light's power per unit luminance of its `radiance` (its Light::area), from its image
+// as pbrt-v4's Phi computes it: goniometric 4 pi x the image's mean (first channel); projection
+// A x the mean of luminance x cos^3 over the pixels, A the image's area on the plane z = 1.
+float image_light_power_factor(const Light& l, const Image& image);
+
+// A spot light's cone angle and falloff width in degrees, as pbrt-v4 and rll's JSON state them
+// (coneangle = acos(cos_falloff_end), conedeltaangle = coneangle - acos(cos_falloff_start)).
+struct SpotAngles {
+  double cone = 0, delta = 0;
+};
+SpotAngles spot_angles(const Light& spot);
+// A spot light's power per unit of axial intensity: the solid angle its falloff integrates to.
+float spot_solid_angle(float cos_falloff_start, float cos_falloff_end);
 // Updates a triangle light's cached normal and area after its vertices moved.
 void refresh_triangle_light(Light& light);
 

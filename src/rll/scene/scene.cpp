@@ -11,25 +11,6 @@
 
 namespace rll {
 
-Vec2 equal_area_sphere_to_square(const Vec3& d) {
-  // The radius in the square grows as sqrt(1 - |z|) (equal area), the angle within each octant
-  // linearly; the lower hemisphere folds out to the corners.
-  const float ax = std::abs(d.x), ay = std::abs(d.y), az = std::abs(d.z);
-  const float r = safe_sqrt(1 - az);
-  const float big = std::max(ax, ay), small = std::min(ax, ay);
-  float phi = big == 0 ? 0 : std::atan(small / big) * (2 / kPi);  // in [0, 1]
-  if (ay > ax) phi = 1 - phi;
-  float sv = phi * r, su = r - sv;
-  if (d.z < 0) {
-    std::swap(su, sv);
-    su = 1 - su;
-    sv = 1 - sv;
-  }
-  su = std::copysign(su, d.x);
-  sv = std::copysign(sv, d.y);
-  return Vec2{0.5f * (su + 1), 0.5f * (sv + 1)};
-}
-
 Vec3 equal_area_square_to_sphere(Vec2 p) {
   const float u = 2 * p.x - 1, v = 2 * p.y - 1, au = std::abs(u), av = std::abs(v);
   const float signed_distance = 1 - (au + av), r = 1 - std::abs(signed_distance);
@@ -262,6 +243,9 @@ void Scene::finalize() {
   for (const auto& l : lights)
     if (!is_finite(l.p0) || !is_finite(l.radiance) || min_component(l.radiance) < 0)
       fail("{}: a light has a non-finite or negative parameter", source);
+  for (const auto& l : lights)
+    if (l.has_image() && l.triangle >= textures.size())
+      fail("{}: an image light's image was not loaded", source);
 
   bounds = Bounds3{};
   if (sky_triangle_count == 0) {
@@ -272,7 +256,7 @@ void Scene::finalize() {
         for (uint32_t v : mesh.triangles[t]) bounds.expand(mesh.positions[v]);
   }
   for (const auto& l : lights)
-    if (l.type == LightType::Point) bounds.expand(l.p0);
+    if (l.type == LightType::Point || l.type == LightType::Spot) bounds.expand(l.p0);
   if (bounds.empty()) bounds.expand(Vec3(0));
   radius = std::max(1e-3f, 0.5f * length(bounds.diagonal()));
 

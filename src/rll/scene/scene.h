@@ -32,9 +32,8 @@ struct EnvironmentMap {
   Rgb lookup(const Vec3& world_direction) const;
 };
 
-// pbrt-v4's equal-area octahedral map (Clarberg) between unit directions and [0, 1]^2, with
-// +z at the square's centre and -z at its corners.
-Vec2 equal_area_sphere_to_square(const Vec3& d);
+// The inverse of equal_area_sphere_to_square (light.h): pbrt-v4's equal-area octahedral map from
+// [0, 1]^2 to unit directions.
 Vec3 equal_area_square_to_sphere(Vec2 p);
 
 // A sky as a dome of emissive triangles over the upper hemisphere around `up`, or the whole

@@ -22,6 +22,13 @@ struct SceneView {
   View<const Light> lights;
 };
 
+// A light sample as every renderer draws it: image lights read their image from the scene's
+// textures.
+RLL_HD inline LightLiSample sample_li(const SceneView& scene, const Light& light, const Vec3& p,
+                                      Vec2 u) {
+  return sample_li(light, p, u, light.has_image() ? &scene.textures[light.triangle] : nullptr);
+}
+
 // A SceneView of a Scene, and the two small arrays it needs that the Scene holds in another form:
 // the materials without their names, one texel view per texture. Holds pointers into the Scene,
 // which must outlive it and keep its arrays where they are while it is used (a render: after
