@@ -74,8 +74,8 @@
     return '';
   }
   // Clicks the first probed pixel that has a cell, in the chart's own image, and reads the bars:
-  // one per cluster and kind (up to the chart's row limit), the learnt ones summing to 1, the
-  // values those of the report's data.
+  // one per cluster shown and kind, and one for the others' sum, the learnt ones (and the
+  // oracle's) summing to 1, the values those of the report's data.
   function checkCellChart() {
     var el = document.querySelector('script.cell-data');
     if (!el) return '';
@@ -98,9 +98,9 @@
     var kinds = d.oracle ? ['learnt', 'tree', 'oracle'] : ['learnt', 'tree'];
     for (var k = 0; k < kinds.length; ++k) {
       var bars = box.querySelectorAll('rect.bar[data-kind="' + kinds[k] + '"]');
-      var rows = Math.min(cell.learnt.length, 25);
-      if (bars.length !== rows) return kinds[k] + ': ' + bars.length + ' bars for ' + cell.learnt.length + ' clusters';
-      var sum = 0, data = 0;
+      var rows = cell.learnt.length + (cell.rest ? 1 : 0);
+      if (bars.length !== rows) return kinds[k] + ': ' + bars.length + ' bars for ' + rows + ' rows';
+      var sum = 0, data = cell.rest ? cell.rest[kinds[k]] : 0;
       for (var b = 0; b < bars.length; ++b) sum += Number(bars[b].dataset.value);
       for (var c = 0; c < cell[kinds[k]].length; ++c) data += cell[kinds[k]][c];
       if (Math.abs(sum - data) > 1e-6) return kinds[k] + ' bars sum to ' + sum + ', the data to ' + data;

@@ -104,6 +104,23 @@ TEST(ReportHtml, CellChartDataIsEmbeddedForItsSampler) {
   EXPECT_NE(html.find("\"probes\":[0,-1,0,-1]"), std::string::npos);
   EXPECT_EQ(html.find("\"oracle\":["), std::string::npos);
 
+  // Past 24 clusters, the others are summed in one row: 30 clusters of 1/30 each.
+  CellChartCell many;
+  for (uint32_t k = 0; k < 30; ++k) {
+    many.begin.push_back(k);
+    many.end.push_back(k + 1);
+    many.learnt.push_back(k == 29 ? 0.5f : 0.5f / 29);
+    many.tree.push_back(1.0f / 30);
+  }
+  f.r.cell_charts[0].cells = {many};
+  f.r.cell_charts[0].probe_cell = {0, 0, 0, 0};
+  const std::string summed = report_html(f.r);
+  EXPECT_NE(summed.find("\"rest\":{\"count\":6,\"learnt\":0.1034,\"tree\":0.2}"),
+            std::string::npos)
+      << summed.substr(summed.find("cell-data"), 600);
+  EXPECT_NE(summed.find("\"b\":[0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,29]"),
+            std::string::npos);  // the largest, 29, and the first 23 of the equal others
+
   // A name cannot end the data's script element; a chart of no entry is left out.
   f.r.entries[1].name = c.sampler = "a</script>b";
   f.r.cell_charts = {c};

@@ -59,11 +59,12 @@ CellChart cell_chart(const Scene& scene, const Accel& accel, const IntegratorSet
   const PathConstants c = make_path_constants(scene, data.view(), settings);
   const int w = scene.width, h = scene.height;
 
-  // Probe; double the stride while there are too many probes or cells.
+  // Probe; widen the stride while there are too many probes or cells (each try stops at the
+  // first cell over the cap, so a try costs at most kCellChartMaxProbes rays).
   int stride = std::max(1, int(std::ceil(std::sqrt(double(w) * h / kCellChartMaxProbes))));
   std::vector<LightContext> first_point;  // per chart cell: its first probe's context
   std::unordered_map<uint32_t, int32_t> index;
-  for (;; stride *= 2) {
+  for (;; ++stride) {
     chart.stride = stride;
     chart.columns = (w + stride - 1) / stride;
     chart.rows = (h + stride - 1) / stride;

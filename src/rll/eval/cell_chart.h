@@ -17,10 +17,10 @@ class LightSampler;
 class RllLightSampler;
 struct Scene;
 
-// At most this many probes and distinct cells per chart: the data stay under about 1 MB (a
-// cell's cut has at most CutSettings' size of clusters, three numbers each).
+// At most this many probes and distinct cells per chart: the report embeds at most 24 clusters
+// and one sum a cell (about 0.75 kB), so the chart's data stay under about 1.5 MB.
 inline constexpr int kCellChartMaxProbes = 16384;
-inline constexpr int kCellChartMaxCells = 1024;
+inline constexpr int kCellChartMaxCells = 2048;
 // The oracle's bars cost one pmf per light and cell; above this product they are left out.
 inline constexpr double kCellChartMaxOracleWork = 2e8;
 

@@ -81,6 +81,9 @@ std::string colour_bar(float lo, float hi) {
       png_uri(png_bytes(px, n, 1, 3)), short_number(lo), short_number(hi));
 }
 
+// The clusters a cell's chart shows one by one; the others are summed in one row.
+constexpr size_t kChartClusters = 24;
+
 // A probability in few digits, for the chart's data: 4 significant digits.
 double rounded(float v) {
   return std::stod(fmt::format("{:.4g}", v));
@@ -99,17 +102,43 @@ std::string cell_chart_data(const CellChart& c, size_t entry, const std::vector<
                                   {"tree", colour_of("tree", 0x7f7f7f)},
                                   {"oracle", colour_of("oracle", 0x2ca02c)}};
   nlohmann::json cells = nlohmann::json::array();
-  auto values = [](const std::vector<float>& v) {
-    nlohmann::json a = nlohmann::json::array();
-    for (float x : v) a.push_back(rounded(x));
-    return a;
-  };
   for (const CellChartCell& cell : c.cells) {
-    nlohmann::json j = {{"id", cell.cell},        {"level", cell.level},
-                        {"cut", cell.has_cut},    {"b", cell.begin},
-                        {"e", cell.end},          {"learnt", values(cell.learnt)},
-                        {"tree", values(cell.tree)}};
-    if (c.has_oracle) j["oracle"] = values(cell.oracle);
+    // The kChartClusters clusters whose largest probability is largest, in cut order, and the
+    // others' sums: what the chart draws, in at most about 1 kB a cell.
+    const size_t n = cell.learnt.size();
+    auto largest = [&](size_t k) {
+      return std::max({cell.learnt[k], cell.tree[k], c.has_oracle ? cell.oracle[k] : 0.0f});
+    };
+    std::vector<size_t> order(n);
+    for (size_t k = 0; k < n; ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return largest(a) > largest(b); });
+    std::vector<bool> shown(n, false);
+    for (size_t i = 0; i < std::min(n, kChartClusters); ++i) shown[order[i]] = true;
+    nlohmann::json j = {{"id", cell.cell}, {"level", cell.level}, {"cut", cell.has_cut}};
+    nlohmann::json rest = {{"count", 0}, {"learnt", 0.0}, {"tree", 0.0}};
+    if (c.has_oracle) rest["oracle"] = 0.0;
+    for (const char* key : {"b", "e", "learnt", "tree", "oracle"}) j[key] = nlohmann::json::array();
+    for (size_t k = 0; k < n; ++k) {
+      if (!shown[k]) {
+        rest["count"] = rest["count"].get<int>() + 1;
+        rest["learnt"] = rest["learnt"].get<double>() + cell.learnt[k];
+        rest["tree"] = rest["tree"].get<double>() + cell.tree[k];
+        if (c.has_oracle) rest["oracle"] = rest["oracle"].get<double>() + cell.oracle[k];
+        continue;
+      }
+      j["b"].push_back(cell.begin[k]);
+      j["e"].push_back(cell.end[k]);
+      j["learnt"].push_back(rounded(cell.learnt[k]));
+      j["tree"].push_back(rounded(cell.tree[k]));
+      if (c.has_oracle) j["oracle"].push_back(rounded(cell.oracle[k]));
+    }
+    if (!c.has_oracle) j.erase("oracle");
+    if (rest["count"].get<int>() > 0) {
+      for (const char* key : {"learnt", "tree", "oracle"})
+        if (rest.contains(key)) rest[key] = rounded(float(rest[key].get<double>()));
+      j["rest"] = std::move(rest);
+    }
     cells.push_back(std::move(j));
   }
   const nlohmann::json d = {{"sampler", c.sampler}, {"entry", entry},
@@ -306,7 +335,6 @@ constexpr const char* kScript = R"JS(
     return e;
   }
   function percent(v) { return (100 * v).toPrecision(3) + '%'; }
-  var kMaxRows = 24;
   function showCell(d, x, y) {
     var probe = d.probes[Math.floor(y / d.stride) * d.columns + Math.floor(x / d.stride)];
     chartBox.textContent = '';
@@ -321,24 +349,25 @@ constexpr const char* kScript = R"JS(
     }
     var c = d.cells[probe];
     chartBox.dataset.cell = String(c.id);
-    head.textContent = d.sampler + ', pixel (' + x + ', ' + y + '): cell ' + c.id + ', level ' + c.level +
-      ', ' + c.learnt.length + ' clusters' +
+    var px = Math.min(W - 1, Math.floor(x / d.stride) * d.stride + Math.floor(d.stride / 2));
+    var py = Math.min(H - 1, Math.floor(y / d.stride) * d.stride + Math.floor(d.stride / 2));
+    head.textContent = d.sampler + ', pixel (' + x + ', ' + y + ')' +
+      (px !== x || py !== y ? ', probed at (' + px + ', ' + py + ')' : '') + ': cell ' + c.id + ', level ' + c.level +
+      ', ' + (c.learnt.length + (c.rest ? c.rest.count : 0)) + ' clusters' +
       (c.cut ? '' : ' (no cut learnt yet: the cell samples like the light tree)');
     var kinds = [{ key: 'learnt', name: d.sampler + ' (learnt)', colour: d.colours.learnt },
                  { key: 'tree', name: 'light tree (prior)', colour: d.colours.tree }];
     if (d.oracle) kinds.push({ key: 'oracle', name: 'oracle', colour: d.colours.oracle });
-    // The clusters by the largest of their probabilities; past kMaxRows, the rest as one row.
+    // The clusters by the largest of their probabilities, then the others' sums as one row.
     var order = c.learnt.map(function (v, i) { return i; });
     function largest(i) { return Math.max.apply(null, kinds.map(function (k) { return c[k.key][i]; })); }
     order.sort(function (a, b) { return largest(b) - largest(a) || a - b; });
-    var rows = order.slice(0, kMaxRows).map(function (i) {
+    var rows = order.map(function (i) {
       return { label: c.e[i] - c.b[i] === 1 ? 'light ' + c.b[i] : 'lights ' + c.b[i] + '\u2013' + (c.e[i] - 1),
                values: kinds.map(function (k) { return c[k.key][i]; }) };
     });
-    var rest = order.slice(kMaxRows);
-    if (rest.length)
-      rows.push({ label: rest.length + ' other clusters',
-                  values: kinds.map(function (k) { return rest.reduce(function (s, i) { return s + c[k.key][i]; }, 0); }) });
+    if (c.rest)
+      rows.push({ label: c.rest.count + ' other clusters', values: kinds.map(function (k) { return c.rest[k.key]; }) });
     var most = 0;
     rows.forEach(function (r) { r.values.forEach(function (v) { most = Math.max(most, v); }); });
     var barH = 11, rowH = kinds.length * barH + 7, labelW = 140, barW = 320, top = 30;
