@@ -17,12 +17,14 @@
 #include "rll/core/parallel.h"
 #include "rll/core/paths.h"
 #include "rll/core/sysinfo.h"
+#include "rll/eval/cell_chart.h"
 #include "rll/eval/compare.h"
 #include "rll/eval/metrics.h"
 #include "rll/eval/plot.h"
 #include "rll/eval/reference.h"
 #include "rll/eval/report.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/lights/oracle_sampler.h"
 #include "rll/render/progress.h"
 
 namespace rll::cli {
@@ -203,9 +205,10 @@ std::string interrupted_text(const CompareOptions& o, const std::string& name) {
 }
 
 // One render of one sampler, fresh (a learning sampler starts cold every run), with relMSE
-// checkpoints; the image is returned in `image`.
+// checkpoints; the image is returned in `image`, and the sampler in `kept` when it is given.
 RunResult run_once(const CompareOptions& o, RenderSession& session, const std::string& name,
-                   int repeat, const ChosenReference& reference, Image& image) {
+                   int repeat, const ChosenReference& reference, Image& image,
+                   std::unique_ptr<LightSampler>* kept = nullptr) {
   reset_peak_rss();
   const auto t0 = std::chrono::steady_clock::now();
   auto sampler = session.make_sampler(name);
@@ -266,6 +269,7 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
   if (!o.quiet)
     fmt::print(stderr, "{}: {} spp in {}, relMSE {:.4e}\n", label, run.spp,
                format_duration(run.seconds), run.relmse);
+  if (kept) *kept = std::move(sampler);
   return run;
 }
 
@@ -365,6 +369,9 @@ void run(const CompareOptions& o) {
   // sampler always runs first (on a cold cache) or last (on a machine warmed by the others).
   std::vector<RunResult> runs;
   std::map<std::string, Image> first_images;  // repeat 0's, shown in the report
+  // Repeat 0's learning samplers (rll, fermat) and oracle, for the report's cell chart.
+  std::map<std::string, std::unique_ptr<LightSampler>> charted;
+  const OracleLightSampler* oracle = nullptr;
   nlohmann::json order = nlohmann::json::array();
   const int n = int(samplers.size());
   for (int r = 0; r < o.repeats; ++r) {
@@ -373,7 +380,12 @@ void run(const CompareOptions& o) {
       const std::string& name = samplers[size_t((k + r) % n)];
       order.back().push_back(name);
       Image image;
-      runs.push_back(run_once(o, session, name, r, ref, image));
+      std::unique_ptr<LightSampler> sampler;
+      runs.push_back(run_once(o, session, name, r, ref, image, r == 0 ? &sampler : nullptr));
+      const auto* as_oracle = dynamic_cast<const OracleLightSampler*>(sampler.get());
+      if (as_oracle) oracle = as_oracle;
+      if (as_oracle || dynamic_cast<const RllLightSampler*>(sampler.get()))
+        charted.emplace(name, std::move(sampler));
       write_image(out / image_name(name, r), image);
       if (r == 0) first_images.emplace(name, std::move(image));
     }
@@ -414,9 +426,9 @@ void run(const CompareOptions& o) {
   for (const auto& s : summaries) {
     const RunResult& first = *s.runs.front();
     row.push_back(&first_images.at(s.name));
-    captions.push_back(fmt::format("{}\nrelMSE {:.3e}, trimmed {:.3e}\n{} spp, {}", s.name,
-                                   first.relmse, first.trimmed_relmse, first.spp,
-                                   format_duration(first.seconds)));
+    captions.push_back(fmt::format("{}\nrelMSE {:.3e}, trimmed {:.3e}\n{} spp, {}, visible {:.3f}",
+                                   s.name, first.relmse, first.trimmed_relmse, first.spp,
+                                   format_duration(first.seconds), first.visible_ratio));
   }
   row.push_back(&ref.image);
   captions.push_back("reference\n" + ref.caption);
@@ -455,8 +467,9 @@ void run(const CompareOptions& o) {
     const auto& s = summaries[i];
     const RunResult& first = *s.runs.front();
     report.entries.push_back({s.name,
-                              fmt::format("relMSE {:.3e}, {} spp, {}", first.relmse, first.spp,
-                                          format_duration(first.seconds)),
+                              fmt::format("relMSE {:.3e}, {} spp, {}, visible-sample ratio {:.3f}",
+                                          first.relmse, first.spp, format_duration(first.seconds),
+                                          first.visible_ratio),
                               series_colour(i), &first_images.at(s.name), &errors.at(s.name),
                               fmt::format("repeat 1 of {}, seed {}", o.repeats, o.seed)});
     report.samplers.push_back({s.name,
@@ -468,6 +481,13 @@ void run(const CompareOptions& o) {
   report.table = table_cells(summaries);
   report.exposure = o.exposure;
   report.plot_svg = plot_svg(plot);
+  for (const auto& name : samplers) {
+    const auto it = charted.find(name);
+    if (it == charted.end()) continue;
+    if (auto* rll = dynamic_cast<const RllLightSampler*>(it->second.get()))
+      report.cell_charts.push_back(
+          cell_chart(scene, session.accel(), session.integrator(), *rll, name, oracle));
+  }
   write_file_atomic(out / "report.html", report_html(report));
 
   nlohmann::json j = session_stats(session);

@@ -1,7 +1,10 @@
 // Appended to a copy of a compare report by test_compare.cpp: drives the report's controls the
 // way a user would (exposure, zoom, flip with the reference) and checks the layout (the colour
-// scale's labels, the repeat labels); records the outcome in the body's data-selftest attribute,
-// "ok" or "fail: why". (Not spelled out as markup here: this text is in the dumped DOM too.)
+// scale's labels, the repeat labels, the convergence plot's text inside its picture and clear of
+// each other), clicks a pixel of a learning sampler's image where the report has a cell chart and
+// reads its bars; records the outcome in the body's data-selftest attribute, "ok" or "fail: why",
+// and data-cell-chart "checked" when a chart was checked. (Not spelled out as markup here: this
+// text is in the dumped DOM too.)
 (function () {
   'use strict';
   var root = document.getElementById('report');
@@ -45,6 +48,66 @@
       rects.push(r);
     }
     if (overlap(rects[0], rects[1])) return 'the scale labels overlap each other';
+    return '';
+  }
+  // Every text of the convergence plot lies inside the plot's picture (nothing cut at its edge)
+  // and overlaps no other text.
+  function checkPlot() {
+    var svg = document.querySelector('.plot svg');
+    if (!svg) return 'no convergence plot';
+    var box = svg.getBoundingClientRect();
+    var texts = Array.prototype.slice.call(svg.querySelectorAll('text'));
+    if (texts.length < 6) return 'the plot has ' + texts.length + ' texts';
+    var rects = texts.map(function (t) { return t.getBoundingClientRect(); });
+    for (var i = 0; i < rects.length; ++i) {
+      var r = rects[i];
+      if (!(r.width > 0)) return 'plot text "' + texts[i].textContent + '" is not shown';
+      if (r.left < box.left - 0.5 || r.right > box.right + 0.5 || r.top < box.top - 0.5 || r.bottom > box.bottom + 0.5)
+        return 'plot text "' + texts[i].textContent + '" ' + describe(r) + ' is cut by the plot\'s edge ' + describe(box);
+      for (var k = 0; k < i; ++k)
+        if (overlap(r, rects[k]) && Math.min(r.right, rects[k].right) - Math.max(r.left, rects[k].left) > 1 &&
+            Math.min(r.bottom, rects[k].bottom) - Math.max(r.top, rects[k].top) > 1)
+          return 'plot texts "' + texts[i].textContent + '" and "' + texts[k].textContent + '" overlap';
+    }
+    var points = svg.querySelectorAll('circle.pt title');
+    if (points.length < 2 || !/relMSE/.test(points[0].textContent)) return 'the plot\'s points do not name their values';
+    return '';
+  }
+  // Clicks the first probed pixel that has a cell, in the chart's own image, and reads the bars:
+  // one per cluster shown and kind, and one for the others' sum, the learnt ones (and the
+  // oracle's) summing to 1, the values those of the report's data.
+  function checkCellChart() {
+    var el = document.querySelector('script.cell-data');
+    if (!el) return '';
+    var d = JSON.parse(el.textContent);
+    var view = document.querySelector('canvas.view[data-source="image-' + d.entry + '"]');
+    if (!view) return 'no view of the charted image';
+    var probe = -1;
+    for (var i = 0; i < d.probes.length && probe < 0; ++i) if (d.probes[i] >= 0) probe = i;
+    if (probe < 0) return 'the chart has no probe with a cell';
+    var W = view.width, H = view.height;
+    var x = Math.min(W - 1, (probe % d.columns) * d.stride + Math.floor(d.stride / 2));
+    var y = Math.min(H - 1, Math.floor(probe / d.columns) * d.stride + Math.floor(d.stride / 2));
+    var r = view.getBoundingClientRect();
+    view.dispatchEvent(new MouseEvent('click', { clientX: r.left + (x + 0.5) / W * r.width,
+                                                 clientY: r.top + (y + 0.5) / H * r.height, bubbles: true }));
+    var box = document.getElementById('cell-chart');
+    var cell = d.cells[d.probes[probe]];
+    if (box.dataset.cell !== String(cell.id))
+      return 'clicking pixel (' + x + ', ' + y + ') showed cell "' + box.dataset.cell + '", not ' + cell.id;
+    var kinds = d.oracle ? ['learnt', 'tree', 'oracle'] : ['learnt', 'tree'];
+    for (var k = 0; k < kinds.length; ++k) {
+      var bars = box.querySelectorAll('rect.bar[data-kind="' + kinds[k] + '"]');
+      var rows = cell.learnt.length + (cell.rest ? 1 : 0);
+      if (bars.length !== rows) return kinds[k] + ': ' + bars.length + ' bars for ' + rows + ' rows';
+      var sum = 0, data = cell.rest ? cell.rest[kinds[k]] : 0;
+      for (var b = 0; b < bars.length; ++b) sum += Number(bars[b].dataset.value);
+      for (var c = 0; c < cell[kinds[k]].length; ++c) data += cell[kinds[k]][c];
+      if (Math.abs(sum - data) > 1e-6) return kinds[k] + ' bars sum to ' + sum + ', the data to ' + data;
+      if (kinds[k] !== 'tree' && Math.abs(sum - 1) > 0.01) return 'the ' + kinds[k] + ' bars sum to ' + sum;
+      if (!(bars[0].getBoundingClientRect().width > 0) && sum > 0) return 'a ' + kinds[k] + ' bar is not drawn';
+    }
+    document.body.dataset.cellChart = 'checked';
     return '';
   }
   function flipButton(view) { return view.closest('figure').querySelector('button.flip'); }
@@ -101,6 +164,10 @@
       if (checksum(views[k]) !== sums[k]) return fail('view ' + k + ' did not return to the full image');
     var legend = checkLegend(views);
     if (legend) return fail(legend);
+    var plot = checkPlot();
+    if (plot) return fail(plot);
+    var chart = checkCellChart();
+    if (chart) return fail(chart);
     // Every sampler's image and map says which repeat it shows (the comparison has 2 repeats).
     var captions = document.querySelectorAll('figure canvas.view:not([data-source="reference"])');
     for (var j = 0; j < captions.length; ++j) {

@@ -135,38 +135,115 @@ TEST_F(CompareOutput, PrintsTheTableAndTheReportPath) {
       << s_result->output;
 }
 
-TEST_F(CompareOutput, ReportLoadsInChromiumWithoutScriptErrors) {
-  const fs::path chromium = "/usr/bin/chromium";
-  if (!fs::exists(chromium))
-    GTEST_SKIP() << "chromium is not installed (make test installs it): report not loaded";
-  // A copy of the report with a script that uses its controls (exposure, zoom, reset).
-  std::string html = read_text(out("report.html"));
+namespace {
+
+const fs::path kChromium = "/usr/bin/chromium";
+
+// Loads a copy of `report` with tests/cli/report_selftest.js (which uses the report's controls
+// the way a user would) in headless Chromium, in folder `dir`; returns the page's own <body> tag
+// as the DOM ends with it. Fails the test where Chromium fails, logs an uncaught error, or the
+// self-test does not pass.
+std::string run_selftest(const fs::path& report, const fs::path& dir) {
+  std::string html = read_text(report);
   const std::string selftest = read_text(fs::path(RLL_SOURCE_DIR) / "tests/cli/report_selftest.js");
-  ASSERT_FALSE(selftest.empty());
+  EXPECT_FALSE(selftest.empty());
   const size_t body = html.rfind("</body>");
-  ASSERT_NE(body, std::string::npos);
+  EXPECT_NE(body, std::string::npos);
+  if (body == std::string::npos) return "";
   html.insert(body, "<script>" + selftest + "</script>\n");
-  const fs::path page = *s_dir / "selftest.html";
+  const fs::path page = dir / "selftest.html";
   std::ofstream(page) << html;
-  const fs::path dom = *s_dir / "dom.html", log = *s_dir / "chromium.log";
+  const fs::path dom = dir / "dom.html", log = dir / "chromium.log";
   const std::string cmd =
-      "timeout 120 " + chromium.string() +
+      "timeout 120 " + kChromium.string() +
       " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
       " --disable-background-networking --disable-component-update --disable-sync"
       " --user-data-dir=" +
-      (*s_dir / "chromium-profile").string() +
+      (dir / "chromium-profile").string() +
       " --enable-logging=stderr --v=0 --virtual-time-budget=20000 --dump-dom 'file://" +
       page.string() + "' > '" + dom.string() + "' 2> '" + log.string() + "'";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << read_text(log);
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << read_text(log);
   const std::string d = read_text(dom), l = read_text(log);
   EXPECT_FALSE(contains(l, "Uncaught")) << l;
   EXPECT_TRUE(contains(d, "<table id=\"summary\">")) << d.substr(0, 2000);
   EXPECT_TRUE(contains(d, "data-ready=\"1\"")) << "the report's script did not finish";
   // The first <body: the page's own tag, not text quoted in a script.
-  EXPECT_EQ(d.find("<body data-selftest=\"ok\""), d.find("<body"))
-      << d.substr(d.find("<body"), 300);
+  const size_t at = d.find("<body");
+  const std::string tag = at == std::string::npos ? "" : d.substr(at, d.find('>', at) - at + 1);
+  EXPECT_TRUE(contains(tag, "data-selftest=\"ok\""))
+      << (at == std::string::npos ? d.substr(0, 300) : d.substr(at, 300));
+  return tag;
+}
+
+}  // namespace
+
+TEST_F(CompareOutput, ReportLoadsInChromiumWithoutScriptErrors) {
+  if (!fs::exists(kChromium))
+    GTEST_SKIP() << "chromium is not installed (make test installs it): report not loaded";
+  EXPECT_FALSE(contains(run_selftest(out("report.html"), s_dir->path()), "data-cell-chart"));
+  const std::string d = read_text(s_dir->path() / "dom.html");
+  EXPECT_FALSE(contains(d, "id=\"cell-chart\"")) << "a cell chart without a learning sampler";
   EXPECT_TRUE(
       contains(d, "<td><span class=\"swatch\" style=\"background:#1f77b4\"></span>power</td>"));
+}
+
+// The cell chart of a compare with rll and the oracle: per probed cell, rll's baked table and the
+// oracle's probabilities each sum to 1 over the cell's clusters, and so do the tree's; and in
+// Chromium a click on a pixel of rll's image shows that cell's bars.
+TEST(Compare, ReportChartsRllsCellsAgainstTheTreeAndTheOracle) {
+  test::TempDir tmp;
+  auto r = run_rll({"compare", "builtin:cornell-boxes-room", "--res", "32x24", "--samplers",
+                    "power,rll,oracle", "--spp", "8", "--reference-spp", "32", "--set",
+                    "oracle.points=4", "--set", "oracle.rays=2", "--set",
+                    "oracle.discovery_spp=4", "--cache-dir",
+                    (tmp / "cache").string(), "--out", (tmp / "out").string(), "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string html = read_text(tmp / "out" / "report.html");
+  const std::string open = "<script type=\"application/json\" class=\"cell-data\">";
+  const size_t at = html.find(open);
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_EQ(html.find(open, at + 1), std::string::npos) << "one chart: rll's";
+  const size_t from = at + open.size();
+  const auto d = nlohmann::json::parse(html.substr(from, html.find("</script>", from) - from));
+  EXPECT_EQ(d["sampler"], "rll");
+  EXPECT_EQ(d["entry"], 1);
+  EXPECT_TRUE(d["oracle"].get<bool>());
+  EXPECT_EQ(d["stride"], 1);  // 768 pixels: every one is probed
+  EXPECT_EQ(d["probes"].size(), 32u * 24u);
+  const size_t cells = d["cells"].size();
+  ASSERT_GT(cells, 3u);
+  size_t with_cell = 0;
+  for (const auto& p : d["probes"]) {
+    ASSERT_LT(p.get<int>(), int(cells));
+    with_cell += p.get<int>() >= 0;
+  }
+  EXPECT_GT(with_cell, 32u * 24u / 2) << "most pixels see a surface with a cell";
+  size_t learnt_cells = 0;
+  for (const auto& c : d["cells"]) {
+    // The 24 largest clusters one by one, the others summed (the chart's rows).
+    double learnt = 0, tree = 0, oracle = 0;
+    if (c.contains("rest")) {
+      EXPECT_EQ(c["learnt"].size(), 24u);
+      learnt = c["rest"]["learnt"];
+      tree = c["rest"]["tree"];
+      oracle = c["rest"]["oracle"];
+    }
+    for (double v : c["learnt"]) learnt += v;
+    for (double v : c["tree"]) tree += v;
+    for (double v : c["oracle"]) oracle += v;
+    EXPECT_NEAR(learnt, 1, 5e-3) << c.dump();
+    EXPECT_NEAR(oracle, 1, 5e-3) << c.dump();
+    if (tree != 0) {  // 0 where the point faces away from every light
+      EXPECT_NEAR(tree, 1, 5e-3) << c.dump();
+    }
+    EXPECT_EQ(c["b"].size(), c["learnt"].size());
+    learnt_cells += c["cut"].get<bool>();
+  }
+  EXPECT_GT(learnt_cells, cells / 2) << "most cells have a learnt cut after 8 passes";
+  if (!fs::exists(kChromium))
+    GTEST_SKIP() << "chromium is not installed (make test installs it): chart not clicked";
+  const std::string body = run_selftest(tmp / "out" / "report.html", tmp.path());
+  EXPECT_TRUE(contains(body, "data-cell-chart=\"checked\"")) << "the chart was not clicked: " << body;
 }
 
 TEST(Compare, EqualTimeStopsAtTheBudget) {

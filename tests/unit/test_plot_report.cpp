@@ -6,6 +6,7 @@
 #include "rll/core/error.h"
 #include "rll/eval/encode.h"
 #include "rll/eval/plot.h"
+#include "rll/eval/raster.h"
 #include "rll/eval/report.h"
 
 using namespace rll;
@@ -82,6 +83,52 @@ TEST(Plot, SvgHasCurvesLegendAndEscapedText) {
   LogLogPlot tiny;
   tiny.width = tiny.height = 10;
   EXPECT_THROW(plot_svg(tiny), Error);
+}
+
+TEST(Plot, SvgPointsNameTheirValuesOnHover) {
+  const std::string svg = plot_svg(two_series());
+  EXPECT_NE(svg.find("<title>power: seconds 0.1, relMSE 1</title>"), std::string::npos) << svg;
+  EXPECT_NE(svg.find("<title>rll (repeat 2): seconds 2, relMSE 0.03</title>"), std::string::npos);
+  // Every usable point once: 3 of power, 2 + 2 of rll's repeats (the point at x = 0 is off the
+  // log axes).
+  size_t points = 0;
+  for (size_t at = 0; (at = svg.find("<circle class=\"pt\"", at)) != std::string::npos; ++at)
+    ++points;
+  EXPECT_EQ(points, 7u);
+}
+
+TEST(Plot, PngLeavesItsBorderWhiteWithLongTexts) {
+  // A title and names far wider than their room are set smaller and then cut with an ellipsis,
+  // never cut by the edge: the outermost 2 pixels stay white.
+  LogLogPlot p = two_series();
+  p.title = std::string(200, 'W');
+  p.series[0].name = std::string(80, 'm');
+  p.y_label = std::string(120, 'M');
+  const std::string png = plot_png(p);
+  int w = 0, h = 0, n = 0;
+  unsigned char* px = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(png.data()),
+                                            int(png.size()), &w, &h, &n, 3);
+  ASSERT_NE(px, nullptr);
+  int marked = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (x >= 2 && y >= 2 && x < w - 2 && y < h - 2) continue;
+      const unsigned char* q = px + 3 * (size_t(y) * w + x);
+      marked += q[0] < 250 || q[1] < 250 || q[2] < 250;
+    }
+  EXPECT_EQ(marked, 0);
+  stbi_image_free(px);
+  // The cut title keeps its whole text for the reader, on hover.
+  const std::string svg = plot_svg(p);
+  EXPECT_NE(svg.find("\u2026<title>" + p.title + "</title></text>"), std::string::npos);
+}
+
+TEST(Plot, EveryGlyphHasWidth) {
+  // The figure font draws every printable ASCII character and the non-ASCII ones captions use.
+  for (char c = '!'; c <= '~'; ++c) EXPECT_GT(text_width(std::string(1, c), 13), 2.0) << c;
+  EXPECT_GT(text_width("\u00b5s \u2013 \u00b2", 13), 20.0);
+  // "w" is not "u": the bitmap font this replaced drew them alike.
+  EXPECT_GT(text_width("w", 13), text_width("u", 13));
 }
 
 TEST(Plot, EmptyPlotStillDraws) {

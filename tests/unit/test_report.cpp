@@ -76,3 +76,57 @@ TEST(ReportHtml, WideTablesScrollInsideTheirBox) {
   const std::string html = report_html(f.r);
   EXPECT_NE(html.find("<div class=\"table-wrap\">\n<table id=\"summary\">"), std::string::npos);
 }
+
+TEST(ReportHtml, CellChartDataIsEmbeddedForItsSampler) {
+  Fixture f;
+  CellChart c;
+  c.sampler = "oracle";
+  c.stride = 2;
+  c.columns = 2;
+  c.rows = 2;
+  c.probe_cell = {0, -1, 0, -1};
+  CellChartCell cell;
+  cell.cell = 7;
+  cell.level = -3;
+  cell.has_cut = true;
+  cell.begin = {0, 2};
+  cell.end = {2, 3};
+  cell.learnt = {0.25f, 0.75f};
+  cell.tree = {0.5f, 0.123456f};
+  c.cells = {cell};
+  f.r.cell_charts = {c};
+  const std::string html = report_html(f.r);
+  EXPECT_NE(html.find("<div id=\"cell-chart\""), std::string::npos);
+  EXPECT_EQ(count(html, "class=\"cell-data\""), 1u);
+  EXPECT_NE(html.find("\"entry\":1"), std::string::npos);  // oracle is the second entry
+  EXPECT_NE(html.find("\"learnt\":[0.25,0.75]"), std::string::npos);
+  EXPECT_NE(html.find("\"tree\":[0.5,0.1235]"), std::string::npos);  // 4 significant digits
+  EXPECT_NE(html.find("\"probes\":[0,-1,0,-1]"), std::string::npos);
+  EXPECT_EQ(html.find("\"oracle\":["), std::string::npos);
+
+  // Past 24 clusters, the others are summed in one row: 30 clusters of 1/30 each.
+  CellChartCell many;
+  for (uint32_t k = 0; k < 30; ++k) {
+    many.begin.push_back(k);
+    many.end.push_back(k + 1);
+    many.learnt.push_back(k == 29 ? 0.5f : 0.5f / 29);
+    many.tree.push_back(1.0f / 30);
+  }
+  f.r.cell_charts[0].cells = {many};
+  f.r.cell_charts[0].probe_cell = {0, 0, 0, 0};
+  const std::string summed = report_html(f.r);
+  EXPECT_NE(summed.find("\"rest\":{\"count\":6,\"learnt\":0.1034,\"tree\":0.2}"),
+            std::string::npos)
+      << summed.substr(summed.find("cell-data"), 600);
+  EXPECT_NE(summed.find("\"b\":[0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,29]"),
+            std::string::npos);  // the largest, 29, and the first 23 of the equal others
+
+  // A name cannot end the data's script element; a chart of no entry is left out.
+  f.r.entries[1].name = c.sampler = "a</script>b";
+  f.r.cell_charts = {c};
+  const std::string escaped = report_html(f.r);
+  EXPECT_NE(escaped.find("a<\\/script>b"), std::string::npos);
+  EXPECT_EQ(escaped.find("\"a</script>b"), std::string::npos);
+  f.r.cell_charts[0].sampler = "rll";
+  EXPECT_EQ(report_html(f.r).find("id=\"cell-chart\""), std::string::npos);
+}

@@ -4,20 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <tuple>
 
 #include "rll/core/error.h"
 #include "rll/core/image.h"
 #include "rll/eval/encode.h"
-
-// stb_easy_font is all static functions, some of which plot.cpp does not call.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#pragma GCC diagnostic ignored "-Wsign-compare"
-#include <stb/stb_easy_font.h>
-#pragma GCC diagnostic pop
+#include "rll/eval/raster.h"
 
 namespace rll {
 
@@ -33,10 +25,8 @@ struct Polyline {
   double width = 1;
 };
 
-// stb_easy_font draws glyphs about 7 units tall; the PNG scales them up by this factor, and the
-// SVG uses a font size that takes about the same width.
-constexpr double kTextScale = 2.0;
-constexpr double kSvgFontSize = 13.0;
+// Font sizes in pixels (user units): labels and ticks, the title.
+constexpr double kFontSize = 13.0, kTitleSize = 14.0;
 
 // A region between two x-monotone lines that share their x: the spread of a series' repeats.
 struct Band {
@@ -54,7 +44,16 @@ struct Label {
   bool vertical = false;  // rotated 90 degrees counter-clockwise (reads bottom to top)
   uint32_t colour = 0;
   bool bold = false;
-  double scale = kTextScale;  // stb_easy_font units to pixels (PNG)
+  double size = kFontSize;  // font size, pixels
+  std::string full;         // the whole text, shown on hover, where `text` had to be cut
+};
+
+// A data point that names its values when the mouse is over it (an SVG <title>); drawn
+// transparent, so that the PNG does not show it.
+struct Marker {
+  double x = 0, y = 0;
+  uint32_t colour = 0;
+  std::string text;
 };
 
 // The whole plot as primitives in pixel coordinates, y down: what both back ends draw, in this
@@ -65,11 +64,33 @@ struct Drawing {
   size_t data_begin = 0;
   std::vector<Band> bands;
   std::vector<Label> labels;
+  std::vector<Marker> markers;
 };
 
-double text_width(const std::string& text) {
-  std::string copy = text;
-  return stb_easy_font_width(copy.data()) * kTextScale;
+// The smallest font size a label is set in to fit its room; below it the text is cut.
+constexpr double kSmallestFontSize = 9.0;
+
+// `l` made to fit `room` pixels of width: at its size, or smaller down to kSmallestFontSize,
+// or at that size cut to the characters that fit with an ellipsis (the whole text in `full`).
+Label fitted(Label l, double room) {
+  const double w = text_width(l.text, l.size, l.bold);
+  if (w <= room || !(w > 0)) return l;
+  l.size = std::max(kSmallestFontSize, l.size * room / w);
+  if (text_width(l.text, l.size, l.bold) <= room) return l;
+  l.full = l.text;
+  std::string cut = l.text;
+  while (!cut.empty() && text_width(cut + "\u2026", l.size, l.bold) > room) {
+    cut.pop_back();
+    while (!cut.empty() && (static_cast<unsigned char>(cut.back()) & 0xc0) == 0x80) cut.pop_back();
+    if (!cut.empty() && static_cast<unsigned char>(cut.back()) >= 0xc0) cut.pop_back();
+  }
+  l.text = cut + "\u2026";
+  return l;
+}
+
+// A value for a hover text: "0.0123", "1.23e-5".
+std::string value_text(double v) {
+  return fmt::format("{:.3g}", v);
 }
 
 struct LogAxis {
@@ -165,13 +186,22 @@ Drawing layout(const LogLogPlot& plot) {
     note = fewest == most ? fmt::format("lines: median of {} repeats, bands: min to max", most)
                           : "lines: median over repeats, bands: min to max";
 
-  double legend_width = 0;
-  for (const auto& s : plot.series) legend_width = std::max(legend_width, text_width(s.name));
-  const double left = 78, top = note.empty() ? 40 : 56, bottom = 56;
-  const double right = std::min(0.4 * plot.width, 44 + legend_width + 16);
   LogAxis ax, ay;
   std::tie(ax.lo, ax.hi) = log_range(xs, 0.1, 10);
   std::tie(ay.lo, ay.hi) = log_range(ys, 1e-3, 1);
+  // Margins from the text they hold: the widest y tick label beside the y axis' title, the
+  // legend's names (up to 40% of the width), half the last x tick label.
+  double tick_width = 0, legend_width = 0;
+  for (double t : log_ticks(std::pow(10.0, ay.lo), std::pow(10.0, ay.hi)))
+    tick_width = std::max(tick_width, text_width(tick_label(t), kFontSize));
+  for (const auto& s : plot.series)
+    legend_width = std::max(legend_width, text_width(s.name, kFontSize));
+  double last_x_tick = 0;
+  for (double t : log_ticks(std::pow(10.0, ax.lo), std::pow(10.0, ax.hi)))
+    last_x_tick = text_width(tick_label(t), kFontSize);
+  const double left = std::max(78.0, 40 + tick_width), top = note.empty() ? 40 : 56, bottom = 56;
+  const double right = std::max(0.5 * last_x_tick + 4,
+                                std::min(0.4 * plot.width, 44 + legend_width + 12));
   ax.p0 = left;
   ax.p1 = plot.width - right;
   ay.p0 = plot.height - bottom;  // y grows upwards
@@ -188,7 +218,7 @@ Drawing layout(const LogLogPlot& plot) {
     const double x = std::round(ax.map(t)) + 0.5;
     vline(x, ay.p1, ay.p0, kGridColour);
     vline(x, ay.p0, ay.p0 + 5, kAxisColour);
-    d.labels.push_back({tick_label(t), x, ay.p0 + 16, Anchor::Middle, false, kTextColour});
+    d.labels.push_back({tick_label(t), x, ay.p0 + 17, Anchor::Middle, false, kTextColour});
   }
   for (double t : log_minor_ticks(std::pow(10.0, ax.lo), std::pow(10.0, ax.hi))) {
     const double x = std::round(ax.map(t)) + 0.5;
@@ -274,18 +304,33 @@ Drawing layout(const LogLogPlot& plot) {
       if (!line.points.empty()) d.lines.push_back(std::move(line));
     }
   }
+  // Every usable point names its values on hover.
+  for (const PlotSeries& s : plot.series)
+    for (size_t r = 0; r < s.curves.size(); ++r)
+      for (const auto& [x, y] : s.curves[r])
+        if (usable(x, y))
+          d.markers.push_back(
+              {ax.map(x), ay.map(y), s.colour,
+               fmt::format("{}{}: {} {}, {} {}", s.name,
+                           s.curves.size() > 1 ? fmt::format(" (repeat {})", r + 1) : "",
+                           plot.x_label, value_text(x), plot.y_label, value_text(y))});
+  const double mid = 0.5 * (ax.p0 + ax.p1);
   if (xs.empty())
-    d.labels.push_back({"no data", 0.5 * (ax.p0 + ax.p1), 0.5 * (ay.p0 + ay.p1), Anchor::Middle,
-                        false, kTextColour});
+    d.labels.push_back(
+        {"no data", mid, 0.5 * (ay.p0 + ay.p1), Anchor::Middle, false, kTextColour});
 
-  // Titles and legend.
-  d.labels.push_back(
-      {plot.title, 0.5 * (ax.p0 + ax.p1), 20, Anchor::Middle, false, kTextColour, true});
+  // Titles and legend, each fitted to its room: a long title or name is set smaller, and cut
+  // with an ellipsis only past that, never cut by the picture's edge.
+  const double title_room = 2 * std::min(mid, plot.width - mid) - 8;
+  d.labels.push_back(fitted(
+      {plot.title, mid, 20, Anchor::Middle, false, kTextColour, true, kTitleSize}, title_room));
   if (!note.empty())
-    d.labels.push_back({note, 0.5 * (ax.p0 + ax.p1), 38, Anchor::Middle, false, kNoteColour});
-  d.labels.push_back({plot.x_label, 0.5 * (ax.p0 + ax.p1), plot.height - 16.0, Anchor::Middle,
-                      false, kTextColour});
-  d.labels.push_back({plot.y_label, 18, 0.5 * (ay.p0 + ay.p1), Anchor::Middle, true, kTextColour});
+    d.labels.push_back(fitted({note, mid, 38, Anchor::Middle, false, kNoteColour}, title_room));
+  d.labels.push_back(fitted(
+      {plot.x_label, mid, plot.height - 16.0, Anchor::Middle, false, kTextColour}, title_room));
+  d.labels.push_back(
+      fitted({plot.y_label, 18, 0.5 * (ay.p0 + ay.p1), Anchor::Middle, true, kTextColour},
+             ay.p0 - ay.p1));
   double ly = top + 10;
   for (size_t i = 0; i < plot.series.size(); ++i) {
     const PlotSeries& s = plot.series[i];
@@ -294,148 +339,12 @@ Drawing layout(const LogLogPlot& plot) {
       d.bands.push_back(
           {{{lx, ly - 6}, {lx + 24, ly - 6}}, {{lx, ly + 6}, {lx + 24, ly + 6}}, s.colour, 0.2});
     d.lines.push_back({{{lx, ly}, {lx + 24, ly}}, s.colour, 3});
-    d.labels.push_back({s.name, lx + 30, ly, Anchor::Start, false, kTextColour});
+    d.labels.push_back(fitted({s.name, lx + 30, ly, Anchor::Start, false, kTextColour},
+                              plot.width - (lx + 30) - 4));
     ly += 22;
   }
   return d;
 }
-
-// ---- PNG back end ----
-
-class Raster {
- public:
-  Raster(int w, int h)
-      : m_w(w), m_h(h), m_rgb(size_t(w) * h * 3, 255), m_cover(size_t(w) * h, 0.f) {}
-
-  uint8_t* pixel(int x, int y) { return &m_rgb[(size_t(y) * m_w + x) * 3]; }
-  // Text is drawn only at x0 <= x < x1 (captions of neighbouring images must not run together).
-  void clip_text(int x0, int x1) {
-    m_clip0 = std::max(0, x0);
-    m_clip1 = std::min(m_w, x1);
-  }
-
-  // A translucent band: per pixel column, four sub-columns each add the vertical overlap of
-  // the pixel with the band there, which anti-aliases both edges.
-  void band(const Band& b) {
-    const size_t n = std::min(b.upper.size(), b.lower.size());
-    if (n < 2) return;
-    const double xa = b.upper.front().x, xb = b.upper[n - 1].x;
-    const int x0 = std::max(0, int(std::floor(xa))), x1 = std::min(m_w - 1, int(std::ceil(xb)));
-    int y_min = m_h, y_max = -1;
-    size_t k = 0;
-    for (int x = x0; x <= x1; ++x)
-      for (int sub = 0; sub < 4; ++sub) {
-        const double sx = x + (sub + 0.5) / 4;
-        if (sx < xa || sx > xb) continue;
-        while (k + 2 < n && b.upper[k + 1].x < sx) ++k;
-        const double dx = b.upper[k + 1].x - b.upper[k].x;
-        const double t = dx > 0 ? std::clamp((sx - b.upper[k].x) / dx, 0.0, 1.0) : 0.0;
-        const double ua = b.upper[k].y + t * (b.upper[k + 1].y - b.upper[k].y);
-        const double la = b.lower[k].y + t * (b.lower[k + 1].y - b.lower[k].y);
-        const double ya = std::max(0.0, std::min(ua, la)),
-                     yb = std::min(double(m_h), std::max(ua, la));
-        for (int y = int(std::floor(ya)); y < int(std::ceil(yb)); ++y) {
-          const double overlap = std::min(yb, y + 1.0) - std::max(ya, double(y));
-          if (overlap > 0) m_cover[size_t(y) * m_w + x] += float(overlap / 4);
-          y_min = std::min(y_min, y);
-          y_max = std::max(y_max, y);
-        }
-      }
-    for (int y = std::max(0, y_min); y <= y_max; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        float& c = m_cover[size_t(y) * m_w + x];
-        if (c > 0) blend(x, y, b.colour, float(b.opacity) * std::min(c, 1.0f));
-        c = 0;
-      }
-  }
-
-  // Anti-aliased thick polyline: coverage from the distance to the nearest segment, taken as a
-  // maximum over segments so that joints are not blended twice.
-  void polyline(const Polyline& line) {
-    const double r = 0.5 * line.width;
-    int bx0 = m_w, by0 = m_h, bx1 = -1, by1 = -1;
-    for (size_t i = 0; i + 1 < line.points.size(); ++i) {
-      const Point a = line.points[i], b = line.points[i + 1];
-      const int x0 = std::max(0, int(std::floor(std::min(a.x, b.x) - r - 1)));
-      const int x1 = std::min(m_w - 1, int(std::ceil(std::max(a.x, b.x) + r + 1)));
-      const int y0 = std::max(0, int(std::floor(std::min(a.y, b.y) - r - 1)));
-      const int y1 = std::min(m_h - 1, int(std::ceil(std::max(a.y, b.y) + r + 1)));
-      const double dx = b.x - a.x, dy = b.y - a.y, len2 = dx * dx + dy * dy;
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-          const double px = x + 0.5 - a.x, py = y + 0.5 - a.y;
-          const double t = len2 > 0 ? std::clamp((px * dx + py * dy) / len2, 0.0, 1.0) : 0.0;
-          const double ex = px - t * dx, ey = py - t * dy;
-          const float cover = float(std::clamp(r + 0.5 - std::sqrt(ex * ex + ey * ey), 0.0, 1.0));
-          float& c = m_cover[size_t(y) * m_w + x];
-          c = std::max(c, cover);
-        }
-      bx0 = std::min(bx0, x0);
-      by0 = std::min(by0, y0);
-      bx1 = std::max(bx1, x1);
-      by1 = std::max(by1, y1);
-    }
-    for (int y = by0; y <= by1; ++y)
-      for (int x = bx0; x <= bx1; ++x) {
-        float& c = m_cover[size_t(y) * m_w + x];
-        if (c > 0) blend(x, y, line.colour, c);
-        c = 0;
-      }
-  }
-
-  void label(const Label& l) {
-    if (l.text.empty()) return;
-    std::string text = l.text;
-    std::vector<char> buffer(text.size() * 300 + 64);
-    const int quads =
-        stb_easy_font_print(0, 0, text.data(), nullptr, buffer.data(), int(buffer.size()));
-    const double scale = l.scale;
-    const double w = stb_easy_font_width(text.data()) * scale;
-    const double h = 7 * scale;  // cap height of the font
-    const double bold_offset = std::max(1.0, std::round(scale / 2));
-    const double offset = l.anchor == Anchor::Start    ? 0
-                          : l.anchor == Anchor::Middle ? -0.5 * w
-                                                       : -w;
-    for (int q = 0; q < quads; ++q) {
-      // Each quad is axis-aligned: vertices 0 and 2 are opposite corners (16 bytes a vertex).
-      float v0[2], v2[2];
-      std::memcpy(v0, buffer.data() + size_t(q) * 64, sizeof v0);
-      std::memcpy(v2, buffer.data() + size_t(q) * 64 + 32, sizeof v2);
-      for (int pass = 0; pass < (l.bold ? 2 : 1); ++pass) {
-        // Glyph space (u right along the text, v down) scaled, then placed at the anchor.
-        const double u0 = offset + std::min(v0[0], v2[0]) * scale + pass * bold_offset;
-        const double u1 = offset + std::max(v0[0], v2[0]) * scale + pass * bold_offset;
-        const double w0 = std::min(v0[1], v2[1]) * scale - 0.5 * h;
-        const double w1 = std::max(v0[1], v2[1]) * scale - 0.5 * h;
-        if (!l.vertical)
-          fill(l.x + u0, l.y + w0, l.x + u1, l.y + w1, l.colour);
-        else
-          fill(l.x + w0, l.y - u1, l.x + w1, l.y - u0, l.colour);
-      }
-    }
-  }
-
-  std::string png() const { return png_bytes(m_rgb, m_w, m_h, 3); }
-
- private:
-  void blend(int x, int y, uint32_t colour, float a) {
-    uint8_t* p = &m_rgb[(size_t(y) * m_w + x) * 3];
-    const int c[3] = {int(colour >> 16) & 255, int(colour >> 8) & 255, int(colour) & 255};
-    for (int k = 0; k < 3; ++k) p[k] = uint8_t(std::lround(p[k] + a * (c[k] - p[k])));
-  }
-  void fill(double x0, double y0, double x1, double y1, uint32_t colour) {
-    const int ix0 = std::max(m_clip0, int(std::lround(x0)));
-    const int ix1 = std::min(m_clip1, int(std::lround(x1)));
-    const int iy0 = std::max(0, int(std::lround(y0))), iy1 = std::min(m_h, int(std::lround(y1)));
-    for (int y = iy0; y < iy1; ++y)
-      for (int x = ix0; x < ix1; ++x) blend(x, y, colour, 1.0f);
-  }
-
-  int m_w, m_h;
-  int m_clip0 = 0, m_clip1 = m_w;
-  std::vector<uint8_t> m_rgb;
-  std::vector<float> m_cover;
-};
 
 // Both back ends draw in one order: grid and frame, bands, data and legend lines, labels.
 template <class LineFn, class BandFn>
@@ -542,75 +451,49 @@ std::string side_by_side_png(const std::vector<const Image*>& images,
     if (im->width() != w || im->height() != h)
       fail("side by side: an image is {}x{}, not {}x{} like the first", im->width(), im->height(),
            w, h);
-  // About 60 characters across the image at most, never smaller than the font's own pixels: a
-  // 1920-pixel render gets 8x text (56 pixels tall), which stays readable when the whole row is
-  // shrunk to a page's width.
+  // About 60 characters across the image at most, never under 10 pixels: a 1920-pixel render
+  // gets 80-pixel text, which stays readable when the whole row is shrunk to a page's width.
   const double scale = std::clamp(std::floor(w / 200.0), 1.0, 8.0);
-  const double line_height = 12 * scale, pad = 5 * scale;
-  auto width_of = [&](const std::string& t) {
-    std::string copy = t;
-    return stb_easy_font_width(copy.data()) * scale;
-  };
-  // Word wrap to the image's width; a word wider than that is cut at the column's edge.
-  std::vector<std::vector<std::pair<std::string, bool>>> lines(images.size());  // text, bold
-  size_t most_lines = 0;
+  const double font_px = 10 * scale, pad = 5 * scale;
+  // Each caption's lines ('\n'), the first bold, word-wrapped to the image's width by pango.
+  std::vector<std::vector<std::pair<std::string, bool>>> lines(images.size());
+  double band = 0;
   for (size_t i = 0; i < captions.size(); ++i) {
+    double height = 0;
     size_t start = 0;
     for (bool first = true; start <= captions[i].size(); first = false) {
       size_t end = captions[i].find('\n', start);
       if (end == std::string::npos) end = captions[i].size();
-      std::string line;
-      size_t at = start;
-      while (at < end) {
-        size_t space = captions[i].find(' ', at);
-        if (space == std::string::npos || space > end) space = end;
-        const std::string word = captions[i].substr(at, space - at);
-        const std::string joined = line.empty() ? word : line + " " + word;
-        if (!line.empty() && width_of(joined) > w) {
-          lines[i].emplace_back(line, first);
-          line = word;
-        } else {
-          line = joined;
-        }
-        at = space + 1;
+      const std::string line = captions[i].substr(start, end - start);
+      if (!line.empty()) {
+        lines[i].emplace_back(line, first);
+        height += wrapped_text_height(line, w, font_px, first);
       }
-      if (!line.empty()) lines[i].emplace_back(line, first);
       start = end + 1;
     }
-    most_lines = std::max(most_lines, lines[i].size());
+    band = std::max(band, height);
   }
   const int n = int(images.size());
-  const int band = most_lines ? int(std::ceil(2 * pad + most_lines * line_height)) : 0;
-  Raster r(n * w + (n - 1) * kSideBySideGap, h + band);
+  Canvas c(n * w + (n - 1) * kSideBySideGap, h + (band > 0 ? int(std::ceil(2 * pad + band)) : 0));
   const float exposure = std::exp2(exposure_stops);
   for (int i = 0; i < n; ++i) {
     const Image& im = *images[size_t(i)];
     const int x0 = i * (w + kSideBySideGap);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
-        uint8_t* p = r.pixel(x0 + x, y);
-        for (int k = 0; k < 3; ++k) p[k] = to_srgb8(im.at(x, y)[k], exposure);
+        const Rgb v = im.at(x, y);
+        c.set_pixel(x0 + x, y, to_srgb8(v.x, exposure), to_srgb8(v.y, exposure),
+                    to_srgb8(v.z, exposure));
       }
-    r.clip_text(x0, x0 + w);
-    double y = h + pad + 0.5 * line_height;
-    for (const auto& [text, bold] : lines[size_t(i)]) {
-      Label l{text, double(x0), y, Anchor::Start, false, kTextColour, bold, scale};
-      r.label(l);
-      y += line_height;
-    }
+    double y = h + pad;
+    for (const auto& [text, bold] : lines[size_t(i)])
+      y += c.text(x0, y, w, text, font_px, bold, kTextColour);
   }
-  return r.png();
+  return c.png();
 }
 
 std::string plot_png(const LogLogPlot& plot) {
-  if (plot.width < 200 || plot.height < 150)
-    fail("plot size {}x{} is too small", plot.width, plot.height);
-  const Drawing d = layout(plot);
-  Raster r(d.width, d.height);
-  for_each_shape(
-      d, [&](const Polyline& l) { r.polyline(l); }, [&](const Band& b) { r.band(b); });
-  for (const auto& label : d.labels) r.label(label);
-  return r.png();
+  return svg_to_png(plot_svg(plot));
 }
 
 std::string plot_svg(const LogLogPlot& plot) {
@@ -619,9 +502,9 @@ std::string plot_svg(const LogLogPlot& plot) {
   const Drawing d = layout(plot);
   std::string s = fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 {0} {1}\" width=\"{0}\" "
-      "height=\"{1}\" font-family=\"sans-serif\" font-size=\"{2}\" role=\"img\">\n<rect "
-      "width=\"100%\" height=\"100%\" fill=\"#fff\"/>\n",
-      d.width, d.height, kSvgFontSize);
+      "height=\"{1}\" font-family=\"{2}\" font-size=\"{3}\" role=\"img\">\n<style>.pt:hover "
+      "{{ fill-opacity: 1 }}</style>\n<rect width=\"100%\" height=\"100%\" fill=\"#fff\"/>\n",
+      d.width, d.height, kFigureFontFamily, kFontSize);
   auto line = [&](const Polyline& line) {
     s += "<polyline fill=\"none\" stroke-linejoin=\"round\" stroke-linecap=\"round\" points=\"";
     for (const auto& p : line.points) s += fmt::format("{:.1f},{:.1f} ", p.x, p.y);
@@ -641,14 +524,25 @@ std::string plot_svg(const LogLogPlot& plot) {
     const char* anchor = l.anchor == Anchor::Start    ? "start"
                          : l.anchor == Anchor::Middle ? "middle"
                                                       : "end";
-    s += fmt::format(
-        "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"{}\" dominant-baseline=\"central\" "
-        "fill=\"{}\"",
-        l.x, l.y, anchor, css_colour(l.colour));
-    if (l.vertical) s += fmt::format(" transform=\"rotate(-90 {:.1f} {:.1f})\"", l.x, l.y);
+    // The baseline 0.36 em below the middle centres DejaVu Sans' digits and capitals (cap height
+    // 0.73 em) on l.y; not dominant-baseline, which librsvg does not follow.
+    const double baseline = 0.36 * l.size;
+    s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"{}\" fill=\"{}\"",
+                     l.vertical ? l.x + baseline : l.x, l.vertical ? l.y : l.y + baseline, anchor,
+                     css_colour(l.colour));
+    if (l.size != kFontSize) s += fmt::format(" font-size=\"{:.2f}\"", l.size);
+    if (l.vertical)
+      s += fmt::format(" transform=\"rotate(-90 {:.1f} {:.1f})\"", l.x + baseline, l.y);
     if (l.bold) s += " font-weight=\"bold\"";
-    s += ">" + escape_markup(l.text) + "</text>\n";
+    s += ">" + escape_markup(l.text);
+    if (!l.full.empty()) s += "<title>" + escape_markup(l.full) + "</title>";
+    s += "</text>\n";
   }
+  for (const Marker& m : d.markers)
+    s += fmt::format(
+        "<circle class=\"pt\" cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"4\" fill=\"{}\" "
+        "fill-opacity=\"0\"><title>{}</title></circle>\n",
+        m.x, m.y, css_colour(m.colour), escape_markup(m.text));
   return s + "</svg>";
 }
 

@@ -1,6 +1,6 @@
-// Figures drawn by rll itself: log-log line plots (an error metric against time) as a PNG (a small
-// rasterizer, text from stb_easy_font) and as inline SVG for HTML reports, both from one layout;
-// and the labelled row of images published as side-by-side.png.
+// rll's figures: log-log line plots (an error metric against time) as inline SVG for HTML reports,
+// with real text and points that name their values on hover, and as PNG (the same SVG rasterized
+// by librsvg, eval/raster.h); and the labelled row of images published as side-by-side.png.
 #pragma once
 
 #include <cstdint>
@@ -46,17 +46,20 @@ uint32_t series_colour(size_t i);
 // "#rrggbb".
 std::string css_colour(uint32_t rgb);
 
-// The contents of a PNG file.
-std::string plot_png(const LogLogPlot& plot);
-// An <svg> element, self-contained, to be embedded in HTML.
+// An <svg> element, self-contained, to be embedded in HTML. Text is set in the figure font
+// (raster.h); a title, axis title or legend name too wide for its room is set smaller (down to
+// 9 pixels) and past that cut with an ellipsis, its whole text on hover, so that no text is cut
+// by the picture's edge. Throws rll::Error for a plot under 200x150.
 std::string plot_svg(const LogLogPlot& plot);
+// plot_svg rasterized: the contents of a PNG file.
+std::string plot_png(const LogLogPlot& plot);
 
 // The side-by-side picture: the images in one row, 4 white pixels apart (kSideBySideGap), each
 // tone-mapped to sRGB with `exposure_stops`, and under each its caption in dark text on a white
 // band (the images keep their rows 0..h-1; the band adds rows below). Captions hold lines
 // separated by '\n', the first drawn bold (the sampler's name), and are word-wrapped to the
-// image's width; the font grows with the image width so that the text stays legible when the
-// picture is shown at a size that fits a page. Throws rll::Error unless there is one caption per
+// image's width by pango (raster.h); the font grows with the image width so that the text stays
+// legible when the picture is shown at a size that fits a page. Throws rll::Error unless there is one caption per
 // image and all images have one size. Returns the contents of a PNG file.
 constexpr int kSideBySideGap = 4;
 std::string side_by_side_png(const std::vector<const Image*>& images,

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "rll/core/error.h"
 #include "rll/eval/encode.h"
@@ -78,6 +79,77 @@ std::string colour_bar(float lo, float hi) {
       "id=\"scale-min\">{}</span><span class=\"bar-note\">log scale</span><span "
       "id=\"scale-max\">{}</span></div></div>",
       png_uri(png_bytes(px, n, 1, 3)), short_number(lo), short_number(hi));
+}
+
+// The clusters a cell's chart shows one by one; the others are summed in one row.
+constexpr size_t kChartClusters = 24;
+
+// A probability in few digits, for the chart's data: 4 significant digits.
+double rounded(float v) {
+  return std::stod(fmt::format("{:.4g}", v));
+}
+
+// A cell chart as the page's script reads it, in a JSON script element ("</" escaped so that no
+// name can end the element).
+std::string cell_chart_data(const CellChart& c, size_t entry, const std::vector<ReportEntry>& all) {
+  // The bars in the colours of the samplers they stand for, where those are in the comparison.
+  auto colour_of = [&](const std::string& name, uint32_t otherwise) {
+    for (const ReportEntry& e : all)
+      if (e.name == name) return css_colour(e.colour);
+    return css_colour(otherwise);
+  };
+  const nlohmann::json colours = {{"learnt", css_colour(all[entry].colour)},
+                                  {"tree", colour_of("tree", 0x7f7f7f)},
+                                  {"oracle", colour_of("oracle", 0x2ca02c)}};
+  nlohmann::json cells = nlohmann::json::array();
+  for (const CellChartCell& cell : c.cells) {
+    // The kChartClusters clusters whose largest probability is largest, in cut order, and the
+    // others' sums: what the chart draws, in at most about 1 kB a cell.
+    const size_t n = cell.learnt.size();
+    auto largest = [&](size_t k) {
+      return std::max({cell.learnt[k], cell.tree[k], c.has_oracle ? cell.oracle[k] : 0.0f});
+    };
+    std::vector<size_t> order(n);
+    for (size_t k = 0; k < n; ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return largest(a) > largest(b); });
+    std::vector<bool> shown(n, false);
+    for (size_t i = 0; i < std::min(n, kChartClusters); ++i) shown[order[i]] = true;
+    nlohmann::json j = {{"id", cell.cell}, {"level", cell.level}, {"cut", cell.has_cut}};
+    nlohmann::json rest = {{"count", 0}, {"learnt", 0.0}, {"tree", 0.0}};
+    if (c.has_oracle) rest["oracle"] = 0.0;
+    for (const char* key : {"b", "e", "learnt", "tree", "oracle"}) j[key] = nlohmann::json::array();
+    for (size_t k = 0; k < n; ++k) {
+      if (!shown[k]) {
+        rest["count"] = rest["count"].get<int>() + 1;
+        rest["learnt"] = rest["learnt"].get<double>() + cell.learnt[k];
+        rest["tree"] = rest["tree"].get<double>() + cell.tree[k];
+        if (c.has_oracle) rest["oracle"] = rest["oracle"].get<double>() + cell.oracle[k];
+        continue;
+      }
+      j["b"].push_back(cell.begin[k]);
+      j["e"].push_back(cell.end[k]);
+      j["learnt"].push_back(rounded(cell.learnt[k]));
+      j["tree"].push_back(rounded(cell.tree[k]));
+      if (c.has_oracle) j["oracle"].push_back(rounded(cell.oracle[k]));
+    }
+    if (!c.has_oracle) j.erase("oracle");
+    if (rest["count"].get<int>() > 0) {
+      for (const char* key : {"learnt", "tree", "oracle"})
+        if (rest.contains(key)) rest[key] = rounded(float(rest[key].get<double>()));
+      j["rest"] = std::move(rest);
+    }
+    cells.push_back(std::move(j));
+  }
+  const nlohmann::json d = {{"sampler", c.sampler}, {"entry", entry},
+                            {"stride", c.stride},   {"columns", c.columns},
+                            {"rows", c.rows},       {"probes", c.probe_cell},
+                            {"oracle", c.has_oracle}, {"colours", colours},
+                            {"cells", std::move(cells)}};
+  std::string text = d.dump();
+  for (size_t at = 0; (at = text.find("</", at)) != std::string::npos; at += 3)
+    text.replace(at, 2, "<\\/");
+  return "<script type=\"application/json\" class=\"cell-data\">" + text + "</script>\n";
 }
 
 // Zoom/pan state shared by every view, the exposure slider and the RGBE decoder.
@@ -245,6 +317,99 @@ constexpr const char* kScript = R"JS(
     toggleAll();
   });
 
+  // The cell chart: a click (not the end of a drag) on a learning sampler's image or error map
+  // shows, for the cell at that pixel, each cluster's learnt probability beside the light
+  // tree's and the oracle's, as bars.
+  var charts = {};
+  Array.prototype.forEach.call(document.querySelectorAll('script.cell-data'), function (el) {
+    var d = JSON.parse(el.textContent);
+    charts['image-' + d.entry] = d;
+    charts['error-' + d.entry] = d;
+  });
+  var chartBox = document.getElementById('cell-chart');
+  var SVG = 'http://www.w3.org/2000/svg';
+  function svgElement(name, attrs, parent) {
+    var e = document.createElementNS(SVG, name);
+    Object.keys(attrs).forEach(function (k) { e.setAttribute(k, attrs[k]); });
+    if (parent) parent.appendChild(e);
+    return e;
+  }
+  function percent(v) { return (100 * v).toPrecision(3) + '%'; }
+  function showCell(d, x, y) {
+    var probe = d.probes[Math.floor(y / d.stride) * d.columns + Math.floor(x / d.stride)];
+    chartBox.textContent = '';
+    chartBox.dataset.pixel = x + ',' + y;
+    var head = document.createElement('p');
+    chartBox.appendChild(head);
+    if (probe === undefined || probe < 0) {
+      chartBox.dataset.cell = '';
+      head.textContent = d.sampler + ', pixel (' + x + ', ' + y + '): no cell (the camera ray leaves ' +
+        'the scene, or meets a surface that takes no light sample, or the table holds no cell there)';
+      return;
+    }
+    var c = d.cells[probe];
+    chartBox.dataset.cell = String(c.id);
+    var px = Math.min(W - 1, Math.floor(x / d.stride) * d.stride + Math.floor(d.stride / 2));
+    var py = Math.min(H - 1, Math.floor(y / d.stride) * d.stride + Math.floor(d.stride / 2));
+    head.textContent = d.sampler + ', pixel (' + x + ', ' + y + ')' +
+      (px !== x || py !== y ? ', probed at (' + px + ', ' + py + ')' : '') + ': cell ' + c.id + ', level ' + c.level +
+      ', ' + (c.learnt.length + (c.rest ? c.rest.count : 0)) + ' clusters' +
+      (c.cut ? '' : ' (no cut learnt yet: the cell samples like the light tree)');
+    var kinds = [{ key: 'learnt', name: d.sampler + ' (learnt)', colour: d.colours.learnt },
+                 { key: 'tree', name: 'light tree (prior)', colour: d.colours.tree }];
+    if (d.oracle) kinds.push({ key: 'oracle', name: 'oracle', colour: d.colours.oracle });
+    // The clusters by the largest of their probabilities, then the others' sums as one row.
+    var order = c.learnt.map(function (v, i) { return i; });
+    function largest(i) { return Math.max.apply(null, kinds.map(function (k) { return c[k.key][i]; })); }
+    order.sort(function (a, b) { return largest(b) - largest(a) || a - b; });
+    var rows = order.map(function (i) {
+      return { label: c.e[i] - c.b[i] === 1 ? 'light ' + c.b[i] : 'lights ' + c.b[i] + '\u2013' + (c.e[i] - 1),
+               values: kinds.map(function (k) { return c[k.key][i]; }) };
+    });
+    if (c.rest)
+      rows.push({ label: c.rest.count + ' other clusters', values: kinds.map(function (k) { return c.rest[k.key]; }) });
+    var most = 0;
+    rows.forEach(function (r) { r.values.forEach(function (v) { most = Math.max(most, v); }); });
+    var barH = 11, rowH = kinds.length * barH + 7, labelW = 140, barW = 320, top = 30;
+    var svg = svgElement('svg', { class: 'cell-bars', width: labelW + barW + 70, height: top + rows.length * rowH + 20,
+                                  'font-size': 12 });
+    kinds.forEach(function (k, i) {
+      svgElement('rect', { x: labelW + i * 130, y: 6, width: 12, height: 12, fill: k.colour }, svg);
+      svgElement('text', { x: labelW + i * 130 + 16, y: 16 }, svg).textContent = k.name;
+    });
+    rows.forEach(function (r, ri) {
+      var y = top + ri * rowH;
+      svgElement('text', { x: labelW - 6, y: y + kinds.length * barH / 2 + 4, 'text-anchor': 'end' }, svg).textContent = r.label;
+      r.values.forEach(function (v, ki) {
+        var width = most > 0 ? v / most * barW : 0;
+        var bar = svgElement('rect', { class: 'bar', 'data-kind': kinds[ki].key, 'data-row': ri, 'data-value': v,
+                                       x: labelW, y: y + ki * barH, width: width, height: barH - 1,
+                                       fill: kinds[ki].colour }, svg);
+        svgElement('title', {}, bar).textContent = r.label + ', ' + kinds[ki].name + ': ' + percent(v);
+        if (ki === 0 || v > 0)
+          svgElement('text', { x: labelW + width + 4, y: y + ki * barH + barH - 2, 'font-size': 9, fill: '#555' }, svg)
+            .textContent = percent(v);
+      });
+    });
+    var axisY = top + rows.length * rowH;
+    svgElement('line', { x1: labelW, y1: top - 2, x2: labelW, y2: axisY, stroke: '#333' }, svg);
+    svgElement('text', { x: labelW + barW, y: axisY + 14, 'text-anchor': 'end', fill: '#555' }, svg)
+      .textContent = 'bar length: probability, the longest ' + percent(most);
+    chartBox.appendChild(svg);
+  }
+  var pressedAt = null;
+  canvases.forEach(function (c) {
+    c.addEventListener('pointerdown', function (ev) { pressedAt = { x: ev.clientX, y: ev.clientY }; });
+    c.addEventListener('click', function (ev) {
+      var d = charts[c.dataset.source];
+      if (!d || !chartBox) return;
+      if (pressedAt && Math.abs(ev.clientX - pressedAt.x) + Math.abs(ev.clientY - pressedAt.y) > 4) return;
+      var p = imagePoint(c, ev), x = Math.floor(p.x), y = Math.floor(p.y);
+      if (x < 0 || y < 0 || x >= W || y >= H) return;
+      showCell(d, x, y);
+    });
+  });
+
   var parts = {};
   Array.prototype.forEach.call(document.querySelectorAll('img[data-hdr]'), function (img) {
     (parts[img.dataset.hdr] = parts[img.dataset.hdr] || {})[img.dataset.part] = img;
@@ -308,6 +473,8 @@ canvas.view { display: block; image-rendering: pixelated; cursor: grab; backgrou
 .bar-note { color: #666; }
 .legend p { margin: 0; font-size: 0.9em; }
 .hidden { display: none; }
+.plot svg { max-width: 100%; height: auto; }
+.cell-chart svg { font-family: DejaVu Sans, Verdana, sans-serif; }
 )CSS";
 
 }  // namespace
@@ -448,6 +615,37 @@ std::string report_html(const Report& r) {
     data += hdr_images(id, *e.image);
   }
   s += "</div>\n";
+
+  // The cell chart, under the images it reads its clicks from.
+  std::string chart_data;
+  std::vector<std::string> charted;
+  for (const CellChart& c : r.cell_charts)
+    for (size_t i = 0; i < r.entries.size(); ++i)
+      if (r.entries[i].name == c.sampler) {
+        chart_data += cell_chart_data(c, i, r.entries);
+        charted.push_back(c.sampler);
+        break;
+      }
+  if (!charted.empty()) {
+    std::string names;
+    for (size_t i = 0; i < charted.size(); ++i)
+      names += (i == 0 ? "" : i + 1 == charted.size() ? " or " : ", ") + escape_markup(charted[i]);
+    s += "<h2>What the cells learnt</h2>\n<p class=\"note\">Click a pixel of the " + names +
+         " image (or its error map): the chart shows, for the cell that the pixel's first hit falls "
+         "in, the probability of each cluster of the cell's cut as its baked table holds it "
+         "(learnt), as the light tree gives it there (the prior: the chance that a descent from "
+         "the root reaches the cluster), and as the oracle gives it, when it ran; tree and oracle "
+         "at the cell's first probed point.</p>\n";
+    for (const CellChart& c : r.cell_charts) {
+      std::string line =
+          c.stride == 1 ? "every pixel probed" : fmt::format("one pixel in {0}x{0} probed", c.stride);
+      line = fmt::format("{}: {}, {} cells", c.sampler, line, c.cells.size());
+      if (!c.note.empty()) line += "; " + c.note;
+      s += "<p class=\"note\">" + escape_markup(line) + "</p>\n";
+    }
+    s += "<div id=\"cell-chart\" class=\"cell-chart\"><p>No pixel chosen yet.</p></div>\n" +
+         chart_data;
+  }
 
   // The maps sit under their images; the colour scale takes the reference's place.
   const auto [lo, hi] = error_range(r);

@@ -1,7 +1,10 @@
 // The HTML report of a comparison: one self-contained file (images embedded as data URIs, inline
 // CSS, JS and SVG) with the images side by side under an exposure slider, synchronized zoom and
 // pan, a flip of any view with the reference, false-colour relative-error maps, the table, the
-// samplers' parameters and setup times, and the convergence plot.
+// samplers' parameters and setup times, the convergence plot (inline SVG, its points naming their
+// values on hover) and, for a learning sampler, the cell chart: clicking a pixel of its image
+// shows the learnt probabilities of the clusters of the cell there beside the light tree's and
+// the oracle's.
 //
 // Exposure: each image is embedded losslessly as RGBE (Ward's shared-exponent format) split into
 // two PNGs, one RGB with the mantissas and one grey with the exponents, which the page decodes
@@ -15,6 +18,7 @@
 #include <vector>
 
 #include "rll/core/image.h"
+#include "rll/eval/cell_chart.h"
 
 namespace rll {
 
@@ -46,6 +50,7 @@ struct Report {
   std::vector<std::vector<std::string>> table;  // header row first; one row per entry, in order
   std::vector<ReportSampler> samplers;          // matched to entries by name for the colour
   std::string plot_svg;                         // an <svg> element, or empty
+  std::vector<CellChart> cell_charts;           // matched to entries by sampler name
   float exposure = 0;                           // initial exposure, stops
 };
 
