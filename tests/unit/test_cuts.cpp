@@ -235,6 +235,7 @@ TEST(CutStore, PoolSharesStandInForClustersACellHasNotVisited) {
   cs.cut_size = cs.initial_size = 8;
   cs.pool_levels = 1;
   cs.pool_weight = 8;
+  cs.forget = Forgetting::Floor;  // each cluster's memory capped at 1 / alpha = 50 rewards (below)
   const double scale = 4.0;
   CutStore store(tree, 2, cs, scale);
   ASSERT_EQ(store.initial_size(), 8u);
