@@ -6,7 +6,9 @@
 # --reference-variance`). docs/rll.md ("What is left of the gap to the oracle") has the figures.
 # Usage: scripts/learning_speed.sh RLL SCENE OUT_DIR [extra render flags, e.g. --set rll.X=Y]
 # Environment: INTEGRATOR (direct), RES (320x240), SPP (64), TRAIN ("4 16 64 256"),
-# REF_SPP (512, rendered by rll, as the bench's), RLL_CACHE_DIR (the reference cache).
+# REF_SPP (512, rendered by rll, as the bench's), RLL_CACHE_DIR (the reference cache), CHAIN (0;
+# 1: each state goes on learning from the previous one, over the difference of the TRAIN counts,
+# which must increase: 4096 spp of learning cost 4096 spp, not the sum of the counts).
 # Prints one line per render: what learnt before, relMSE, trimmed relMSE, ratio to the oracle's.
 set -euo pipefail
 rll=$1 scene=$2 out=$3
@@ -31,10 +33,19 @@ line() {  # label, image
 line oracle "$out/oracle.exr"
 "$rll" render "${common[@]}" --sampler rll --spp "$spp" --seed 1 -o "$out/cold.exr" "$@" > /dev/null 2>> "$out/render.log"
 line "rll, cold" "$out/cold.exr"
+previous=0
 for n in $train; do
   rm -f "$out/state$n.bin"
-  "$rll" render "${common[@]}" --sampler rll --spp "$n" --seed 77 -o "$out/train$n.exr" \
-    --rll-state "$out/state$n.bin" --rll-state-mode save "$@" > /dev/null 2>> "$out/render.log"
+  if [ "${CHAIN:-0}" = 1 ] && [ "$previous" -gt 0 ]; then
+    # The seed differs per step, so that no step repeats the samples of an earlier one.
+    cp "$out/state$previous.bin" "$out/state$n.bin"
+    "$rll" render "${common[@]}" --sampler rll --spp "$((n - previous))" --seed "$((77 + n))" \
+      -o "$out/train$n.exr" --rll-state "$out/state$n.bin" "$@" > /dev/null 2>> "$out/render.log"
+  else
+    "$rll" render "${common[@]}" --sampler rll --spp "$n" --seed 77 -o "$out/train$n.exr" \
+      --rll-state "$out/state$n.bin" --rll-state-mode save "$@" > /dev/null 2>> "$out/render.log"
+  fi
+  previous=$n
   "$rll" render "${common[@]}" --sampler rll --spp "$spp" --seed 1 -o "$out/warm$n.exr" \
     --rll-state "$out/state$n.bin" --rll-state-mode load "$@" > /dev/null 2>> "$out/render.log"
   line "rll, after $n" "$out/warm$n.exr"

@@ -257,9 +257,9 @@ TEST(RllPool, FoldEqualsSumsInTheOrderOfTheCellsKeys) {
     for (size_t k = 0; k < K; ++k) {
       float rq = had ? old_q[k] : -1.0f, rm2 = had ? old_m2[k] : 0.0f, rn = had ? old_n[k] : 0.0f;
       if (rcount[k] > 0) {
-        const double cap = 1.0 / s.alpha, nk = double(rcount[k]);
-        shrinkage_fold(rq, rm2, rn, rq >= 0 ? std::min(double(rn), cap) : 0.0, std::max(rq, 0.0f),
-                       rm2, nk, RewardMoments(nk, rsum[k], rsq[k]), cap);
+        const double nk = double(rcount[k]);
+        shrinkage_update(s, rq, rm2, rn, rq >= 0 ? double(rn) : 0.0, rq >= 0, std::max(rq, 0.0f),
+                         rm2, nk, RewardMoments(nk, rsum[k], rsq[k]));
       }
       EXPECT_EQ(q[j * K + k], rq) << "coarse " << keys[j] << " cluster " << k;
       EXPECT_EQ(m2[j * K + k], rm2);
@@ -271,4 +271,76 @@ TEST(RllPool, FoldEqualsSumsInTheOrderOfTheCellsKeys) {
   }
   EXPECT_EQ(first, entries.size());
   EXPECT_GE(keys.size(), 4u);
+}
+
+namespace {
+// A one-cell store of 4 clusters on many-lights-open's tree, with `forget`.
+struct OneCell {
+  Scene scene = test::small_builtin_scene("many-lights-open", 16, 12);
+  std::unique_ptr<CutStore> store;
+  explicit OneCell(Forgetting forget, float change_z = 5) {
+    CutSettings s;
+    s.cut_size = s.initial_size = 4;
+    s.forget = forget;
+    s.change_z = change_z;
+    store = std::make_unique<CutStore>(*scene.light_tree, 1, s, 1.0);
+    store->set_anchor(0, {Vec3(0, 1, 0), Vec3(0, 1, 0), -4});
+  }
+  // One pass: 100 rewards of cluster 0 from `reward(i)`, 100 of 1 each, the others none.
+  template <typename F>
+  CutPassStats pass(F reward) {
+    for (int i = 0; i < 100; ++i) {
+      store->record(0, 0, reward(i));
+      store->record(0, 1, 1.0f);
+    }
+    return store->end_pass(0);
+  }
+};
+}  // namespace
+
+// forget=changes (DESIGN 2b.3): a cluster whose rewards do not change keeps every one of them
+// (the rate stays 1/n), where forget=floor keeps the last 1/alpha = 50; a lamp that switches off
+// fails the change test and its cluster falls back to the last 50 rewards at once, the others
+// keeping theirs; a rare bright reward among zeros is no change; the lights changing cuts every
+// cluster back (cut_forget).
+TEST(RllForgetting, StaticClustersKeepEveryRewardAndChangesForget) {
+  Pcg32 rng(3);
+  auto noisy = [&](int) { return 2 * rng.next_float(); };
+  OneCell changes(Forgetting::Changes), floor(Forgetting::Floor);
+  uint32_t found = 0;
+  for (int p = 0; p < 20; ++p) {
+    found += changes.pass(noisy).changes;
+    floor.pass(noisy);
+  }
+  EXPECT_EQ(found, 0u) << "noise alone failed the change test";
+  // Cluster 0's prior estimate counts as prior_samples = 4 rewards.
+  EXPECT_EQ(changes.store->memory(0)[0], 2004.0f);
+  EXPECT_EQ(changes.store->memory(0)[1], 2004.0f);
+  EXPECT_EQ(floor.store->memory(0)[0], 50.0f);
+  EXPECT_NEAR(changes.store->q(0)[0], 1.0f, 0.05f);
+  // The lamp of cluster 0 switches off.
+  const CutPassStats off = changes.pass([](int) { return 0.0f; });
+  EXPECT_EQ(off.changes, 1u);
+  EXPECT_EQ(changes.store->memory(0)[0], 150.0f);  // the last 50 of before, and the 100 zeros
+  EXPECT_EQ(changes.store->memory(0)[1], 2104.0f);
+  EXPECT_LT(changes.store->q(0)[0], 0.4f);
+  // A lamp seen through a gap: one reward in 200 is bright, the others zero.
+  OneCell gap(Forgetting::Changes);
+  found = 0;
+  for (int p = 0; p < 40; ++p)
+    found += gap.pass([&](int) { return rng.next_float() < 0.005f ? 100.0f : 0.0f; }).changes;
+  EXPECT_EQ(found, 0u) << "rare bright rewards failed the change test";
+  EXPECT_GT(gap.store->memory(0)[0], 3000.0f);
+  // change_z = 0: no test, only the lights changing forgets.
+  OneCell untested(Forgetting::Changes, 0);
+  for (int p = 0; p < 5; ++p) untested.pass(noisy);
+  EXPECT_EQ(untested.pass([](int) { return 0.0f; }).changes, 0u);
+  EXPECT_EQ(untested.store->memory(0)[0], 604.0f);
+  // The lights change: every cluster back to at most 50 rewards; a floor store is untouched.
+  const CutStoreEndView v = changes.store->end_view();
+  cut_forget(v, 0);
+  for (uint32_t k = 0; k < 4; ++k) EXPECT_LE(changes.store->memory(0)[k], 50.0f);
+  EXPECT_EQ(changes.store->memory(0)[1], 50.0f);
+  cut_forget(floor.store->end_view(), 0);
+  EXPECT_EQ(floor.store->memory(0)[0], 50.0f);
 }

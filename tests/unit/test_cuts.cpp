@@ -48,6 +48,10 @@ TEST(SplitCollapse, InvariantsAfterManyRandomPasses) {
   cs.initial_size = 16;
   cs.splits = 6;
   cs.threshold = 1.1f;
+  // The rewards below move every 50 passes with about 2 per cluster and pass, too few for the
+  // change test of forget=changes to see (its memory then outlasts the moves and the cuts settle):
+  // the fixed floor keeps both operations busy.
+  cs.forget = Forgetting::Floor;
   const uint32_t cells = 16;
   CutStore store(tree, cells, cs, 1.0);
   Pcg32 rng(2024);
@@ -235,6 +239,7 @@ TEST(CutStore, PoolSharesStandInForClustersACellHasNotVisited) {
   cs.cut_size = cs.initial_size = 8;
   cs.pool_levels = 1;
   cs.pool_weight = 8;
+  cs.forget = Forgetting::Floor;  // each cluster's memory capped at 1 / alpha = 50 rewards (below)
   const double scale = 4.0;
   CutStore store(tree, 2, cs, scale);
   ASSERT_EQ(store.initial_size(), 8u);

@@ -249,6 +249,16 @@ RLL_HD inline void cut_refresh(const CutStoreEndView& v, uint32_t cell) {
   cut_bake(v, cell, v.size[cell]);
 }
 
+// The lights changed (forget=changes): every cluster's memory is cut back to the last 1/alpha
+// rewards, as if each had failed the change test.
+RLL_HD inline void cut_forget(const CutStoreEndView& v, uint32_t cell) {
+  if (v.s.forget != Forgetting::Changes || v.s.rule != LearningRule::Shrinkage || !v.active(cell))
+    return;
+  const size_t b = v.base(cell);
+  const float cap = float(1.0 / v.s.alpha);
+  for (size_t k = 0; k < v.size[cell]; ++k) v.n[b + k] = std::min(v.n[b + k], cap);
+}
+
 // Forgets a cell (eviction).
 RLL_HD inline void cut_clear(const CutStoreEndView& v, uint32_t cell) {
   const size_t b = v.base(cell);
@@ -307,8 +317,10 @@ RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell)
       v.weight[b + k] = cut_weight_of(v, cell, v.initial[k]);
     }
 
-  // Fold this pass's rewards into Q and M2. Shrinkage: a running mean over at most 1/alpha
-  // rewards, started from the prior estimate counted as prior_samples rewards. Exponential: the
+  // Fold this pass's rewards into Q and M2. Shrinkage: a running mean of all rewards, started
+  // from the prior estimate counted as prior_samples rewards, cut back to the last 1/alpha where
+  // the pass's rewards fail the change test (forget=changes), or over at most the last 1/alpha
+  // rewards (forget=floor). Exponential: the
   // paper's rule Q := (1-a) Q + a r once per reward, each reward replaced by the pass mean,
   // gives Q := b Q + (1-b) mean with b = (1-a)^n. Either way the result does not depend on the
   // order the threads delivered the rewards in.
@@ -334,9 +346,9 @@ RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell)
         q[k] = float(bk * old_q + (1 - bk) * r.mean);
         m2[k] = float(bk * old_m2 + (1 - bk) * r.mean2);
       } else {
-        const double w =
-            q[k] >= 0 ? std::min(double(n[k]), 1.0 / v.s.alpha) : double(v.s.prior_samples);
-        shrinkage_fold(q[k], m2[k], n[k], w, old_q, old_m2, count, r, 1.0 / v.s.alpha);
+        const bool visited = q[k] >= 0;
+        const double w = visited ? double(n[k]) : double(v.s.prior_samples);
+        st.changes += shrinkage_update(v.s, q[k], m2[k], n[k], w, visited, old_q, old_m2, count, r);
       }
       largest = std::max(largest, std::sqrt(double(m2[k])));
       v.sum[b + k].reset();

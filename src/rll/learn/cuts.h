@@ -20,10 +20,16 @@
 namespace rll {
 
 // How Q and M2 follow the rewards. Shrinkage: the mean of the rewards and of the prior estimate
-// counted as `prior_samples` rewards, over at most the last 1/alpha rewards (a learning rate
-// that starts at 1/n and settles at the floor alpha, so that moving lights are followed).
-// Exponential: the paper's Q := (1-a) Q + a r per reward.
+// counted as `prior_samples` rewards (a learning rate that starts at 1/n), forgetting as
+// `Forgetting` says. Exponential: the paper's Q := (1-a) Q + a r per reward.
 enum class LearningRule { Shrinkage, Exponential };
+
+// How the shrinkage rule forgets (rll.forget). Changes: the mean of all of a cluster's rewards
+// (the rate stays 1/n, so a static cell keeps sharpening), cut back to the last 1/alpha rewards
+// where a pass's rewards fail the change test (change_test) and, for every cluster, when the
+// lights change. Floor: the last 1/alpha rewards at most, for good (v2: the rate settles at the
+// floor alpha).
+enum class Forgetting { Changes, Floor };
 
 // What a cell samples clusters in proportion to: sqrt(M2), the variance-optimal target of a
 // one-sample estimator (DESIGN 2b), or the mean Q (the paper).
@@ -42,7 +48,14 @@ inline constexpr int kMaxCutSize = 4096;
 struct CutSettings {
   int cut_size = 128;      // M, the most clusters of a cell (at most kMaxCutSize)
   int initial_size = 128;  // clusters of a new cell's cut (the shared initial cut), <= M
-  float alpha = 0.02f;     // floor of the per-reward learning rate
+  // The shrinkage rule's memory after a change (forget=changes) or always (forget=floor): the
+  // last 1/alpha rewards; the exponential rule's rate.
+  float alpha = 0.02f;
+  Forgetting forget = Forgetting::Changes;
+  // The change test's threshold (forget=changes): a pass's mean of a cluster's rewards that
+  // differs from the running mean by more than change_z standard errors is a change; 0: no test
+  // (only a change of the lights forgets).
+  float change_z = 5;
   float threshold = 2;     // T: split l_max and collapse p_min if score(l_max) > T value(p_min)
   int splits = 0;        // split-collapse steps per cell and pass (0: the cut stays as it started)
   float epsilon = 0.1f;  // weight of the defensive prior once a cell is trusted
@@ -115,12 +128,43 @@ struct RewardMoments {
 
 // The shrinkage rule (LearningRule::Shrinkage) for one cluster: values old_q and old_m2, held
 // with the weight of w rewards, and n new rewards of moments r give the weighted means; the
-// weight becomes w + n, at most cap (1 / alpha).
+// weight becomes w + n, at most cap.
 RLL_HD inline void shrinkage_fold(float& q, float& m2, float& weight, double w, double old_q,
                                   double old_m2, double n, const RewardMoments& r, double cap) {
   q = float((w * old_q + n * r.mean) / (w + n));
   m2 = float((w * old_m2 + n * r.mean2) / (w + n));
   weight = float(std::min(w + n, cap));
+}
+
+// The change test of forget=changes: true if n new rewards of moments r differ in mean from
+// old_q (held with the weight of w rewards, second moment old_m2) by more than z standard errors
+// of the difference. The variance is the larger of the old rewards' and the new ones', so that a
+// rare bright reward among zeros (a cluster seen through a gap) does not count as a change, and
+// a lamp switching off (new rewards all zero) or on (old ones all zero) does; a relative slack
+// of 1e-4 absorbs the rounding of rewards that never vary.
+RLL_HD inline bool reward_changed(double old_q, double old_m2, double w, double n,
+                                  const RewardMoments& r, double z) {
+  const double var = std::max(std::max(old_m2 - old_q * old_q, r.mean2 - r.mean * r.mean), 0.0);
+  const double se = std::sqrt(var * (1 / n + 1 / std::max(w, 1.0)));
+  return std::abs(r.mean - old_q) > z * se + 1e-4 * (std::abs(old_q) + std::abs(r.mean));
+}
+
+// One cluster's fold under the shrinkage rule as CutSettings say: the weight w of the past (the
+// cluster's own n if `visited`, else the prior's weight) capped at 1/alpha under forget=floor, or
+// where forget=changes finds a change; true if it found one.
+RLL_HD inline bool shrinkage_update(const CutSettings& s, float& q, float& m2, float& weight,
+                                    double w, bool visited, double old_q, double old_m2, double n,
+                                    const RewardMoments& r) {
+  const double floor_cap = 1.0 / s.alpha;
+  if (s.forget == Forgetting::Floor) {
+    shrinkage_fold(q, m2, weight, visited ? std::min(w, floor_cap) : w, old_q, old_m2, n, r,
+                   floor_cap);
+    return false;
+  }
+  const bool changed = visited && s.change_z > 0 && w > floor_cap &&
+                       reward_changed(old_q, old_m2, w, n, r, s.change_z);
+  shrinkage_fold(q, m2, weight, changed ? floor_cap : w, old_q, old_m2, n, r, 1e30);
+  return changed;
 }
 
 // Pooling: shrinks K values, each held with the weight of n[k] rewards (visited[k] false: none,
@@ -359,6 +403,7 @@ RLL_HD inline void cut_record(const CutStoreView& v, uint32_t cell, uint32_t k, 
 // What the end of pass did to one cell (CutStore::end_pass, cut_end_pass).
 struct CutPassStats {
   uint32_t splits = 0, collapses = 0;
+  uint32_t changes = 0;  // clusters whose rewards failed the change test (forget=changes)
   bool touched = false;
 };
 
@@ -387,6 +432,9 @@ class CutStore {
   const float* cdf(uint32_t cell) const { return &m_cdf[size_t(cell) * m_m]; }
   const float* q(uint32_t cell) const { return &m_q[size_t(cell) * m_m]; }
   const float* m2(uint32_t cell) const { return &m_m2[size_t(cell) * m_m]; }
+  // The weight, in rewards, behind each cluster's q and m2 (its memory: every reward seen, or
+  // at most 1/alpha of them since the last change, as rll.forget says).
+  const float* memory(uint32_t cell) const { return &m_n[size_t(cell) * m_m]; }
   // Guided descent: the inner nodes above a cell's cut are one per boundary between adjacent
   // clusters j and j + 1 (the node whose children meet there); guide_left(cell)[j] and
   // guide_right(cell)[j] are the factors of that node's first and second child: the mean of

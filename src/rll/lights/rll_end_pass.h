@@ -64,10 +64,11 @@ struct PoolEntry {
 // A coarse cell's fold: the pass's rewards of its cells (entries[0, count), in the order of their
 // keys) summed into sum, sq and n_rewards (k each, scratch), then folded into the coarse cell
 // `slot` of `next` by the shrinkage rule without a prior (a cluster's first rewards are its
-// values), from its state in `old` if it had one.
-RLL_HD inline void pool_fold(const CutStoreEndView& v, const PoolEntry* entries, size_t count,
-                             const RllPoolView& old, const RllPoolView& next, size_t slot,
-                             double* sum, double* sq, uint64_t* n_rewards) {
+// values), from its state in `old` if it had one, forgetting as the cells do (rll.forget);
+// returns the clusters whose rewards failed the change test.
+RLL_HD inline uint32_t pool_fold(const CutStoreEndView& v, const PoolEntry* entries, size_t count,
+                                 const RllPoolView& old, const RllPoolView& next, size_t slot,
+                                 double* sum, double* sq, uint64_t* n_rewards) {
   const size_t K = next.k;
   for (size_t k = 0; k < K; ++k) {
     sum[k] = sq[k] = 0;
@@ -83,13 +84,23 @@ RLL_HD inline void pool_fold(const CutStoreEndView& v, const PoolEntry* entries,
     m2[k] = o >= 0 ? old.m2[size_t(o) * K + k] : 0.0f;
     n[k] = o >= 0 ? old.n[size_t(o) * K + k] : 0.0f;
   }
-  const double cap = 1.0 / v.s.alpha;
+  uint32_t changes = 0;
   for (size_t k = 0; k < K; ++k) {
     if (n_rewards[k] == 0) continue;
-    const double nk = double(n_rewards[k]), w = q[k] >= 0 ? std::min(double(n[k]), cap) : 0.0;
-    shrinkage_fold(q[k], m2[k], n[k], w, std::max(q[k], 0.0f), m2[k], nk,
-                   RewardMoments(nk, sum[k], sq[k]), cap);
+    const double nk = double(n_rewards[k]);
+    const bool visited = q[k] >= 0;
+    changes += shrinkage_update(v.s, q[k], m2[k], n[k], visited ? double(n[k]) : 0.0, visited,
+                                std::max(q[k], 0.0f), m2[k], nk, RewardMoments(nk, sum[k], sq[k]));
   }
+  return changes;
+}
+
+// The lights changed (forget=changes): the memory of every cluster of coarse cell `slot` is cut
+// back to the last 1/alpha rewards, as cut_forget does for a cell's.
+RLL_HD inline void pool_forget(const CutStoreEndView& v, const RllPoolView& p, size_t slot) {
+  if (v.s.forget != Forgetting::Changes) return;
+  const float cap = float(1.0 / v.s.alpha);
+  for (size_t k = 0; k < p.k; ++k) p.n[slot * p.k + k] = std::min(p.n[slot * p.k + k], cap);
 }
 
 // A coarse cell's values into out (zero where it has none), normalized if `normalize`; false if

@@ -59,6 +59,10 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
       choice("level_rounding", int(s.grid.level_rounding), {"stochastic", "nearest"}));
   s.cut.rule = LearningRule(choice("learning", int(s.cut.rule), {"shrinkage", "exponential"}));
   s.cut.prior_samples = p.get_float(key("prior_samples"), s.cut.prior_samples);
+  s.cut.forget = Forgetting(choice("forget", int(s.cut.forget), {"changes", "floor"}));
+  s.cut.change_z = p.get_float(key("change_z"), s.cut.change_z);
+  if (!(s.cut.change_z >= 0 && s.cut.change_z <= 1000))
+    bad("change_z", "must be in [0, 1000] (0: no change test)");
   s.cut.trust = p.get_float(key("trust"), s.cut.trust);
   s.cut.pool_levels = int(p.get_int_in(key("pool"), s.cut.pool_levels, 0, 8));
   s.cut.pool_weight = p.get_float(key("pool_weight"), s.cut.pool_weight);
@@ -233,12 +237,14 @@ void RllLightSampler::end_pass() {
   if (m_s.cut.pool_levels > 0) pool_pass(cells);
   std::vector<CutPassStats> stats(cells.size());
   host_parallel_for(cells.size(), [&](size_t i) { stats[i] = cut_end_pass(ev, cells[i]); });
-  uint32_t splits = 0, collapses = 0, touched = 0;
+  uint32_t splits = 0, collapses = 0, touched = 0, changes = 0;
   for (const CutPassStats& st : stats) {
     splits += st.splits;
     collapses += st.collapses;
     touched += st.touched;
+    changes += st.changes;
   }
+  m_changes_per_pass.push_back(changes);
   m_splits_per_pass.push_back(splits);
   m_collapses_per_pass.push_back(collapses);
   m_touched_per_pass.push_back(touched);
@@ -370,10 +376,14 @@ void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
   std::vector<uint64_t> count(keys.size() * K);
   const CutStoreEndView ev = m_cuts->end_view();
   const RllPoolView old = pool_view();
+  std::vector<uint32_t> changes(keys.size());
   host_parallel_for(keys.size(), [&](size_t j) {
-    pool_fold(ev, &entries[first[j]], first[j + 1] - first[j], old, next, j, &sum[j * K],
-              &sq[j * K], &count[j * K]);
+    changes[j] = pool_fold(ev, &entries[first[j]], first[j + 1] - first[j], old, next, j,
+                           &sum[j * K], &sq[j * K], &count[j * K]);
   });
+  uint32_t total = 0;
+  for (uint32_t c : changes) total += c;
+  m_pool_changes_per_pass.push_back(total);
   m_pool_keys = std::move(keys);
   m_pool_q = std::move(q);
   m_pool_m2 = std::move(m2);
@@ -393,6 +403,14 @@ void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells,
 
 void RllLightSampler::lights_changed(const Scene& scene) {
   refresh_light_powers(scene);
+  {
+    // forget=changes: every cluster's memory, a cell's and a coarse cell's, is cut back to the
+    // last 1/alpha rewards (what a cluster learnt under the old lights may be wrong under the new).
+    const CutStoreEndView ev = m_cuts->end_view();
+    host_parallel_for(m_s.capacity, [&](size_t c) { cut_forget(ev, uint32_t(c)); });
+    const RllPoolView pool = pool_view();
+    for (size_t j = 0; j < m_pool_keys.size(); ++j) pool_forget(ev, pool, j);
+  }
   auto refresh_all = [&] {
     const CutStoreEndView ev = m_cuts->end_view();
     host_parallel_for(m_s.capacity, [&](size_t c) { cut_refresh(ev, uint32_t(c)); });
@@ -525,6 +543,8 @@ nlohmann::json RllLightSampler::describe() const {
         {"descend_above", m_s.descend_above},
         {"learning", m_s.cut.rule == LearningRule::Shrinkage ? "shrinkage" : "exponential"},
         {"prior_samples", m_s.cut.prior_samples},
+        {"forget", m_s.cut.forget == Forgetting::Changes ? "changes" : "floor"},
+        {"change_z", m_s.cut.change_z},
         {"trust", m_s.cut.trust},
         {"pool", m_s.cut.pool_levels},
         {"pool_weight", m_s.cut.pool_weight},
@@ -551,6 +571,8 @@ nlohmann::json RllLightSampler::describe() const {
       {"splits_per_pass", m_splits_per_pass},
       {"collapses_per_pass", m_collapses_per_pass},
       {"cells_touched_per_pass", m_touched_per_pass},
+      {"changes_per_pass", m_changes_per_pass},
+      {"pool_changes_per_pass", m_pool_changes_per_pass},
       {"bytes", bytes()},
   };
   return j;

@@ -138,6 +138,8 @@ class RllLightSampler final : public LightSampler {
   // Statistics.
   uint64_t m_evictions = 0, m_failed_inserts = 0;
   std::vector<uint32_t> m_splits_per_pass, m_collapses_per_pass, m_touched_per_pass;
+  // Clusters whose rewards failed the change test (forget=changes), of cells and of coarse cells.
+  std::vector<uint32_t> m_changes_per_pass, m_pool_changes_per_pass;
   RllView m_view;  // what prepare, sample, pmf and record read (rll_view.h)
 };
 
