@@ -21,6 +21,7 @@
 #include "rll/eval/compare.h"
 #include "rll/eval/metrics.h"
 #include "rll/eval/plot.h"
+#include "rll/eval/raster.h"
 #include "rll/eval/reference.h"
 #include "rll/eval/report.h"
 #include "rll/lights/light_sampler.h"
@@ -413,6 +414,10 @@ void run(const CompareOptions& o) {
           "inflates every error alike and pulls the ratios towards 1 (use --reference-spp).",
           ref.json["spp"].get<int>(), kReferenceSppFactor, most));
   }
+  if (!figures_built())
+    warnings.push_back(
+        "this rll was built without librsvg and pango (-DRLL_FIGURES=OFF): side-by-side.png and "
+        "convergence.png are not written; report.html has every figure");
   for (const auto& w : warnings) fmt::print(stderr, "rll: warning: {}\n", w);
 
   std::map<std::string, std::vector<float>> errors;
@@ -432,9 +437,10 @@ void run(const CompareOptions& o) {
   }
   row.push_back(&ref.image);
   captions.push_back("reference\n" + ref.caption);
-  write_file_atomic(out / "side-by-side.png", side_by_side_png(row, captions, o.exposure));
+  if (figures_built())
+    write_file_atomic(out / "side-by-side.png", side_by_side_png(row, captions, o.exposure));
   LogLogPlot plot = convergence_plot(scene, summaries, o.plot_metric);
-  write_file_atomic(out / "convergence.png", plot_png(plot));
+  if (figures_built()) write_file_atomic(out / "convergence.png", plot_png(plot));
 
   Report report;
   report.title = fmt::format("rll compare: {}", scene.source);
@@ -516,9 +522,11 @@ void run(const CompareOptions& o) {
     sj["error_image"] = file_stem(s.name) + ".error.exr";
     j["samplers"].push_back(std::move(sj));
   }
-  j["files"] = {{"report", "report.html"},
-                {"convergence", "convergence.png"},
-                {"side_by_side", "side-by-side.png"}};
+  j["files"] = {{"report", "report.html"}};
+  if (figures_built()) {
+    j["files"]["convergence"] = "convergence.png";
+    j["files"]["side_by_side"] = "side-by-side.png";
+  }
   j["outputs"] = output_files(o, samplers);
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 

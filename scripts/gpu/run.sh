@@ -38,6 +38,9 @@ note() { summary+=("$1"); echo "rll: $1"; }
 cmake_args=(-S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DRLL_CUDA=ON
             -DCMAKE_CUDA_COMPILER="$nvcc")
 command -v ccache > /dev/null && cmake_args+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# The GPU machine has no librsvg or pango (and reaches no registry to fetch them): build without
+# compare's PNG figures there (report.html still draws every figure).
+pkg-config --exists librsvg-2.0 pangocairo 2> /dev/null || cmake_args+=(-DRLL_FIGURES=OFF)
 if [ "$system_packages" -eq 0 ]; then
   debs=(.gpu-debs/*.deb)
   if [ ! -e "${debs[0]}" ]; then

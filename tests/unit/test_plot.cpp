@@ -9,6 +9,7 @@
 #include "rll/core/error.h"
 #include "rll/core/image.h"
 #include "rll/eval/plot.h"
+#include "rll/eval/raster.h"
 
 using namespace rll;
 
@@ -132,6 +133,7 @@ TEST(PlotBand, SvgDrawsRepeatsAsOneMedianLineOverABand) {
 }
 
 TEST(PlotBand, PngFillsTheBandTranslucently) {
+  if (!figures_built()) GTEST_SKIP() << "built with -DRLL_FIGURES=OFF: no PNG figures";
   // The band's inside is the series colour at 20% over white: (31, 119, 180) -> (210, 228, 240).
   auto tinted = [](const std::string& png) {
     const Decoded d = decode(png);
@@ -149,6 +151,7 @@ TEST(PlotBand, PngFillsTheBandTranslucently) {
 }
 
 TEST(SideBySide, CaptionsAddALegibleBandUnderTheImages) {
+  if (!figures_built()) GTEST_SKIP() << "built with -DRLL_FIGURES=OFF: no PNG figures";
   Image a(60, 40, Rgb(0.2f)), b(60, 40, Rgb(0.8f, 0.1f, 0.1f));
   const std::string png =
       side_by_side_png({&a, &b}, {"power\nrelMSE 1.23e-02, 64 spp", "reference"}, 1.0f);
@@ -179,6 +182,7 @@ TEST(SideBySide, CaptionsAddALegibleBandUnderTheImages) {
 }
 
 TEST(SideBySide, TextGrowsWithTheImage) {
+  if (!figures_built()) GTEST_SKIP() << "built with -DRLL_FIGURES=OFF: no PNG figures";
   Image small(100, 50, Rgb(0.5f)), large(1600, 800, Rgb(0.5f));
   const Decoded s = decode(side_by_side_png({&small}, {"power"}, 0));
   const Decoded l = decode(side_by_side_png({&large}, {"power"}, 0));

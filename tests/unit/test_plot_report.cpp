@@ -44,6 +44,7 @@ LogLogPlot two_series() {
 }  // namespace
 
 TEST(Plot, PngHasTheSizeAndEverySeriesColour) {
+  if (!figures_built()) GTEST_SKIP() << "built with -DRLL_FIGURES=OFF: no PNG figures";
   const LogLogPlot p = two_series();
   const std::string png = plot_png(p);
   int w = 0, h = 0, n = 0;
@@ -98,6 +99,7 @@ TEST(Plot, SvgPointsNameTheirValuesOnHover) {
 }
 
 TEST(Plot, PngLeavesItsBorderWhiteWithLongTexts) {
+  if (!figures_built()) GTEST_SKIP() << "built with -DRLL_FIGURES=OFF: no PNG figures";
   // A title and names far wider than their room are set smaller and then cut with an ellipsis,
   // never cut by the edge: the outermost 2 pixels stay white.
   LogLogPlot p = two_series();
@@ -124,6 +126,7 @@ TEST(Plot, PngLeavesItsBorderWhiteWithLongTexts) {
 }
 
 TEST(Plot, EveryGlyphHasWidth) {
+  if (!figures_built()) GTEST_SKIP() << "built with -DRLL_FIGURES=OFF: no PNG figures";
   // The figure font draws every printable ASCII character and the non-ASCII ones captions use.
   for (char c = '!'; c <= '~'; ++c) EXPECT_GT(text_width(std::string(1, c), 13), 2.0) << c;
   EXPECT_GT(text_width("\u00b5s \u2013 \u00b2", 13), 20.0);
@@ -132,6 +135,7 @@ TEST(Plot, EveryGlyphHasWidth) {
 }
 
 TEST(Plot, EmptyPlotStillDraws) {
+  if (!figures_built()) GTEST_SKIP() << "built with -DRLL_FIGURES=OFF: no PNG figures";
   LogLogPlot p;
   p.series.push_back({"none", series_colour(0), {{{0, 0}}}});
   EXPECT_NE(plot_svg(p).find("no data"), std::string::npos);

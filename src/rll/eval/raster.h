@@ -13,6 +13,11 @@ namespace rll {
 // sans-serif where DejaVu Sans is missing).
 inline constexpr const char* kFigureFontFamily = "DejaVu Sans, Verdana, sans-serif";
 
+// False where rll was built without librsvg and pango (cmake -DRLL_FIGURES=OFF, the GPU machine,
+// which reaches no package registry): text is then measured by an estimate, and svg_to_png and
+// Canvas throw rll::Error saying why.
+bool figures_built();
+
 // Width in pixels of one line of text in the figure font at `font_px` pixels.
 double text_width(const std::string& text, double font_px, bool bold = false);
 
