@@ -519,7 +519,9 @@ def test_aov_cell_image_is_constant_inside_cells(occlusion):
         assert (inner == c).all(), c
         if x0 > 0 and x1 < 47:
             widths.append(x1 - x0 + 1)
-    assert widths and max(widths) - min(widths) <= 2  # one cell size: one level of detail
+    # One level of detail: one cell size (a level apart would be twice the width); perspective
+    # and the ragged edges vary it by a little.
+    assert widths and max(widths) <= 1.5 * min(widths)
     st = r.state
     in_state = set(st.cells["id"].tolist())
     assert set(ids.astype(int).tolist()) <= in_state
@@ -555,8 +557,12 @@ def test_aov_leaves_the_image_unchanged_and_matches_the_cli(occlusion, tmp_path)
     img, info = rll.read_exr(out, metadata=True)
     assert np.array_equal(img, plain.image)
     assert sorted(info["channels"]) == sorted("aov." + n for n in names)
-    for n in names:
+    for n in names[1:]:
         assert np.array_equal(info["channels"]["aov." + n], with_aov.aov[n], equal_nan=True), n
+    # Cell ids are the table's, handed out in the order threads first reach the cells: the same
+    # cells, not the same numbers, in another run; one id of one is one id of the other.
+    pairs = set(zip(info["channels"]["aov.cell"].ravel().tolist(), with_aov.aov["cell"].ravel().tolist()))
+    assert len({a for a, _ in pairs}) == len({b for _, b in pairs}) == len(pairs) > 1
     # Samplers without cells: no cell, entropy or rewards (-1, NaN), a probability and a ratio.
     power = rll.render(scene, sampler="power", spp=2, aov=names).aov
     assert (power["cell"] == -1).all() and np.isnan(power["entropy"]).all()
