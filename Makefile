@@ -5,7 +5,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps test-deps build demo test test-asan bench fuzz clean format
+.PHONY: all deps test-deps build demo test test-asan bench fuzz clean format install
 
 all: build
 
@@ -24,6 +24,12 @@ build: deps $(BUILD)/build.ninja
 
 demo: build
 	@scripts/demo.sh $(BUILD)
+
+# The program into $(PREFIX)/bin and the Python module rll (with its type stub) into
+# $(PREFIX)/lib/python3.X/dist-packages, where Debian's python3 finds it for /usr/local.
+PREFIX ?= /usr/local
+install: build
+	cmake --install $(BUILD) --prefix $(PREFIX)
 
 test: build test-deps
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -93,12 +93,8 @@ std::string budget_text(const CompareOptions& o) {
                     : fmt::format("equal samples, {} spp per run", o.spp);
 }
 
-bool is_run_seed(const CompareOptions& o, uint64_t s) {
-  return s >= o.seed && s - o.seed < uint64_t(o.repeats);
-}
-// A reference's halves use its seed and the next one.
 bool reference_shares_a_run_seed(const CompareOptions& o, uint64_t s) {
-  return is_run_seed(o, s) || is_run_seed(o, s + 1);
+  return reference_shares_a_seed(s, o.seed, o.repeats);
 }
 
 // Checks every flag that can be checked before the scene (perhaps slow to load) is read.
@@ -145,15 +141,6 @@ struct ChosenReference {
   std::string caption;
 };
 
-// The reference's own noise, in relMSE units: the mean of Var(ref) / (ref^2 + eps).
-double reference_noise_relmse(const Image& ref, const Image& variance) {
-  double sum = 0;
-  for (size_t i = 0; i < ref.pixel_count(); ++i)
-    for (int c = 0; c < 3; ++c)
-      sum += double(variance[i][c]) / (double(ref[i][c]) * ref[i][c] + kRelMseEpsilon);
-  return sum / (3.0 * double(ref.pixel_count()));
-}
-
 // --reference, or the cache's reference, or a new one rendered into the cache.
 ChosenReference choose_reference(const CompareOptions& o, const RenderSession& session) {
   ChosenReference ref;
@@ -181,16 +168,10 @@ ChosenReference choose_reference(const CompareOptions& o, const RenderSession& s
   ref.image = std::move(got.image);
   check_measured_pixels(ref.image, got.info.image.string(), MeasuredRole::reference);
   ref.variance = std::move(got.variance);
-  ref.json = {{"source", got.from_cache ? "cache" : "rendered"},
-              {"cache_entry", got.info.image.string()},
-              {"sampler", got.info.sampler},
-              {"spp", got.info.spp},
-              {"seed", got.info.seed},
-              {"seconds", got.info.seconds}};
+  ref.json = reference_json(got.from_cache, got.info, ref.image, ref.variance);
   ref.caption = fmt::format("{} spp, {}", got.info.spp, got.info.sampler);
   if (ref.variance.pixel_count()) {
-    const double noise = reference_noise_relmse(ref.image, ref.variance);
-    ref.json["noise_relmse"] = noise;
+    const double noise = ref.json["noise_relmse"].get<double>();
     ref.caption += fmt::format(", its noise {:.2e} (relMSE) subtracted from every error", noise);
   } else {
     ref.caption += ", made without halves: its noise is not subtracted";
@@ -210,12 +191,6 @@ std::string interrupted_text(const CompareOptions& o, const std::string& name) {
 RunResult run_once(const CompareOptions& o, RenderSession& session, const std::string& name,
                    int repeat, const ChosenReference& reference, Image& image,
                    std::unique_ptr<LightSampler>* kept = nullptr) {
-  reset_peak_rss();
-  const auto t0 = std::chrono::steady_clock::now();
-  auto sampler = session.make_sampler(name);
-  const double setup_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  Film film(session.scene().width, session.scene().height);
   RenderSettings rs;
   rs.spp = o.time > 0 ? kUnlimitedSpp : o.spp;
   rs.time_limit = o.time;
@@ -224,49 +199,13 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
   rs.max_pass_spp = o.max_pass_spp;
   const std::string label =
       o.repeats > 1 ? fmt::format("{} ({}/{})", name, repeat + 1, o.repeats) : name;
-  // Animated scenes: the frames before the last are rendered with the same budget, so that a
-  // learning sampler carries what it learnt into the measured last frame.
-  for (int f = 0; f + 1 < o.frames; ++f) {
-    session.set_frame(f, sampler.get());
-    Film earlier(session.scene().width, session.scene().height);
-    RenderSettings rf = rs;
-    rf.frame = f;
-    session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1), !o.quiet,
-                   interrupt_flag());
-    if (interrupted()) throw Interrupted(interrupted_text(o, name));
-  }
-  session.set_frame(o.frames - 1, sampler.get());
-  rs.frame = o.frames - 1;
-  ConvergenceRecorder recorder(reference.image,
-                               reference.variance.pixel_count() ? &reference.variance : nullptr);
-  const RenderProgress p =
-      session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag(),
-                     [&](const RenderProgress& pr, const Film& f) { recorder.after_pass(pr, f); });
-  if (p.cancelled) throw Interrupted(interrupted_text(o, name));
-  image = film.resolve();
-  recorder.finish(p, image);
-
-  RunResult run;
-  run.sampler = name;
-  run.repeat = repeat;
-  run.seed = rs.seed;
-  run.spp = p.spp_done;
-  run.seconds = p.seconds;
-  run.setup_seconds = setup_seconds;
-  run.checkpoints = recorder.checkpoints();
-  const Checkpoint& last = run.checkpoints.back();
-  run.relmse = last.relmse;
-  run.mse = last.mse;
-  run.trimmed_relmse = last.trimmed_relmse;
-  run.mrse = last.mrse;
-  run.visible_ratio = p.rays.visible_ratio();
-  run.describe = sampler->describe();
-  if (run.describe.is_object() && run.describe.contains("bytes") &&
-      run.describe["bytes"].is_number())
-    run.sampler_bytes = run.describe["bytes"].get<double>();
-  run.peak_rss_bytes = peak_rss_bytes();
-  if (p.nonfinite)
-    fmt::print(stderr, "rll: warning: {}: {} non-finite samples were dropped\n", name, p.nonfinite);
+  MeasuredRun m = measure_run(session, name, repeat, rs, o.frames, reference.image,
+                              reference.variance.pixel_count() ? &reference.variance : nullptr,
+                              label, !o.quiet, interrupt_flag());
+  if (m.cancelled || interrupted()) throw Interrupted(interrupted_text(o, name));
+  image = std::move(m.image);
+  if (kept) *kept = std::move(m.sampler);
+  const RunResult& run = m.result;
   if (!o.quiet)
     fmt::print(stderr, "{}: {} spp in {}, relMSE {:.4e}\n", label, run.spp,
                format_duration(run.seconds), run.relmse);

@@ -70,7 +70,7 @@ void run(const ReferenceOptions& o) {
     if (o.output.empty()) return;
     // As `rll render` does, an .exr says how many samples each pixel holds.
     if (lower(fs::path(o.output).extension().string()) == ".exr")
-      write_exr(o.output, ExrFile{ref.image, {}, ref.counts});
+      write_exr(o.output, ExrFile{ref.image, {}, ref.counts, {}});
     else
       write_image(o.output, ref.image, o.exposure);
     fmt::print(stderr, "wrote {} (partial: {} spp)\n", o.output, ref.info.spp);

@@ -14,6 +14,7 @@
 #include "rll/core/sysinfo.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/lights/sampler_state.h"
+#include "rll/render/aov.h"
 #include "rll/render/progress.h"
 #include "rll/render/share.h"
 #include "rll/session/session.h"
@@ -41,6 +42,7 @@ struct RenderOptions {
   bool spp_given = false;  // --spp was on the command line
   std::string state;       // --rll-state FILE
   std::string state_mode = "update";
+  std::string aov;  // --aov NAME[,NAME]: diagnostics as extra EXR channels
 };
 
 // What every share of one render has in common (ShareInfo::settings), but the frame.
@@ -101,6 +103,14 @@ void run(const RenderOptions& o) {
     fail("--task {}: the output must be an .exr, which keeps what a merge needs (got -o {})",
          o.task, output.string());
   prepare_output(output, "-o", {".exr", ".png"});
+  const std::vector<Aov> aovs = o.aov.empty() ? std::vector<Aov>() : parse_aovs(o.aov, "--aov");
+  if (!aovs.empty() && lower(output.extension().string()) != ".exr")
+    fail("--aov: the diagnostics are extra channels of an .exr output (got -o {})",
+         output.string());
+  if (!aovs.empty() && (o.session.wavefront || o.session.device != "cpu"))
+    fail(
+        "--aov: the diagnostics are measured by the megakernel; leave out --wavefront and "
+        "--device");
   for (int f = 1; f < o.frames; ++f) check_output_file(frame_path(output, f, o.frames), "-o");
   const bool load_state = !o.state.empty() && o.state_mode != "save";
   const bool save_state = !o.state.empty() && o.state_mode != "load";
@@ -157,6 +167,7 @@ void run(const RenderOptions& o) {
     session.set_frame(f, sampler.get());
     rs.frame = f;
     Film film(scene.width, scene.height);
+    if (!aovs.empty()) film.track_camera_vertex();
     std::string label =
         frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
     RenderProgress p = session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag());
@@ -170,7 +181,9 @@ void run(const RenderOptions& o) {
       share.held = {task.index};
       share.scene = o.session.scene;
       share.commit = build_commit();
-      write_exr(out, share_file(film, share));
+      ExrFile file = share_file(film, share);
+      if (!aovs.empty()) file.channels = resolve_aovs(film, *sampler, aovs);
+      write_exr(out, file);
     } else {
       write_image(out, film.resolve(), o.exposure);
     }
@@ -286,6 +299,11 @@ void add_render_command(CLI::App& app) {
                   "written (the shares of a farm); save: start cold, write at the end")
       ->capture_default_str()
       ->check(CLI::IsMember({"update", "load", "save"}));
+  std::string aov_help =
+      "Per-pixel diagnostics at the camera vertex (the first surface a path hits), written as "
+      "extra channels aov.NAME of the .exr output; a comma-separated list of:";
+  for (const auto& a : aov_list()) aov_help += fmt::format(" {} ({});", a.name, a.meaning);
+  cmd->add_option("--aov", o->aov, aov_help);
   cmd->callback([o] { run(*o); });
 }
 

@@ -1,8 +1,6 @@
 // The Python module `rll`: loads scenes, renders them with any light sampler into numpy arrays,
 // measures images against references and reads and writes EXR files, over the library (the
 // session and evaluation layers), not the command line.
-#include <pybind11/numpy.h>
-#include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include <atomic>
@@ -14,48 +12,31 @@
 #include <string>
 #include <vector>
 
+#include "module.h"
 #include "rll/core/error.h"
 #include "rll/core/image.h"
 #include "rll/core/parallel.h"
 #include "rll/eval/metrics.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/render/aov.h"
 #include "rll/render/film.h"
 #include "rll/render/render.h"
+#include "rll/render/share.h"
 #include "rll/scene/builtin.h"
 #include "rll/session/session.h"
 
-namespace py = pybind11;
 using namespace rll;
+using namespace rll::python;
 
-namespace {
+namespace rll::python {
 
 static_assert(sizeof(Rgb) == 3 * sizeof(float), "images are handed to numpy as float triples");
 
-// The limits of the command line's flags (apps/commands.h), so that Python takes what `rll render`
-// takes.
-constexpr long long kMaxSpp = (1 << 30) - 1;
-constexpr int kMaxThreads = 4096;
-constexpr double kMaxSeconds = 1e7;
-
-// A path argument as str or os.PathLike.
 std::string fspath(const py::handle& path) {
   return py::str(py::module_::import("os").attr("fspath")(path)).cast<std::string>();
 }
 
-// "WIDTHxHEIGHT" from None (empty: the scene's own), a string or a (width, height) pair.
-std::string resolution_arg(const py::object& res) {
-  if (res.is_none()) return "";
-  if (py::isinstance<py::str>(res)) return res.cast<std::string>();
-  if (py::isinstance<py::sequence>(res) && py::len(res) == 2) {
-    auto wh = res.cast<std::vector<long long>>();
-    return std::to_string(wh[0]) + "x" + std::to_string(wh[1]);
-  }
-  fail("res: expected None, 'WIDTHxHEIGHT' or (width, height), got {}",
-       py::repr(res).cast<std::string>());
-}
-
-// The image as a float32 HxWx3 array that owns it (no copy).
-py::array to_array(Image image) {
+py::array image_to_array(Image image) {
   auto* owned = new Image(std::move(image));
   py::capsule free_image(owned, [](void* p) { delete static_cast<Image*>(p); });
   const auto h = py::ssize_t(owned->height()), w = py::ssize_t(owned->width());
@@ -64,8 +45,7 @@ py::array to_array(Image image) {
                             reinterpret_cast<const float*>(owned->pixels().data()), free_image);
 }
 
-// An HxWx3 array (any real dtype, converted to float32) as an Image; `name` is for messages.
-Image from_array(const py::handle& obj, const char* name) {
+Image image_from_array(const py::handle& obj, const char* name) {
   auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(obj);
   if (!a) fail("{}: expected an HxWx3 array of numbers", name);
   if (a.ndim() != 3 || a.shape(2) != 3 || a.shape(0) < 1 || a.shape(1) < 1)
@@ -81,26 +61,74 @@ Image from_array(const py::handle& obj, const char* name) {
   return image;
 }
 
+}  // namespace rll::python
+
+namespace {
+
+// The limits of the command line's flags (apps/commands.h), so that Python takes what `rll render`
+// takes.
+constexpr long long kMaxSpp = (1 << 30) - 1;
+constexpr int kMaxThreads = 4096;
+constexpr double kMaxSeconds = 1e7;
+
+// "WIDTHxHEIGHT" from None (empty: the scene's own), a string or a (width, height) pair.
+std::string resolution_arg(const py::object& res) {
+  if (res.is_none()) return "";
+  if (py::isinstance<py::str>(res)) return res.cast<std::string>();
+  if (py::isinstance<py::sequence>(res) && py::len(res) == 2) {
+    auto wh = res.cast<std::vector<long long>>();
+    return std::to_string(wh[0]) + "x" + std::to_string(wh[1]);
+  }
+  fail("res: expected None, 'WIDTHxHEIGHT' or (width, height), got {}",
+       py::repr(res).cast<std::string>());
+}
+
 // A parameter value as `--set key=value` takes it (Python's True is "true").
 std::string param_value(const py::handle& v) {
   if (py::isinstance<py::bool_>(v)) return v.cast<bool>() ? "true" : "false";
   return py::str(v).cast<std::string>();
 }
 
-// A scene loaded once, with the session that renders it with the default integrator; renders
-// with other settings (integrator, params, res) load it again into a session of their own.
-struct PyScene {
-  SessionSettings settings;
-  std::shared_ptr<RenderSession> session;
-  std::mutex mutex;  // one render at a time: a session's parameter bookkeeping is not shared
-
-  const Scene& scene() const { return session->scene(); }
-};
-
 std::shared_ptr<RenderSession> make_session(const SessionSettings& s) {
   py::gil_scoped_release release;
   return std::make_shared<RenderSession>(s);
 }
+
+}  // namespace
+
+namespace rll::python {
+
+SessionSettings settings_with(const PyScene& scene, const py::dict& params) {
+  SessionSettings settings = scene.settings;
+  for (const auto& [k, v] : params)
+    settings.set.push_back(py::str(k).cast<std::string>() + "=" + param_value(v));
+  Params::parse(settings.set);  // a malformed key fails before the scene is loaded again
+  return settings;
+}
+
+std::shared_ptr<RenderSession> session_for(PyScene& scene, const SessionSettings& settings) {
+  const SessionSettings& own = scene.settings;
+  const bool same = settings.integrator == own.integrator && settings.max_depth == own.max_depth &&
+                    settings.resolution == own.resolution && settings.set == own.set &&
+                    settings.wavefront == own.wavefront && settings.device == own.device;
+  return same ? scene.session : make_session(settings);
+}
+
+std::shared_ptr<LightSampler> named_sampler(const RenderSession& session, const std::string& spec) {
+  try {
+    std::shared_ptr<LightSampler> sampler = session.make_sampler(spec);
+    session.check_params_used();
+    return sampler;
+  } catch (const Error& e) {
+    const std::string msg = e.what();
+    if (msg.rfind("--set: ", 0) == 0) throw Error("params: " + msg.substr(7));
+    throw Error("sampler: " + msg);
+  }
+}
+
+}  // namespace rll::python
+
+namespace {
 
 std::shared_ptr<PyScene> py_load(const py::object& path, const py::object& res) {
   auto s = std::make_shared<PyScene>();
@@ -112,11 +140,18 @@ std::shared_ptr<PyScene> py_load(const py::object& path, const py::object& res) 
 
 struct PyRender {
   py::array image;
+  py::array counts;
   int spp = 0;
   double seconds = 0;
   bool interrupted = false;
   py::dict stats;
+  py::object state = py::none();
+  py::dict aov;
 };
+
+}  // namespace
+
+namespace rll::python {
 
 py::dict progress_dict(const RenderProgress& p) {
   py::dict d;
@@ -132,9 +167,45 @@ py::object to_python(const nlohmann::json& j) {
   return py::module_::import("json").attr("loads")(j.dump());
 }
 
+void PassWatcher::operator()(const RenderProgress& p) {
+  py::gil_scoped_acquire gil;
+  try {
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    if (!progress.is_none()) progress(progress_dict(p));
+  } catch (py::error_already_set& e) {
+    if (e.matches(PyExc_KeyboardInterrupt))
+      interrupted = true;
+    else
+      callback_error = std::current_exception();
+    cancel = true;
+  }
+}
+
+void PassWatcher::rethrow() const {
+  if (callback_error) std::rethrow_exception(callback_error);
+}
+
+}  // namespace rll::python
+
+namespace {
+
 PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::string& integrator,
                    int max_depth, long long spp, std::optional<double> time, const py::object& res,
-                   uint64_t seed, const py::dict& params, int threads, const py::object& progress) {
+                   uint64_t seed, const py::dict& params, int threads, const py::object& progress,
+                   const py::object& aov, bool wavefront, const std::string& device) {
+  std::vector<Aov> aovs;
+  if (!aov.is_none()) {
+    std::string list;
+    if (py::isinstance<py::str>(aov)) {
+      list = aov.cast<std::string>();
+    } else {
+      for (const auto& name : aov.cast<std::vector<std::string>>())
+        list += (list.empty() ? "" : ",") + name;
+    }
+    aovs = parse_aovs(list, "aov");
+  }
+  if (!aovs.empty() && (wavefront || device != "cpu"))
+    fail("aov: the diagnostics are measured by the megakernel; leave out wavefront and device");
   if (spp < 1 || spp > kMaxSpp) fail("spp: {} is not in [1, {}]", spp, kMaxSpp);
   if (time && !(*time > 0 && *time <= kMaxSeconds))
     fail("time: {} seconds is not in (0, {}] (None: no limit)", *time, kMaxSeconds);
@@ -143,14 +214,13 @@ PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::s
     fail("threads: {} is not in [0, {}] (0: all cores)", threads, kMaxThreads);
   if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
     fail("progress: expected a callable or None");
-  SessionSettings settings = scene.settings;
+  SessionSettings settings = settings_with(scene, params);
   settings.integrator = integrator;
   settings.max_depth = max_depth;
+  settings.wavefront = wavefront;
+  settings.device = device;
   const std::string resolution = resolution_arg(res);
   if (!resolution.empty()) settings.resolution = resolution;
-  for (const auto& [k, v] : params)
-    settings.set.push_back(py::str(k).cast<std::string>() + "=" + param_value(v));
-  Params::parse(settings.set);  // a malformed key fails before the scene is loaded again
 
   // The lock is taken without the GIL: a render holding it takes the GIL between passes.
   std::unique_lock<std::mutex> lock(scene.mutex, std::defer_lock);
@@ -158,56 +228,36 @@ PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::s
     py::gil_scoped_release release;
     lock.lock();
   }
-  const bool own = settings.integrator != scene.settings.integrator ||
-                   settings.max_depth != scene.settings.max_depth ||
-                   settings.resolution != scene.settings.resolution || !settings.set.empty();
-  std::shared_ptr<RenderSession> session = own ? make_session(settings) : scene.session;
-  std::unique_ptr<LightSampler> sampler;
-  try {
-    sampler = session->make_sampler(sampler_spec);
-    session->check_params_used();
-  } catch (const Error& e) {
-    const std::string msg = e.what();
-    if (msg.rfind("--set: ", 0) == 0) throw Error("params: " + msg.substr(7));
-    throw Error("sampler: " + msg);
-  }
+  const std::shared_ptr<RenderSession> session = session_for(scene, settings);
+  const std::shared_ptr<LightSampler> sampler = named_sampler(*session, sampler_spec);
 
   RenderSettings rs;
   rs.spp = int(spp);
   rs.time_limit = time.value_or(0);
   rs.seed = seed;
   Film film(session->scene().width, session->scene().height);
-  std::atomic<bool> cancel{false};
-  bool interrupted = false;
-  std::exception_ptr callback_error;
-  // Between passes, on this thread: Ctrl-C (Python's SIGINT handler raising KeyboardInterrupt)
-  // cancels the render as SIGINT cancels `rll render`; the progress callback runs with the GIL.
-  auto after_pass = [&](const RenderProgress& p, const Film&) {
-    py::gil_scoped_acquire gil;
-    try {
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-      if (!progress.is_none()) progress(progress_dict(p));
-    } catch (py::error_already_set& e) {
-      if (e.matches(PyExc_KeyboardInterrupt))
-        interrupted = true;
-      else
-        callback_error = std::current_exception();
-      cancel = true;
-    }
-  };
+  if (!aovs.empty()) film.track_camera_vertex();
+  PassWatcher watch(progress);
   RenderProgress p;
   {
     ThreadLimit limit(threads);
     py::gil_scoped_release release;
-    p = session->render(*sampler, film, rs, "render", false, &cancel, after_pass);
+    p = session->render(*sampler, film, rs, "render", false, &watch.cancel,
+                        [&](const RenderProgress& pr, const Film&) { watch(pr); });
   }
-  if (callback_error) std::rethrow_exception(callback_error);
+  watch.rethrow();
 
   PyRender r;
-  r.image = to_array(film.resolve());
+  r.image = image_to_array(film.resolve());
+  r.counts = numpy_of(film.counts(), {py::ssize_t(film.height()), py::ssize_t(film.width())});
+  r.state = state_object({session, sampler});
+  if (!aovs.empty())
+    for (auto& [name, values] : resolve_aovs(film, *sampler, aovs))
+      r.aov[py::str(name.substr(4))] =  // (without the channels' "aov.")
+          numpy_of(std::move(values), {py::ssize_t(film.height()), py::ssize_t(film.width())});
   r.spp = p.spp_done;
   r.seconds = p.seconds;
-  r.interrupted = interrupted || p.cancelled;
+  r.interrupted = watch.interrupted || p.cancelled;
   const Scene& sc = session->scene();
   r.stats["scene"] = settings.scene;
   r.stats["resolution"] = py::make_tuple(sc.width, sc.height);
@@ -238,7 +288,7 @@ PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::s
 
 py::dict py_error(const py::handle& image, const py::handle& reference,
                   const py::handle& reference_variance) {
-  const Image img = from_array(image, "img"), ref = from_array(reference, "ref");
+  const Image img = image_from_array(image, "img"), ref = image_from_array(reference, "ref");
   check_measured_pixels(img, "img", MeasuredRole::image);
   check_measured_pixels(ref, "ref", MeasuredRole::reference);
   if (img.width() != ref.width() || img.height() != ref.height())
@@ -247,7 +297,7 @@ py::dict py_error(const py::handle& image, const py::handle& reference,
   Image var;
   const bool has_var = !reference_variance.is_none();
   if (has_var) {
-    var = from_array(reference_variance, "reference_variance");
+    var = image_from_array(reference_variance, "reference_variance");
     check_measured_pixels(var, "reference_variance", MeasuredRole::reference_variance);
     if (var.width() != ref.width() || var.height() != ref.height())
       fail("error: reference_variance is {}x{}, ref {}x{}", var.width(), var.height(), ref.width(),
@@ -267,6 +317,7 @@ PYBIND11_MODULE(rll, m) {
       "rll, a path tracer with learnt light sampling: load scenes, render them with any light "
       "sampler into numpy arrays, measure images against references, read and write EXR files.";
   py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+  bind_state(m);
 
   m.def(
       "scenes",
@@ -317,6 +368,16 @@ PYBIND11_MODULE(rll, m) {
                     "True when Ctrl-C (KeyboardInterrupt) stopped the render early.")
       .def_readonly("stats", &PyRender::stats,
                     "Statistics as `rll render --stats` writes them: rays, samples, sampler...")
+      .def_readonly("counts", &PyRender::counts,
+                    "Samples behind each pixel, uint32 array of shape (height, width) (the "
+                    "`count` channel of the CLI's EXR files).")
+      .def_readonly("aov", &PyRender::aov,
+                    "The diagnostics asked for with aov=, name -> float32 array (height, width): "
+                    "cell (id, -1: none), probability, entropy, visible, rewards (NaN where a "
+                    "pixel has nothing to measure).")
+      .def_readonly("state", &PyRender::state,
+                    "The learnt state (rll.State) of rll, fermat or the oracle after the render; "
+                    "None for samplers that learn nothing.")
       .def("__repr__", [](const PyRender& r) {
         return "<rll.Render " + std::to_string(r.image.shape(1)) + "x" +
                std::to_string(r.image.shape(0)) + ", " + std::to_string(r.spp) + " spp>";
@@ -330,13 +391,17 @@ PYBIND11_MODULE(rll, m) {
         py::arg("integrator") = "path", py::arg("max_depth") = 5, py::arg("spp") = 16,
         py::arg("time") = py::none(), py::arg("res") = py::none(), py::arg("seed") = 1,
         py::arg("params") = py::dict(), py::arg("threads") = 0, py::arg("progress") = py::none(),
+        py::arg("aov") = py::none(), py::arg("wavefront") = false, py::arg("device") = "cpu",
         "Renders `scene` with a light sampler (see samplers()) as `rll render` does with the\n"
         "same settings, to the same image: `spp` samples per pixel, or fewer when `time`\n"
         "seconds run out; `max_depth` bounds the path length (`--max-depth`); `params` are `--set` "
         "parameters (key: value); `threads` 0 uses every\n"
         "core. `progress(dict)` is called after every pass (passes, spp, spp_target, seconds,\n"
         "samples). The GIL is released while rendering; Ctrl-C stops the render and returns\n"
-        "what it has (Render.interrupted is then True).");
+        "what it has (Render.interrupted is then True). `aov`: per-pixel diagnostics at the\n"
+        "camera vertex, names as `rll render --aov` takes them (a list or 'a,b'; aov_names()),\n"
+        "returned in Render.aov; the image is the same with or without. `wavefront` and\n"
+        "`device` ('cpu' or 'cuda') as `--wavefront` and `--device`.");
   m.def("error", &py_error, py::arg("img"), py::arg("ref"),
         py::arg("reference_variance") = py::none(),
         "Errors of an HxWx3 image against a reference as `rll error` measures them: a dict of\n"
@@ -344,25 +409,92 @@ PYBIND11_MODULE(rll, m) {
         "channel) the reference's own noise is subtracted.");
   m.def(
       "read_exr",
-      [](const py::object& path) {
+      [](const py::object& path, bool metadata) -> py::object {
         const std::string p = fspath(path);
-        Image image;
+        ExrFile f;
         {
           py::gil_scoped_release release;
-          image = read_exr_file(p).image;
+          f = read_exr_file(p);
         }
-        return to_array(std::move(image));
+        const int w = f.image.width(), h = f.image.height();
+        py::array image = image_to_array(std::move(f.image));
+        if (!metadata) return image;
+        py::dict info, attributes;
+        for (const auto& [k, v] : f.attributes) attributes[py::str(k)] = v;
+        info["attributes"] = attributes;
+        info["count"] = f.counts.empty() ? py::object(py::none())
+                                         : py::object(numpy_of(std::move(f.counts), {h, w}));
+        py::dict channels;
+        for (auto& [name, values] : f.channels)
+          channels[py::str(name)] = numpy_of(std::move(values), {h, w});
+        info["channels"] = channels;
+        const std::string* share = f.attribute(kShareAttribute);
+        info["share"] = share ? py::module_::import("json").attr("loads")(*share) : py::none();
+        return py::make_tuple(image, info);
       },
-      py::arg("path"), "Reads the R, G, B channels of an OpenEXR file as a float32 HxWx3 array.");
+      py::arg("path"), py::arg("metadata") = false,
+      "Reads the R, G, B channels of an OpenEXR file as a float32 HxWx3 array. With\n"
+      "`metadata`, returns (image, info): info['count'] the samples behind each pixel (uint32\n"
+      "HxW, the `count` channel `rll render` writes; None where the file has none),\n"
+      "info['attributes'] the header's string attributes, info['channels'] its other float\n"
+      "channels (name -> HxW; `rll render --aov` writes aov.NAME), info['share'] the `rll.share` "
+      "header\n"
+      "(the settings and share a render was made with, parsed from JSON; None if absent).");
   m.def(
       "write_exr",
-      [](const py::object& path, const py::handle& image) {
+      [](const py::object& path, const py::handle& image, const py::object& count,
+         const py::dict& attributes, const py::object& share) {
         ExrFile f;
-        f.image = from_array(image, "image");
+        f.image = image_from_array(image, "image");
+        if (!count.is_none()) {
+          auto c = py::array_t<uint32_t, py::array::c_style | py::array::forcecast>::ensure(count);
+          if (!c || c.ndim() != 2 || c.shape(0) != f.image.height() ||
+              c.shape(1) != f.image.width())
+            fail("count: expected an HxW array of sample counts ({}x{}), as the image",
+                 f.image.height(), f.image.width());
+          f.counts.assign(c.data(), c.data() + c.size());
+        }
+        for (const auto& [k, v] : attributes) {
+          const std::string key = py::str(k).cast<std::string>();
+          if (!py::isinstance<py::str>(v)) fail("attributes: the value of '{}' is not a str", key);
+          f.attributes.emplace_back(key, v.cast<std::string>());
+        }
+        if (!share.is_none()) {
+          if (f.attribute(kShareAttribute)) fail("share: also given in attributes");
+          f.attributes.emplace_back(
+              kShareAttribute,
+              py::module_::import("json").attr("dumps")(share).cast<std::string>());
+        }
         const std::string p = fspath(path);
         py::gil_scoped_release release;
         write_exr(p, f);
       },
-      py::arg("path"), py::arg("image"),
-      "Writes an HxWx3 array as a 32-bit float RGB OpenEXR file (atomically).");
+      py::arg("path"), py::arg("image"), py::arg("count") = py::none(),
+      py::arg("attributes") = py::dict(), py::arg("share") = py::none(),
+      "Writes an HxWx3 array as a 32-bit float RGB OpenEXR file (atomically); with `count`\n"
+      "(HxW sample counts, e.g. Render.counts) the `count` channel, `attributes` (str -> str) as\n"
+      "header attributes and `share` (a dict, stored as JSON) as the `rll.share` header that\n"
+      "`rll merge` reads.");
+  m.def(
+      "aov_names",
+      [] {
+        py::dict d;
+        for (const auto& a : aov_list()) d[py::str(a.name)] = a.meaning;
+        return d;
+      },
+      "The per-pixel diagnostics render(aov=...) and `rll render --aov` know, name -> meaning.");
+  m.def(
+      "cell_colours",
+      [](const py::handle& cells) {
+        auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(cells);
+        if (!a || a.ndim() != 2)
+          fail("cells: expected an HxW array of cell ids (Render.aov['cell'])");
+        Image image(int(a.shape(1)), int(a.shape(0)));
+        for (size_t i = 0; i < image.pixel_count(); ++i) image[i] = cell_colour(a.data()[i]);
+        return image_to_array(std::move(image));
+      },
+      py::arg("cells"),
+      "A false colour per cell id of an HxW cell image (Render.aov['cell']): HxWx3 float32,\n"
+      "neighbouring ids in unrelated colours, black where there is no cell (-1).");
+  bind_measure(m);
 }

@@ -8,7 +8,7 @@ set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config libembree-dev libtbb-dev libopenexr-dev libstb-dev
       libtinyobjloader-dev libtinygltf-dev libcli11-dev nlohmann-json3-dev libfmt-dev libgtest-dev
       libbenchmark-dev libboost-dev python3 zlib1g-dev python3-dev pybind11-dev python3-numpy
-      python3-pytest librsvg2-dev libpango1.0-dev fonts-dejavu-core)
+      python3-pytest python3-matplotlib librsvg2-dev libpango1.0-dev fonts-dejavu-core)
 daemons=()
 if [ "${1:-}" = "--test" ]; then
   pkgs+=(chromium slurmctld slurmd slurm-client munge)

@@ -5,6 +5,7 @@ import json
 import os
 import signal
 import subprocess
+import sys
 import threading
 import time
 
@@ -250,3 +251,382 @@ def test_docstrings_and_stub():
     for name in ("def load", "def render", "def error", "def read_exr", "def write_exr",
                  "class Scene", "class Render", "class Error"):
         assert name in text
+
+
+@pytest.fixture(scope="module")
+def learnt(box):
+    return rll.render(box, sampler="rll", spp=16, seed=3)
+
+
+def test_state_arrays(box, learnt):
+    st = learnt.state
+    assert isinstance(st, rll.State) and st.sampler == "rll" and st.passes >= 1
+    assert st.lights == box.lights
+    cells = st.cells
+    n = len(cells["id"])
+    assert n >= 1 and (np.diff(cells["id"].astype(np.int64)) > 0).all()
+    assert (cells["id"] < st.capacity).all()
+    assert cells["key"].dtype == np.uint64 and (cells["key"] != 0).all()
+    assert len(set(cells["key"].tolist())) == n  # one cell per key
+    assert cells["anchor"].shape == (n, 3) and cells["normal"].shape == (n, 3)
+    assert np.allclose(np.linalg.norm(cells["normal"], axis=1), 1, atol=1e-4)
+    lo, hi = np.array(box.bounds[0]), np.array(box.bounds[1])
+    pad = 1e-3 * np.linalg.norm(hi - lo)
+    assert ((cells["anchor"] >= lo - pad) & (cells["anchor"] <= hi + pad)).all()
+    assert (cells["rewards"] >= 0).all() and cells["rewards"].max() > 0
+    assert cells["learnt"].dtype == bool and cells["learnt"].any()
+    assert ((cells["defensive"] >= 0) & (cells["defensive"] <= 1)).all()
+    assert "rll.State of rll" in repr(st)
+    # The light tree: the root covers every light, children partition their parent.
+    t = st.tree
+    m = len(t["power"])
+    assert t["lo"].shape == (m, 3) and t["begin"][0] == 0 and t["end"][0] == box.lights
+    inner = np.nonzero(~t["leaf"])[0]
+    for i in inner:
+        c = t["child"][i]
+        assert t["parent"][c] == i and t["parent"][c + 1] == i
+        assert t["begin"][c] == t["begin"][i] and t["end"][c] == t["begin"][c + 1]
+        assert t["end"][c + 1] == t["end"][i]
+    assert (t["end"][t["leaf"]] - t["begin"][t["leaf"]] == 1).all()
+    assert (t["power"] >= 0).all() and t["power"][0] > 0
+    assert t["parent"][0] == 2**32 - 1
+    init = st.initial_cut
+    assert len(init) >= 1 and t["begin"][init[0]] == 0 and t["end"][init[-1]] == box.lights
+
+
+def test_state_probabilities_match_the_sampler_pmf(learnt):
+    st = learnt.state
+    cells = st.cells
+    with_cut = cells["id"][cells["size"] > 0]
+    assert len(with_cut) >= 1
+    checked_single = 0
+    for cell in with_cut[:40]:
+        cut = st.cut(cell)
+        assert cut["own"]
+        k = len(cut["nodes"])
+        assert k == cells["size"][cells["id"] == cell][0]
+        # The clusters partition the lights in order.
+        assert cut["begin"][0] == 0 and cut["end"][-1] == st.lights
+        assert (cut["begin"][1:] == cut["end"][:-1]).all()
+        p = cut["probability"]
+        assert p.dtype == np.float32 and (p >= 0).all()
+        assert abs(p.astype(np.float64).sum() - 1) < 1e-5
+        pmf = st.pmf(cell)  # every light, at the cell's anchor
+        assert pmf.shape == (st.lights,)
+        for j in range(k):
+            b, e = cut["begin"][j], cut["end"][j]
+            if e - b == 1:  # one light: its pmf is the cluster's probability, to the bit
+                assert st.pmf(cell, int(b)) == p[j]
+                checked_single += 1
+            assert pmf[b:e].astype(np.float64).sum() == pytest.approx(float(p[j]), rel=1e-5,
+                                                                        abs=1e-7)
+        assert abs(pmf.astype(np.float64).sum() - 1) < 1e-5
+    assert checked_single > 0
+    # The probabilities differ between cells: the check compares learnt tables, not one prior.
+    tables = {tuple(st.cut(c)["probability"].round(6)) for c in with_cut[:40]}
+    assert len(tables) > 1
+
+
+def test_state_errors_and_other_samplers(box, learnt, tmp_path):
+    st = learnt.state
+    with pytest.raises(rll.Error, match="cell"):
+        st.cut(st.capacity)
+    with pytest.raises(rll.Error, match="light"):
+        st.pmf(int(st.cells["id"][0]), st.lights)
+    with pytest.raises(rll.Error, match="point"):
+        st.pmf(int(st.cells["id"][0]), 0, point=(1, 2))
+    assert rll.render(box, sampler="power", spp=1).state is None
+    assert rll.render(box, sampler="fermat", spp=2).state.sampler == "fermat"
+    oracle = rll.render(box, sampler="oracle", spp=1, params={"oracle.discovery_spp": 1}).state
+    assert oracle.sampler == "oracle" and (oracle.cells["size"] > 0).any()
+
+
+def test_state_save_and_load(box, learnt, tmp_path):
+    st = learnt.state
+    path = tmp_path / "s.state"
+    st.save(path)
+    back = rll.load_state(path, box)
+    for k in ("id", "key", "anchor", "level", "rewards", "size"):
+        assert np.array_equal(back.cells[k], st.cells[k]), k
+    cell = int(st.cells["id"][st.cells["size"] > 0][0])
+    assert np.array_equal(back.cut(cell)["probability"], st.cut(cell)["probability"])
+    assert np.array_equal(back.pmf(cell), st.pmf(cell))
+    # The CLI loads what Python saved, and Python what the CLI saved.
+    cli("render", BOX, "--res", "40x30", "--spp", "2", "--quiet", "-o", str(tmp_path / "x.exr"),
+        "--rll-state", str(path), "--rll-state-mode", "load")
+    saved = tmp_path / "cli.state"
+    cli("render", BOX, "--res", "40x30", "--spp", "4", "--quiet", "-o", str(tmp_path / "y.exr"),
+        "--rll-state", str(saved), "--rll-state-mode", "save")
+    assert rll.load_state(saved, box).passes >= 1
+    with pytest.raises(rll.Error, match="s.state"):
+        rll.load_state(path, box, sampler="fermat")
+    with pytest.raises(rll.Error, match="missing.state"):
+        rll.load_state(tmp_path / "missing.state", box)
+    with pytest.raises(rll.Error, match="sampler: .*power"):
+        rll.load_state(path, box, sampler="power")
+
+
+def test_exr_count_channel_and_share_header(tmp_path):
+    out = tmp_path / "cli.exr"
+    cli("render", BOX, "--res", "20x10", "--spp", "3", "--sampler", "power", "--quiet", "-o",
+        str(out))
+    img, info = rll.read_exr(out, metadata=True)
+    assert img.shape == (10, 20, 3)
+    assert info["count"].dtype == np.uint32 and info["count"].shape == (10, 20)
+    assert (info["count"] == 3).all()
+    share = info["share"]
+    assert share["settings"]["sampler"] == "power" and share["settings"]["resolution"] == "20x10"
+    assert "rll.share" in info["attributes"] and info["channels"] == {}
+    # Written back with its counts and header, rll merge takes it as the share it was.
+    copy = tmp_path / "copy.exr"
+    rll.write_exr(copy, img, count=info["count"], share=share, attributes={"note": "hi"})
+    img2, info2 = rll.read_exr(copy, metadata=True)
+    assert np.array_equal(img2, img) and np.array_equal(info2["count"], info["count"])
+    assert info2["share"] == share and info2["attributes"]["note"] == "hi"
+    merged = tmp_path / "merged.exr"
+    cli("merge", str(merged), str(copy), "--check-against", str(out))
+    # A render's counts are the CLI's count channel.
+    r = rll.render(rll.load(BOX, res=(20, 10)), sampler="power", spp=3)
+    assert np.array_equal(r.counts, info["count"])
+    assert isinstance(rll.read_exr(copy, metadata=False), np.ndarray)
+    with pytest.raises(rll.Error, match="count"):
+        rll.write_exr(copy, img, count=np.ones((3, 3)))
+    with pytest.raises(rll.Error, match="attributes"):
+        rll.write_exr(copy, img, attributes={"a": 1})
+    assert rll.read_exr(tmp_path / "copy.exr", metadata=True)[1]["share"] == share
+
+
+def test_reference_and_compare_match_the_cli(tmp_path):
+    cache = tmp_path / "cache"
+    scene = rll.load(BOX, res=(24, 16))
+    ref = rll.reference(scene, spp=16, cache_dir=cache)
+    assert ref["source"] == "rendered" and ref["spp"] >= 16 and ref["sampler"] == "tree"
+    assert ref["image"].shape == (16, 24, 3) and ref["variance"].shape == (16, 24, 3)
+    again = rll.reference(scene, spp=16, cache_dir=cache)
+    assert again["source"] == "cache" and np.array_equal(again["image"], ref["image"])
+    cached = rll.read_exr(again["cache_entry"])
+    assert np.array_equal(cached, ref["image"])
+
+    out = tmp_path / "cmp"
+    cli("compare", BOX, "--res", "24x16", "--samplers", "power,rll", "--spp", "4",
+        "--repeats", "2", "--reference-spp", "16", "--cache-dir", str(cache), "--quiet",
+        "--out", str(out))
+    want = json.loads((out / "summary.json").read_text())
+    got = rll.compare(scene, ["power", "rll"], spp=4, repeats=2, reference_spp=16,
+                      cache_dir=cache)
+    assert got["order"] == want["order"] and got["repeats"] == 2
+    assert got["reference"]["source"] == "cache"
+    assert got["reference"]["noise_relmse"] == pytest.approx(want["reference"]["noise_relmse"])
+    assert [s["name"] for s in got["samplers"]] == ["power", "rll"]
+    for g, w in zip(got["samplers"], want["samplers"]):
+        assert set(g) <= set(w)
+        missing = set(w) - set(g)
+        assert missing <= {"image", "error_image"}, missing
+        for metric in ("relmse", "trimmed_relmse", "mrse", "mse", "visible_sample_ratio"):
+            assert g[metric]["values"] == pytest.approx(w[metric]["values"], rel=1e-9), metric
+        assert g["spp"] == w["spp"]
+    assert np.array_equal(got["images"]["power"], rll.read_exr(out / want["samplers"][0]["image"]))
+    assert np.array_equal(got["reference_image"], rll.read_exr(out / "reference.exr"))
+    # A given reference (array or file), and the errors.
+    fixed = rll.compare(scene, ["power"], spp=2, reference=ref["image"])
+    assert fixed["reference"]["source"] == "array"
+    assert fixed["samplers"][0]["relmse"]["median"] == pytest.approx(
+        rll.error(fixed["images"]["power"], ref["image"])["relmse"])
+    with pytest.raises(rll.Error, match="budget"):
+        rll.compare(scene, ["power"], reference=ref["image"])
+    with pytest.raises(rll.Error, match="budget"):
+        rll.compare(scene, ["power"], spp=2, time=1, reference=ref["image"])
+    with pytest.raises(rll.Error, match="twice"):
+        rll.compare(scene, ["power", "power"], spp=2, reference=ref["image"])
+    with pytest.raises(rll.Error, match="sampler: .*nope"):
+        rll.compare(scene, ["nope"], spp=2, reference=ref["image"])
+    with pytest.raises(rll.Error, match="reference: the image is 3x2"):
+        rll.compare(scene, ["power"], spp=2, reference=np.ones((2, 3, 3)))
+    with pytest.raises(rll.Error, match="spp"):
+        rll.reference(scene, spp=0, cache_dir=cache)
+
+
+# Two lamps over a floor: lamp A (3x the power of B) inside a closed box, lamp B inside a box open
+# at the bottom that the camera looks down into. Every floor point the camera sees faces lamp B,
+# unoccluded, and can never reach lamp A: power sampling picks B with probability 1/4, so exactly
+# that share of its light samples reaches a light.
+OCCLUSION_SCENE = {
+    "camera": {"position": [0, 0.8, 0], "target": [0, 0, 0], "up": [0, 0, 1], "fov": 40},
+    "film": {"width": 48, "height": 48},
+    "materials": {
+        "white": {"albedo": [0.5, 0.5, 0.5]},
+        "dim": {"albedo": [0, 0, 0], "emission": [10, 10, 10]},
+        "bright": {"albedo": [0, 0, 0], "emission": [30, 30, 30]},
+    },
+    "shapes": [
+        {"type": "quad", "origin": [-1.5, 0, -1.5], "edge1": [0, 0, 3], "edge2": [5.5, 0, 0],
+         "material": "white"},
+        {"type": "box", "min": [-1, 0.001, -1], "max": [1, 1, 1], "inward": True,
+         "skip": ["-y"], "material": "white"},
+        {"type": "quad", "origin": [-0.1, 0.95, -0.1], "edge1": [0.2, 0, 0],
+         "edge2": [0, 0, 0.2], "material": "dim"},
+        {"type": "box", "min": [2.5, 0.001, -0.5], "max": [3.5, 1, 0.5], "inward": True,
+         "material": "white"},
+        {"type": "quad", "origin": [2.9, 0.95, -0.1], "edge1": [0.2, 0, 0],
+         "edge2": [0, 0, 0.2], "material": "bright"},
+    ],
+}
+
+
+@pytest.fixture(scope="module")
+def occlusion(tmp_path_factory):
+    path = tmp_path_factory.mktemp("occ") / "occlusion.json"
+    path.write_text(json.dumps(OCCLUSION_SCENE))
+    return path
+
+
+def test_aov_visible_ratio_of_power_is_the_analytic_share(occlusion):
+    scene = rll.load(occlusion)
+    spp = 64
+    r = rll.render(scene, sampler="power", integrator="direct", spp=spp, aov=["visible"])
+    vis = r.aov["visible"]
+    assert vis.shape == (48, 48) and vis.dtype == np.float32 and np.isfinite(vis).all()
+    # Every pixel takes one light sample per sample: the mean of the pixels' ratios is the share
+    # of all N samples. Binomial bound, z = 4.5 (Sobol' points stratify the choice: tighter still);
+    # it is 3.5% of 1/4, so a 5% bias of the ratio fails.
+    n = vis.size * spp
+    share = 0.25
+    bound = 4.5 * np.sqrt(share * (1 - share) / n)
+    assert abs(vis.mean() - share) < bound, (vis.mean(), bound)
+    assert bound < 0.05 * share
+    # The whole render's ratio (--stats) is the same share: only floor points are seen.
+    assert r.stats["rays"]["shadow"] == n
+    # rll learns that lamp A never reaches: its ratio is far higher.
+    learnt = rll.render(scene, sampler="rll", integrator="direct", spp=spp, aov="visible")
+    assert learnt.aov["visible"].mean() > 0.6
+
+
+def test_aov_cell_image_is_constant_inside_cells(occlusion):
+    scene = rll.load(occlusion)
+    r = rll.render(scene, sampler="rll", integrator="direct", spp=8, aov="cell,entropy,rewards")
+    cell = r.aov["cell"]
+    assert (cell >= 0).all() and (cell == np.round(cell)).all()
+    ids = np.unique(cell)
+    assert len(ids) >= 4  # cell boundaries cross the view
+    # The floor is cut by axis-aligned cell boxes, which the camera (looking straight down, up +z)
+    # sees as rectangles: each id holds a rectangle, constant inside (its last sample decides a
+    # pixel on a boundary, so one pixel of its edge may show the neighbour).
+    widths = []
+    for c in ids:
+        ys, xs = np.nonzero(cell == c)
+        y0, y1, x0, x1 = ys.min(), ys.max(), xs.min(), xs.max()
+        inner = cell[y0 + 1:y1, x0 + 1:x1]
+        assert (inner == c).all(), c
+        if x0 > 0 and x1 < 47:
+            widths.append(x1 - x0 + 1)
+    # One level of detail: one cell size (a level apart would be twice the width); perspective
+    # and the ragged edges vary it by a little.
+    assert widths and max(widths) <= 1.5 * min(widths)
+    st = r.state
+    in_state = set(st.cells["id"].tolist())
+    assert set(ids.astype(int).tolist()) <= in_state
+    # Every cell of the image lies on the floor (anchor y = 0, normal up).
+    rows = np.isin(st.cells["id"], ids.astype(np.uint32))
+    assert np.allclose(st.cells["anchor"][rows, 1], 0, atol=1e-3)
+    assert np.allclose(st.cells["normal"][rows], [0, 1, 0], atol=1e-3)
+    # Entropy and rewards of each pixel's cell, as the state has them.
+    ent, rew = r.aov["entropy"], r.aov["rewards"]
+    c0 = int(ids[0])
+    p = st.cut(c0)["probability"].astype(np.float64)
+    p = p[p > 0]
+    where = cell == c0
+    assert ent[where] == pytest.approx(-(p * np.log2(p)).sum(), rel=1e-5)
+    assert (rew[where] == st.cells["rewards"][st.cells["id"] == c0][0]).all()
+    colours = rll.cell_colours(cell)
+    assert colours.shape == (48, 48, 3) and (colours > 0).all()
+
+
+def test_aov_leaves_the_image_unchanged_and_matches_the_cli(occlusion, tmp_path):
+    scene = rll.load(occlusion, res=(24, 24))
+    names = list(rll.aov_names())
+    assert names == ["cell", "probability", "entropy", "visible", "rewards"]
+    plain = rll.render(scene, sampler="rll", spp=6, seed=2)
+    with_aov = rll.render(scene, sampler="rll", spp=6, seed=2, aov=names)
+    assert np.array_equal(plain.image, with_aov.image)  # to the bit
+    assert plain.aov == {} and sorted(with_aov.aov) == sorted(names)
+    prob = with_aov.aov["probability"]
+    assert ((prob > 0) & (prob <= 1)).all()
+    out = tmp_path / "aov.exr"
+    cli("render", str(occlusion), "--res", "24x24", "--spp", "6", "--seed", "2", "--quiet",
+        "--aov", ",".join(names), "-o", str(out))
+    img, info = rll.read_exr(out, metadata=True)
+    assert np.array_equal(img, plain.image)
+    assert sorted(info["channels"]) == sorted("aov." + n for n in names)
+    for n in names[1:]:
+        assert np.array_equal(info["channels"]["aov." + n], with_aov.aov[n], equal_nan=True), n
+    # Cell ids are the table's, handed out in the order threads first reach the cells: the same
+    # cells, not the same numbers, in another run; one id of one is one id of the other.
+    pairs = set(zip(info["channels"]["aov.cell"].ravel().tolist(), with_aov.aov["cell"].ravel().tolist()))
+    assert len({a for a, _ in pairs}) == len({b for _, b in pairs}) == len(pairs) > 1
+    # Samplers without cells: no cell, entropy or rewards (-1, NaN), a probability and a ratio.
+    power = rll.render(scene, sampler="power", spp=2, aov=names).aov
+    assert (power["cell"] == -1).all() and np.isnan(power["entropy"]).all()
+    assert np.isfinite(power["visible"]).all()
+
+
+def test_aov_names_are_checked(box, tmp_path):
+    with pytest.raises(rll.Error, match="aov: unknown diagnostic 'nope' .*cell, probability"):
+        rll.render(box, spp=1, aov=["cell", "nope"])
+    with pytest.raises(rll.Error, match="twice"):
+        rll.render(box, spp=1, aov="cell,cell")
+    with pytest.raises(rll.Error, match="megakernel"):
+        rll.render(box, spp=1, aov="cell", wavefront=True)
+    r = cli("render", BOX, "--res", "8x8", "--spp", "1", "--aov", "bogus", "-o",
+            str(tmp_path / "x.exr"), check=False)
+    assert r.returncode != 0 and "--aov: unknown diagnostic 'bogus'" in r.stderr
+    assert "cell, probability, entropy, visible, rewards" in r.stderr
+    r = cli("render", BOX, "--res", "8x8", "--spp", "1", "--aov", "cell", "-o",
+            str(tmp_path / "x.png"), check=False)
+    assert r.returncode != 0 and ".exr" in r.stderr
+
+
+def test_wavefront_from_python_equals_the_cli(tmp_path):
+    out = tmp_path / "wf.exr"
+    cli("render", BOX, "--res", "24x16", "--spp", "4", "--sampler", "power", "--wavefront",
+        "--quiet", "-o", str(out))
+    r = rll.render(rll.load(BOX, res=(24, 16)), sampler="power", spp=4, wavefront=True)
+    assert r.stats["renderer"] == "wavefront"
+    assert np.array_equal(r.image, rll.read_exr(out))
+
+
+@pytest.mark.parametrize("script,args,says", [
+    ("convergence.py", ["builtin:cornell-box", "--samplers", "power,rll", "--spp", "4",
+                        "--res", "32x24", "--reference-spp", "16"], "rll: 4 spp"),
+    ("cell_vs_oracle.py", ["builtin:cornell-boxes-room", "--spp", "8", "--res", "32x24"],
+     "pmf sums: rll 1.0000"),
+])
+def test_examples_run(tmp_path, script, args, says):
+    examples = os.path.join(os.path.dirname(__file__), "..", "..", "examples")
+    out = tmp_path / "plot.png"
+    env = dict(os.environ, RLL_CACHE_DIR=str(tmp_path / "cache"))
+    r = subprocess.run([sys.executable, os.path.join(examples, script), *args, "--out", str(out)],
+                       capture_output=True, text=True, env=env, cwd=tmp_path, timeout=240)
+    assert r.returncode == 0, r.stderr
+    assert says in r.stdout, r.stdout
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 5000
+
+
+def test_install_puts_the_program_and_the_module_under_the_prefix(tmp_path):
+    build = os.environ.get("RLL_BUILD_DIR")
+    if not build:
+        pytest.skip("RLL_BUILD_DIR (set by ctest) names no build folder")
+    prefix = tmp_path / "prefix"
+    r = subprocess.run(["cmake", "--install", build, "--prefix", str(prefix)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    program = prefix / "bin" / "rll"
+    assert subprocess.run([str(program), "samplers"], capture_output=True,
+                          text=True).stdout.split() == rll.samplers()
+    site = prefix / "lib" / f"python{sys.version_info.major}.{sys.version_info.minor}" / \
+        "dist-packages"
+    assert (site / "rll.pyi").exists()
+    env = dict(os.environ, PYTHONPATH=str(site))
+    r = subprocess.run([sys.executable, "-c", "import rll; print(rll.__file__, len(rll.samplers()))"],
+                       capture_output=True, text=True, env=env)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith(str(site)) and int(r.stdout.split()[1]) == len(rll.samplers())

@@ -300,7 +300,7 @@ std::array<const char*, 3> rgb_channels(const Imf::ChannelList& channels, const 
       present.empty() ? "none" : fmt::format("{}", fmt::join(present, ", ")));
 }
 
-// `extras`: also the string attributes and the "count" channel.
+// `extras`: also the string attributes, the "count" channel and further FLOAT channels.
 ExrFile read_exr_unchecked(const fs::path& path, bool extras, LuminanceOnly luminance) {
   const std::string name = path.string();
   check_exr_header(path);
@@ -311,6 +311,13 @@ ExrFile read_exr_unchecked(const fs::path& path, bool extras, LuminanceOnly lumi
   const bool has_counts = extras && header.channels().findChannel("count") != nullptr;
   if (has_counts && header.channels().findChannel("count")->type != Imf::UINT)
     fail("cannot read '{}': its channel 'count' is not 32-bit unsigned", name);
+  if (extras)
+    for (auto c = header.channels().begin(); c != header.channels().end(); ++c) {
+      const std::string_view n = c.name();
+      if (n != "count" && n != rgb[0] && n != rgb[1] && n != rgb[2] &&
+          c.channel().type == Imf::FLOAT)
+        out.channels.emplace_back(c.name(), std::vector<float>());
+    }
   if (extras)
     for (auto a = header.begin(); a != header.end(); ++a)
       if (const auto* v = dynamic_cast<const Imf::StringAttribute*>(&a.attribute()))
@@ -343,6 +350,7 @@ ExrFile read_exr_unchecked(const fs::path& path, bool extras, LuminanceOnly lumi
       px.reserve(std::min(size_t(w * h), std::max(need, 2 * px.capacity())));
     px.resize(need);
     if (has_counts) out.counts.resize(need);
+    for (auto& ch : out.channels) ch.second.resize(need);
     // OpenEXR addresses pixel (x, y) at base + x * xs + y * ys in data-window coordinates.
     const ptrdiff_t origin = ptrdiff_t(((dw.min.y + y0) * w + dw.min.x) * int64_t(sizeof(Rgb)));
     char* base = reinterpret_cast<char*>(px.data() + y0 * w) - origin;
@@ -358,6 +366,12 @@ ExrFile read_exr_unchecked(const fs::path& path, bool extras, LuminanceOnly lumi
       char* cbase = reinterpret_cast<char*>(out.counts.data() + y0 * w) - corigin;
       fb.insert("count",
                 Imf::Slice(Imf::UINT, cbase, sizeof(uint32_t), sizeof(uint32_t) * size_t(w)));
+    }
+    for (auto& [cname, values] : out.channels) {
+      const ptrdiff_t forigin =
+          ptrdiff_t(((dw.min.y + y0) * w + dw.min.x) * int64_t(sizeof(float)));
+      char* fbase = reinterpret_cast<char*>(values.data() + y0 * w) - forigin;
+      fb.insert(cname, Imf::Slice(Imf::FLOAT, fbase, sizeof(float), sizeof(float) * size_t(w)));
     }
     file.setFrameBuffer(fb);
     file.readPixels(int(dw.min.y + y0), int(dw.min.y + y0 + rows - 1));
@@ -393,12 +407,14 @@ void read_image_checks(const fs::path& path) {
 // Writes the EXR to `tmp` (removed on failure; the caller commits it to `path`).
 void write_exr_to(const fs::path& tmp, const fs::path& path, const Image& image,
                   const std::vector<std::pair<std::string, std::string>>& attributes,
-                  const std::vector<uint32_t>* counts) {
+                  const std::vector<uint32_t>* counts,
+                  const std::vector<std::pair<std::string, std::vector<float>>>& channels) {
   try {
     Imf::Header header(image.width(), image.height());
     header.compression() = Imf::ZIP_COMPRESSION;
     for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
     if (counts) header.channels().insert("count", Imf::Channel(Imf::UINT));
+    for (const auto& ch : channels) header.channels().insert(ch.first, Imf::Channel(Imf::FLOAT));
     for (const auto& [name, value] : attributes) header.insert(name, Imf::StringAttribute(value));
     Imf::OutputFile file(tmp.c_str(), header);
     Imf::FrameBuffer fb;
@@ -410,6 +426,9 @@ void write_exr_to(const fs::path& tmp, const fs::path& path, const Image& image,
     if (counts)
       fb.insert("count", Imf::Slice(Imf::UINT, (char*)counts->data(), sizeof(uint32_t),
                                     sizeof(uint32_t) * image.width()));
+    for (const auto& [cname, values] : channels)
+      fb.insert(cname, Imf::Slice(Imf::FLOAT, (char*)values.data(), sizeof(float),
+                                  sizeof(float) * image.width()));
     file.setFrameBuffer(fb);
     file.writePixels(image.height());
   } catch (const std::exception& e) {
@@ -438,9 +457,14 @@ void write_exr(const fs::path& path, const ExrFile& file) {
   if (!file.counts.empty() && file.counts.size() != file.image.pixel_count())
     fail("cannot write '{}': {} sample counts for {} pixels", path.string(), file.counts.size(),
          file.image.pixel_count());
+  for (const auto& [name, values] : file.channels)
+    if (values.size() != file.image.pixel_count() || name.empty() || name == "count" ||
+        name == "R" || name == "G" || name == "B")
+      fail("cannot write '{}': channel '{}' has {} values for {} pixels, or a reserved name",
+           path.string(), name, values.size(), file.image.pixel_count());
   const fs::path tmp = temp_sibling(check_writable_image(path, file.image));
-  write_exr_to(tmp, path, file.image, file.attributes,
-               file.counts.empty() ? nullptr : &file.counts);
+  write_exr_to(tmp, path, file.image, file.attributes, file.counts.empty() ? nullptr : &file.counts,
+               file.channels);
   commit(tmp, path);
 }
 
@@ -477,7 +501,7 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
   std::string ext = lower_extension(path);
   const fs::path tmp = temp_sibling(target);
   if (ext == ".exr") {
-    write_exr_to(tmp, path, image, {}, nullptr);
+    write_exr_to(tmp, path, image, {}, nullptr, {});
   } else if (ext == ".png") {
     float scale = std::exp2(exposure_stops);
     std::vector<uint8_t> px(image.pixel_count() * 3);

@@ -72,13 +72,16 @@ struct ExrFile {
   Image image;
   std::vector<std::pair<std::string, std::string>> attributes;
   std::vector<uint32_t> counts;  // empty, or one per pixel
+  // Further 32-bit float channels, one value per pixel each (`rll render --aov` diagnostics).
+  std::vector<std::pair<std::string, std::vector<float>>> channels;
 
   // The value of attribute `name`, or nullptr.
   const std::string* attribute(const std::string& name) const;
 };
 // Writes atomically, as write_image does for .exr (32-bit float RGB, ZIP).
 void write_exr(const std::filesystem::path& path, const ExrFile& file);
-// Reads an .exr with its string attributes and its "count" channel (empty if it has none).
+// Reads an .exr with its string attributes, its "count" channel (empty if it has none) and its
+// other 32-bit float channels.
 // It must have R, G and B (a share or a cache entry: LuminanceOnly::refuse).
 ExrFile read_exr_file(const std::filesystem::path& path);
 

@@ -3,11 +3,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 
 #include "rll/core/error.h"
+#include "rll/core/sysinfo.h"
 #include "rll/eval/metrics.h"
+#include "rll/session/session.h"
 
 namespace rll {
 
@@ -37,6 +40,72 @@ void ConvergenceRecorder::finish(const RenderProgress& p, const Image& image) {
   if (m_last_pass == p.passes && !m_checkpoints.empty()) m_checkpoints.pop_back();
   m_checkpoints.push_back(measure(p, image));
   m_last_pass = p.passes;
+}
+
+MeasuredRun measure_run(RenderSession& session, const std::string& name, int repeat,
+                        const RenderSettings& settings, int frames, const Image& reference,
+                        const Image* reference_variance, const std::string& label,
+                        bool show_progress, const std::atomic<bool>* cancel,
+                        const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
+  reset_peak_rss();
+  MeasuredRun out;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto sampler = session.make_sampler(name);
+  const double setup_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const Scene& scene = session.scene();
+  RenderSettings rs = settings;
+  for (int f = 0; f + 1 < frames; ++f) {
+    session.set_frame(f, sampler.get());
+    Film earlier(scene.width, scene.height);
+    RenderSettings rf = rs;
+    rf.frame = f;
+    session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1), show_progress,
+                   cancel, after_pass);
+    if (cancel && cancel->load()) {
+      out.cancelled = true;
+      return out;
+    }
+  }
+  session.set_frame(frames - 1, sampler.get());
+  rs.frame = frames - 1;
+  ConvergenceRecorder recorder(reference, reference_variance);
+  Film film(scene.width, scene.height);
+  const RenderProgress p = session.render(*sampler, film, rs, label, show_progress, cancel,
+                                          [&](const RenderProgress& pr, const Film& f) {
+                                            recorder.after_pass(pr, f);
+                                            if (after_pass) after_pass(pr, f);
+                                          });
+  if (p.cancelled) {
+    out.cancelled = true;
+    return out;
+  }
+  out.image = film.resolve();
+  recorder.finish(p, out.image);
+
+  RunResult& run = out.result;
+  run.sampler = name;
+  run.repeat = repeat;
+  run.seed = rs.seed;
+  run.spp = p.spp_done;
+  run.seconds = p.seconds;
+  run.setup_seconds = setup_seconds;
+  run.checkpoints = recorder.checkpoints();
+  const Checkpoint& last = run.checkpoints.back();
+  run.relmse = last.relmse;
+  run.mse = last.mse;
+  run.trimmed_relmse = last.trimmed_relmse;
+  run.mrse = last.mrse;
+  run.visible_ratio = p.rays.visible_ratio();
+  run.describe = sampler->describe();
+  if (run.describe.is_object() && run.describe.contains("bytes") &&
+      run.describe["bytes"].is_number())
+    run.sampler_bytes = run.describe["bytes"].get<double>();
+  run.peak_rss_bytes = peak_rss_bytes();
+  if (p.nonfinite)
+    fmt::print(stderr, "rll: warning: {}: {} non-finite samples were dropped\n", name, p.nonfinite);
+  out.sampler = std::move(sampler);
+  return out;
 }
 
 std::optional<double> efficiency(double relmse, double seconds) {

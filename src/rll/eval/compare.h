@@ -2,13 +2,17 @@
 // their median and spread over repeats, summary.json and the printed table.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "rll/core/image.h"
+#include "rll/lights/light_sampler.h"
 #include "rll/render/film.h"
 #include "rll/render/render.h"
 
@@ -62,6 +66,25 @@ struct RunResult {
   nlohmann::json describe;              // the sampler's describe()
   std::vector<Checkpoint> checkpoints;
 };
+
+class RenderSession;
+
+// One measured run of `rll compare` (and rll.compare in Python): a fresh sampler `name` (its
+// making timed as setup), the frames before `frames - 1` rendered with the same budget so that a
+// learning sampler carries what it learnt, then the last frame rendered with relMSE checkpoints
+// against `reference` (its noise subtracted with `reference_variance`). Cancelled (`cancelled`
+// set, no result) when `cancel` is raised during any frame.
+struct MeasuredRun {
+  RunResult result;
+  Image image;
+  std::unique_ptr<LightSampler> sampler;  // as the run left it (what it learnt)
+  bool cancelled = false;
+};
+MeasuredRun measure_run(
+    RenderSession& session, const std::string& name, int repeat, const RenderSettings& settings,
+    int frames, const Image& reference, const Image* reference_variance, const std::string& label,
+    bool show_progress, const std::atomic<bool>* cancel,
+    const std::function<void(const RenderProgress&, const Film&)>& after_pass = {});
 
 // 1 / (relMSE x seconds); nullopt where undefined (zero error or zero time).
 std::optional<double> efficiency(double relmse, double seconds);

@@ -209,4 +209,12 @@ double quantile(std::vector<float> values, double q) {
   return values[k];
 }
 
+double reference_noise_relmse(const Image& ref, const Image& variance) {
+  double sum = 0;
+  for (size_t i = 0; i < ref.pixel_count(); ++i)
+    for (int c = 0; c < 3; ++c)
+      sum += double(variance[i][c]) / (double(ref[i][c]) * ref[i][c] + kRelMseEpsilon);
+  return sum / (3.0 * double(ref.pixel_count()));
+}
+
 }  // namespace rll

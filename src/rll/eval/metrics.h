@@ -67,6 +67,9 @@ double mrse(const Image& image, const Image& reference);
 // The variance of the mean of two independent, equally sampled renders a and b, per pixel and
 // channel: (a - b)^2 / 4 is an unbiased estimate of Var((a + b) / 2).
 Image variance_of_mean_of_halves(const Image& a, const Image& b);
+// The reference's own noise, in relMSE units: the mean of Var(ref) / (ref^2 + kRelMseEpsilon).
+double reference_noise_relmse(const Image& ref, const Image& variance);
+
 // Per pixel, the mean over channels of (x - ref)^2 / (ref^2 + kRelMseEpsilon): its mean over
 // pixels is relmse(image, reference).
 std::vector<float> relative_error_map(const Image& image, const Image& reference);

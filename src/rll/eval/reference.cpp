@@ -337,4 +337,16 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
   return out;
 }
 
+nlohmann::json reference_json(bool from_cache, const ReferenceInfo& info, const Image& image,
+                              const Image& variance) {
+  nlohmann::json j = {{"source", from_cache ? "cache" : "rendered"},
+                      {"cache_entry", info.image.string()},
+                      {"sampler", info.sampler},
+                      {"spp", info.spp},
+                      {"seed", info.seed},
+                      {"seconds", info.seconds}};
+  if (variance.pixel_count()) j["noise_relmse"] = reference_noise_relmse(image, variance);
+  return j;
+}
+
 }  // namespace rll

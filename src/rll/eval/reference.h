@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 
@@ -87,6 +88,13 @@ class RenderSession;
 // numbers (and hence its noise) with a render it is compared with.
 inline constexpr uint64_t kDefaultReferenceSeed = 1000003;
 
+// True if a reference of seed `s` (halves s and s + 1) shares a seed with runs of seeds
+// [run_seed, run_seed + repeats), and so their noise: compare never measures against one.
+inline bool reference_shares_a_seed(uint64_t s, uint64_t run_seed, int repeats) {
+  auto is_run = [&](uint64_t x) { return x >= run_seed && x - run_seed < uint64_t(repeats); };
+  return is_run(s) || is_run(s + 1);
+}
+
 struct ReferenceRequest {
   // Tree sampling: visibility-blind, without learning state, and far better behaved than power
   // on occluded scenes (whose lamps power sampling gives pmfs near 1e-7).
@@ -115,6 +123,12 @@ struct ObtainedReference {
 // new one rendered as two halves of ceil(spp / 2) samples (progress bars labelled "reference
 // 1/2" and "2/2") and stored in the cache. A cache entry that cannot be read back (truncated,
 // wrong size, non-finite pixels) is reported, deleted and rendered again.
+// What summary.json says of an obtained reference: source (cache or rendered), cache_entry,
+// sampler, spp, seed, seconds and, where its variance is known, noise_relmse
+// (reference_noise_relmse).
+nlohmann::json reference_json(bool from_cache, const ReferenceInfo& info, const Image& image,
+                              const Image& variance);
+
 ObtainedReference obtain_reference(const RenderSession& session, const ReferenceCache& cache,
                                    const ReferenceRequest& request, bool show_progress,
                                    const std::atomic<bool>* cancel = nullptr);

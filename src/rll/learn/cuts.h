@@ -447,6 +447,8 @@ class CutStore {
   bool learnt(uint32_t cell) const { return m_learnt[cell] != 0; }
   // The weight of the defensive term for this cell during this pass (1 before it learnt).
   float defensive_weight(uint32_t cell) const { return m_eps[cell]; }
+  // Rewards the cell has received in earlier passes (huge for a cell the oracle assigned).
+  float rewards_seen(uint32_t cell) const { return m_seen[cell]; }
   // The learnt distribution of the cell's clusters, V(s) / sum V (V = sqrt(M2) or Q), before the
   // defensive prior is mixed in; empty while the cell has learnt nothing. For tests and tools.
   std::vector<double> learnt_shares(uint32_t cell) const;

@@ -9,6 +9,25 @@
 
 namespace rll {
 
+// What one sample's camera vertex (the first surface its path hit) saw of the light sampler, for
+// the per-pixel diagnostics (render/aov.h).
+struct CameraVertexSample {
+  static constexpr uint32_t kNone = ~0u;
+  uint32_t cell = kNone;  // the sampler's cell of the point (rll, fermat, oracle)
+  float light_pmf = 0;    // the pmf of the light its next-event sample chose
+  bool sampled = false;   // a next-event sample was taken there
+  uint32_t shadow = 0;    // light samples there that count a shadow ray ...
+  uint32_t visible = 0;   // ... and those whose shadow ray reached the light
+};
+
+// Per pixel, the sums of its samples' camera vertices: the last sample's cell, the chosen
+// lights' pmfs and how many, the shadow rays and those that reached their light.
+struct CameraVertexSums {
+  std::vector<uint32_t> cell;
+  std::vector<double> light_pmf;
+  std::vector<uint32_t> sampled, shadow, visible;
+};
+
 // A film's sums and counts as a kernel adds to them (in host or device memory).
 struct FilmView {
   View<double> sum;  // 3 per pixel
@@ -35,6 +54,14 @@ class Film {
   int height() const { return m_h; }
   // Not thread-safe per pixel: each pixel is owned by one tile at a time.
   void add(int x, int y, const Rgb& v) { view().add(size_t(y) * m_w + x, v); }
+  // Keeps per-pixel sums of the camera vertices too (render() then asks the integrator for them).
+  void track_camera_vertex();
+  // Null unless tracked.
+  const CameraVertexSums* camera_vertex() const {
+    return m_vertex.cell.empty() ? nullptr : &m_vertex;
+  }
+  // Not thread-safe per pixel, as add().
+  void add_camera_vertex(int x, int y, const CameraVertexSample& v);
   FilmView view() { return {view_of(m_sum), view_of(m_count), m_w}; }
   uint32_t count(int x, int y) const { return m_count[size_t(y) * m_w + x]; }
   uint32_t min_count() const;
@@ -47,6 +74,7 @@ class Film {
   int m_w, m_h;
   std::vector<double> m_sum;  // double: references accumulate many thousand samples
   std::vector<uint32_t> m_count;
+  CameraVertexSums m_vertex;
 };
 
 }  // namespace rll

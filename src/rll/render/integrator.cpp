@@ -79,7 +79,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sam
 }
 
 Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
-                             const Rgb& beta, SampleStream& stream, RayCounters& counters) const {
+                             const Rgb& beta, SampleStream& stream, RayCounters& counters,
+                             CameraVertexSample* camera) const {
   if (m_rht) {
     RhtNeeSamples samples;
     rht_nee(m_constants, *m_rht, ctx, bsdf, wo, stream, depth, samples);
@@ -89,6 +90,10 @@ Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Ve
       if (s.setup.counts_shadow_ray) ++counters.shadow;
       const bool occluded = s.setup.traces && m_accel.occluded(s.setup.shadow);
       if (reaches_light(s.setup, occluded)) ++counters.shadow_visible;
+      if (camera) {  // the visible-sample ratio only: rht's samples have no one light pmf
+        camera->shadow += s.setup.counts_shadow_ray;
+        camera->visible += reaches_light(s.setup, occluded);
+      }
       sum += rht_nee_finish(m_constants, s, occluded, bsdf, wo, beta);
     }
     return sum;
@@ -99,12 +104,19 @@ Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Ve
   if (ch.setup.counts_shadow_ray) ++counters.shadow;
   const bool occluded = ch.setup.traces && m_accel.occluded(ch.setup.shadow);
   if (reaches_light(ch.setup, occluded)) ++counters.shadow_visible;
+  if (camera) {
+    camera->sampled = true;
+    camera->light_pmf = ch.light.pmf;
+    camera->shadow += ch.setup.counts_shadow_ray;
+    camera->visible += reaches_light(ch.setup, occluded);
+  }
   const NeeResult r = nee_finish_resampled(m_constants, ch, occluded, bsdf, wo, beta);
   if (m_learns) m_sampler.record(ctx, ch.light, r.record);
   return r.value;
 }
 
-Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters) const {
+Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters,
+                   CameraVertexSample* camera) const {
   const PathConstants& c = m_constants;
   PathState s = start_path(c);
   Ray ray = camera_ray;
@@ -127,7 +139,9 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     const bool light = samples_light(c, bsdf);
     if (m_prepares && !bsdf.is_delta())
       m_sampler.prepare(ctx, vertex_number(stream, depth, kPrepare));
-    if (light) s.L += s.beta * sample_light(ctx, bsdf, wo, depth, s.beta, stream, counters);
+    CameraVertexSample* vertex = depth == 0 ? camera : nullptr;
+    if (vertex) vertex->cell = ctx.cell;
+    if (light) s.L += s.beta * sample_light(ctx, bsdf, wo, depth, s.beta, stream, counters, vertex);
     if (!continues_after_light(c, bsdf, depth)) break;
 
     bool roulette = false;

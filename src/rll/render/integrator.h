@@ -8,6 +8,7 @@
 #include "rll/accel/accel.h"
 #include "rll/core/rng.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/render/film.h"
 #include "rll/render/path_vertex.h"
 #include "rll/scene/scene.h"
 #include "rll/scene/scene_view.h"
@@ -54,8 +55,11 @@ class Integrator {
  public:
   Integrator(const Scene& scene, const Accel& accel, LightSampler& sampler,
              IntegratorSettings settings);
-  // Radiance along a camera ray; `stream` supplies the per-sample random numbers.
-  Rgb li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters) const;
+  // Radiance along a camera ray; `stream` supplies the per-sample random numbers. With `camera`,
+  // also what the camera vertex saw of the light sampler (the per-pixel diagnostics); the
+  // radiance is the same with or without.
+  Rgb li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters,
+         CameraVertexSample* camera = nullptr) const;
   const IntegratorSettings& settings() const { return m_settings; }
   const PathConstants& constants() const { return m_constants; }
 
@@ -64,7 +68,8 @@ class Integrator {
   // divided by the light pmf, before the path throughput. One sample (resampled from
   // nee.candidates), or a multi-sample sampler's several (rht_view()), each with a shadow ray.
   Rgb sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
-                   const Rgb& beta, SampleStream& stream, RayCounters& counters) const;
+                   const Rgb& beta, SampleStream& stream, RayCounters& counters,
+                   CameraVertexSample* camera) const;
 
   const Scene& m_scene;
   const Accel& m_accel;

@@ -90,6 +90,7 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
   const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
   const int tiles_x = (w + ts - 1) / ts, tiles_y = (h + ts - 1) / ts;
   std::mutex merge_mutex;
+  const bool tracks_vertex = film.camera_vertex() != nullptr;
   auto pass = [&](int first, int count, uint64_t frame_seed, const PassStop& stop,
                   RayCounters& pass_rays, uint64_t& pass_nonfinite) {
     parallel_for_each(size_t(tiles_x) * tiles_y, [&](size_t tile) {
@@ -102,12 +103,15 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
           for (int s = first; s < first + count; ++s) {
             SampleStream stream(frame_seed, uint64_t(y) * w + x,
                                 settings.first_sample + uint64_t(s), settings.points);
-            Rgb L = integrator.li(camera_ray(scene, x, y, stream), stream, rays);
+            CameraVertexSample vertex;
+            Rgb L = integrator.li(camera_ray(scene, x, y, stream), stream, rays,
+                                  tracks_vertex ? &vertex : nullptr);
             if (!is_finite(L)) {
               ++nonfinite;
               L = Rgb(0);
             }
             film.add(x, y, L);
+            if (tracks_vertex) film.add_camera_vertex(x, y, vertex);
           }
       std::lock_guard lock(merge_mutex);
       pass_rays += rays;
