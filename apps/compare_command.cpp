@@ -209,7 +209,6 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
   if (!o.quiet)
     fmt::print(stderr, "{}: {} spp in {}, relMSE {:.4e}\n", label, run.spp,
                format_duration(run.seconds), run.relmse);
-  if (kept) *kept = std::move(sampler);
   return run;
 }
 
