@@ -137,6 +137,7 @@ void run(const RenderOptions& o) {
   RenderSession session(o.session);
   Scene& scene = session.scene();
   auto sampler = make_sampler_for(session, o.sampler, "--sampler");
+  const IntegratorSettings integrator = session.integrator_for(o.sampler);
   session.check_params_used();
   if (!o.state.empty()) check_sampler_has_state(*sampler, "--rll-state");
   // Shares and states belong to the scene as loaded, before an animation moves its lights.
@@ -170,7 +171,8 @@ void run(const RenderOptions& o) {
     if (!aovs.empty()) film.track_camera_vertex();
     std::string label =
         frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
-    RenderProgress p = session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag());
+    RenderProgress p = session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag(), {},
+                                      nullptr, &integrator);
     fs::path out = frame_path(output, f, frames);
     if (exr_output) {
       ShareInfo share;

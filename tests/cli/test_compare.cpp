@@ -342,6 +342,46 @@ TEST(Reference, EditingTheSceneFileInvalidatesItsReference) {
   EXPECT_TRUE(contains(reference().output, "rendered"));
 }
 
+// A variant carries the integrator's keys for itself: "tree:nee.candidates=4" renders what
+// `rll render --sampler tree --set nee.candidates=4` renders (to the bit, the same seed), beside
+// plain tree in one compare; were the key dropped, the variant's image would be plain tree's.
+TEST(Compare, VariantsCarryTheirOwnIntegratorKeys) {
+  test::TempDir tmp;
+  const std::string out = (tmp / "out").string(), cache = (tmp / "cache").string();
+  auto r = run_rll({"compare", "builtin:cornell-boxes-room", "--res", "24x18", "--samplers",
+                    "tree,tree:nee.candidates=4", "--spp", "4", "--reference-spp", "4",
+                    "--cache-dir", cache, "--out", out, "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(std::ifstream(tmp / "out" / "summary.json"));
+  ASSERT_EQ(j["samplers"].size(), 2u);
+  EXPECT_EQ(j["samplers"][1]["name"], "tree:nee.candidates=4");
+  const Image plain = read_image(tmp / "out" / j["samplers"][0]["image"].get<std::string>());
+  const Image variant = read_image(tmp / "out" / j["samplers"][1]["image"].get<std::string>());
+  auto rendered = run_rll({"render", "builtin:cornell-boxes-room", "--res", "24x18", "--sampler",
+                           "tree", "--set", "nee.candidates=4", "--spp", "4", "--quiet", "-o",
+                           (tmp / "m4.exr").string()});
+  ASSERT_EQ(rendered.exit_code, 0) << rendered.output;
+  auto spec = run_rll({"render", "builtin:cornell-boxes-room", "--res", "24x18", "--sampler",
+                       "tree:nee.candidates=4", "--spp", "4", "--quiet", "-o",
+                       (tmp / "spec.exr").string()});
+  ASSERT_EQ(spec.exit_code, 0) << spec.output;
+  const Image m4 = read_image(tmp / "m4.exr"), by_spec = read_image(tmp / "spec.exr");
+  EXPECT_TRUE(variant.pixels() == m4.pixels());
+  EXPECT_TRUE(by_spec.pixels() == m4.pixels());
+  EXPECT_FALSE(plain.pixels() == m4.pixels());
+  // A variant's integrator key is checked as --set's is; rht resamples its own candidates.
+  auto bad = run_rll({"compare", "builtin:cornell-box", "--res", "8x8", "--samplers",
+                      "tree:nee.candidates=0", "--spp", "1", "--cache-dir", cache, "--out", out,
+                      "--quiet"});
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_TRUE(contains(bad.output, "nee.candidates")) << bad.output;
+  auto rht = run_rll({"compare", "builtin:cornell-box", "--res", "8x8", "--samplers",
+                      "rht:nee.candidates=4", "--spp", "1", "--cache-dir", cache, "--out", out,
+                      "--quiet"});
+  EXPECT_NE(rht.exit_code, 0);
+  EXPECT_TRUE(contains(rht.output, "resamples its own candidates")) << rht.output;
+}
+
 TEST(Compare, BadFlagsGiveClearErrors) {
   test::TempDir tmp;
   const std::string out = (tmp / "out").string(), cache = (tmp / "cache").string();

@@ -51,6 +51,7 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
   MeasuredRun out;
   const auto t0 = std::chrono::steady_clock::now();
   auto sampler = session.make_sampler(name);
+  const IntegratorSettings integrator = session.integrator_for(name);
   const double setup_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const Scene& scene = session.scene();
@@ -61,7 +62,7 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
     RenderSettings rf = rs;
     rf.frame = f;
     session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1), show_progress,
-                   cancel, after_pass);
+                   cancel, after_pass, nullptr, &integrator);
     if (cancel && cancel->load()) {
       out.cancelled = true;
       return out;
@@ -75,7 +76,8 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
                                           [&](const RenderProgress& pr, const Film& f) {
                                             recorder.after_pass(pr, f);
                                             if (after_pass) after_pass(pr, f);
-                                          });
+                                          },
+                                          nullptr, &integrator);
   if (p.cancelled) {
     out.cancelled = true;
     return out;

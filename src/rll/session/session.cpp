@@ -72,12 +72,12 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler(const std::string& spe
   return s;
 }
 
-std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::string& spec) const {
-  size_t colon = spec.find(':');
-  if (colon == std::string::npos) return make_light_sampler(spec, m_scene, m_params, m_accel.get());
-  const std::string name = spec.substr(0, colon);
+Params RenderSession::variant_params(const std::string& spec, std::string& name,
+                                     std::vector<std::string>& own) const {
   Params params = m_params;
-  std::vector<std::string> own;  // the keys as the spec gives them
+  const size_t colon = spec.find(':');
+  name = spec.substr(0, colon);
+  if (colon == std::string::npos) return params;
   for (size_t start = colon + 1; start <= spec.size();) {
     size_t end = std::min(spec.find(':', start), spec.size());
     std::string kv = spec.substr(start, end - start);
@@ -90,7 +90,18 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::str
     own.push_back(kv.substr(0, eq));
     start = end + 1;
   }
+  return params;
+}
+
+std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::string& spec) const {
+  if (spec.find(':') == std::string::npos)
+    return make_light_sampler(spec, m_scene, m_params, m_accel.get());
+  std::string name;
+  std::vector<std::string> own;  // the keys as the spec gives them
+  Params params = variant_params(spec, name, own);
   auto sampler = make_light_sampler(name, m_scene, params, m_accel.get());
+  // The integrator's keys (nee.candidates, ...) are a variant's too: integrator_for reads them.
+  make_integrator_settings(m_settings.integrator, m_settings.max_depth, params);
   // A variant's own keys must all be known, and are reported as the spec wrote them (not as
   // --set keys, which the user may never have given).
   std::vector<std::string> unknown;
@@ -102,6 +113,14 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::str
   params.check_all_used();
   m_params.merge_used(params);
   return sampler;
+}
+
+IntegratorSettings RenderSession::integrator_for(const std::string& spec) const {
+  if (spec.find(':') == std::string::npos) return m_integrator;
+  std::string name;
+  std::vector<std::string> own;
+  return make_integrator_settings(m_settings.integrator, m_settings.max_depth,
+                                  variant_params(spec, name, own));
 }
 
 void RenderSession::set_frame(int frame, LightSampler* sampler) {
@@ -117,8 +136,10 @@ void RenderSession::set_frame(int frame, LightSampler* sampler) {
 RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
                                      const RenderSettings& settings, const std::string& label,
                                      bool show_progress, const std::atomic<bool>* cancel,
-                                     const AfterPass& after_pass, WavefrontTimes* times) const {
-  Integrator integrator(m_scene, *m_accel, sampler, m_integrator);
+                                     const AfterPass& after_pass, WavefrontTimes* times,
+                                     const IntegratorSettings* integrator_settings) const {
+  const IntegratorSettings& is = integrator_settings ? *integrator_settings : m_integrator;
+  Integrator integrator(m_scene, *m_accel, sampler, is);
   ProgressBar bar(label, show_progress);
   RenderSettings rs = settings;
   rs.points = m_points;
@@ -127,8 +148,8 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   wavefront.tracer = m_settings.tracer == "bvh" ? WavefrontTracer::Bvh : WavefrontTracer::Embree;
   auto run = [&](const RenderSettings& r, const AfterPass& after) {
     if (m_gpu)
-      return m_gpu->render(m_scene, sampler, m_integrator, film, r, cancel, after, wavefront);
-    return m_settings.wavefront ? render_wavefront(m_scene, *m_accel, sampler, m_integrator, film,
+      return m_gpu->render(m_scene, sampler, is, film, r, cancel, after, wavefront);
+    return m_settings.wavefront ? render_wavefront(m_scene, *m_accel, sampler, is, film,
                                                    r, cancel, after, wavefront)
                                 : rll::render(m_scene, integrator, sampler, film, r, cancel, after);
   };

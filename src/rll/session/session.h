@@ -59,8 +59,13 @@ class RenderSession {
 
   // A fresh sampler (no learnt state) by name, its parameters from --set. A variant may carry
   // its own parameters after colons, keys prefixed with the sampler's name unless they hold a
-  // dot: "rll:within=uniform:reward=fullpdf" is rll with rll.within and rll.reward set.
+  // dot: "rll:within=uniform:reward=fullpdf" is rll with rll.within and rll.reward set. The
+  // integrator's keys are a variant's too ("tree:nee.candidates=4"): integrator_for reads them.
   std::unique_ptr<LightSampler> make_sampler(const std::string& spec) const;
+  // The integrator settings a sampler spec renders with: --set's, with the variant's own
+  // integrator keys in their place, so that "tree" and "tree:nee.candidates=4" run side by side
+  // in one interleaved compare.
+  IntegratorSettings integrator_for(const std::string& spec) const;
   // Throws rll::Error naming every --set key that no sampler or integrator asked for; call it
   // once every sampler the command needs has been made.
   void check_params_used() const { m_params.check_all_used(); }
@@ -75,14 +80,20 @@ class RenderSession {
   // `label` on a terminal when `show_progress`; `after_pass` as in render(). Unless cancelled,
   // at least one sample per pixel is taken, however short the time budget: a render never
   // ends as a black image of 0 spp. With `times`, the wavefront renderer adds its stage times
-  // to it (the megakernel has no stages and leaves it as it is).
+  // to it (the megakernel has no stages and leaves it as it is). With `integrator`, the
+  // integrator settings of integrator_for(spec) instead of --set's.
   RenderProgress render(LightSampler& sampler, Film& film, const RenderSettings& settings,
                         const std::string& label, bool show_progress,
                         const std::atomic<bool>* cancel = nullptr, const AfterPass& after_pass = {},
-                        WavefrontTimes* times = nullptr) const;
+                        WavefrontTimes* times = nullptr,
+                        const IntegratorSettings* integrator = nullptr) const;
 
  private:
   std::unique_ptr<LightSampler> make_sampler_on_host(const std::string& spec) const;
+  // --set's parameters with a variant's keys ("name:key=value:...") set; `name` the sampler's
+  // name, `own` the keys as the spec wrote them.
+  Params variant_params(const std::string& spec, std::string& name,
+                        std::vector<std::string>& own) const;
 
   SessionSettings m_settings;
   Params m_params;
