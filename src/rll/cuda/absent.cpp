@@ -91,5 +91,9 @@ std::vector<CutPassStats> cut_end_pass_gpu(const CutStoreEndView&, const std::ve
   cuda::require_gpu();
   return {};
 }
+RllPassCounts rll_end_pass_gpu(const RllLearnView&, RllPoolState<HostBackend>&, uint32_t, bool) {
+  cuda::require_gpu();
+  return {};
+}
 
 }  // namespace rll

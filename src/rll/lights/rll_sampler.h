@@ -81,6 +81,15 @@ class RllLightSampler final : public LightSampler {
   void load_state(BinaryReader& r) override;
   SamplerView sampler_view() const override;
 
+  // The end of pass with its whole-array work (rll_end_pass over this sampler's learning arrays,
+  // its pool and the cells in use at the last rebuild; with Fermat's reset) done by `run`, on
+  // another device (the GPU's check, cuda/endpass_check.h), the rest as end_pass does it.
+  using EndPassRun = RllPassCounts (*)(const RllLearnView& v, RllPoolState<HostBackend>& pool,
+                                       uint32_t used_before, bool reset);
+  void end_pass_with(EndPassRun run);
+  // For tests: the coarse cells of pooling.
+  const RllPoolState<HostBackend>& pool() const { return m_pool; }
+
   // Stops learning: record() and end_pass() do nothing from now on (the oracle).
   void freeze() { m_frozen = true; }
   // For tests and the oracle: the learnt state.
@@ -94,28 +103,13 @@ class RllLightSampler final : public LightSampler {
   // Points m_view at this sampler's arrays, pass and keyer (after anything that changes them).
   void refresh_view();
   void refresh_light_powers(const Scene& scene);
-  // Pooling (rll.pool): pools this pass's rewards of the cells into their coarse cells, folds
-  // them into the coarse cells' values and gives every cell its coarse cell's shares.
-  void pool_pass(const std::vector<uint32_t>& cells);
-  // Pooling: the coarse cell of each cell in tier 0 (its anchor, pool levels up) or tier 1 (pool +
-  // pool_up levels up); empty for a tier the settings do not have.
-  std::vector<uint64_t> coarse_keys(const std::vector<uint32_t>& cells, int tier) const;
-  // Pooling: gives each cell its coarse cell's shares (none where that has no values);
-  // `coarse[i]` is the coarse key of cells[i], `upper[i]` (pool_up; empty: none) that of the
-  // cell the coarse cell's values are shrunk toward.
-  void give_pool_shares(const std::vector<uint32_t>& cells, const std::vector<uint64_t>& coarse,
-                        const std::vector<uint64_t>& upper);
-  // The same for every cell in use, from their anchors.
-  void give_pool_shares();
-  // The cells in use, in id order.
-  std::vector<uint32_t> cells_in_use() const;
+  // What the end of pass reads and writes (rll_end_pass.h), this sampler's host arrays.
+  RllLearnView learn_view();
 
   // The coarse cells of pooling (rll_end_pass.h): keys ascending, and per coarse cell Q, M2 and
   // reward weight of each cluster of the shared cut (initial_size() per coarse cell, key order).
-  std::vector<uint64_t> m_pool_keys;
-  std::vector<float> m_pool_q, m_pool_m2, m_pool_n;
-  RllPoolView pool_view();
-  void clear_pool();
+  RllPoolState<HostBackend> m_pool;
+  RllScratch<HostBackend> m_scratch;  // the end of pass's, kept between passes
 
   const LightTree& m_tree;
   RllSettings m_s;
