@@ -85,7 +85,15 @@ TEST(GpuEndPass, CutEndPassMatchesTheCpu) {
 // evictions, resets and coarse cells; values and tables within float rounding (the file's head).
 TEST(GpuEndPass, WholeEndPassMatchesTheCpu) {
   for (const test::RllEndPassCase& c : test::rll_end_pass_cases())
-    test::run_end_pass_case(c, rll_end_pass_gpu, 1e-4f);
+    test::run_end_pass_case(
+        c, [](RllLightSampler& s) { s.end_pass_with(rll_end_pass_gpu); }, 1e-4f);
+}
+
+// The same through the state `rll render --device cuda` keeps on the device (cuda/device_rll.cuh):
+// uploaded, its end of pass run there, pulled back by the sampler's first host reader.
+TEST(GpuEndPass, ResidentStateMatchesTheCpu) {
+  for (const test::RllEndPassCase& c : test::rll_end_pass_cases())
+    test::run_end_pass_case(c, rll_end_pass_resident_gpu, 1e-4f);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -158,9 +159,10 @@ inline std::vector<RllEndPassCase> rll_end_pass_cases() {
           {"fermat-reset3", "fermat", {"fermat.reset_every=3"}}};
 }
 
-// The case's twins through 7 passes, a's end of pass its own, b's by `run`, compared after each
-// (expect_same_learning within `tolerance`); a's description at the end.
-inline nlohmann::json run_end_pass_case(const RllEndPassCase& c, RllLightSampler::EndPassRun run,
+// The case's twins through 7 passes, a's end of pass its own, b's by `end_pass`, compared after
+// each (expect_same_learning within `tolerance`); a's description at the end.
+inline nlohmann::json run_end_pass_case(const RllEndPassCase& c,
+                                        const std::function<void(RllLightSampler&)>& end_pass,
                                         float tolerance) {
   SCOPED_TRACE(c.label);
   RllTwins t("cornell-boxes-room", c.sampler, c.set);
@@ -169,7 +171,7 @@ inline nlohmann::json run_end_pass_case(const RllEndPassCase& c, RllLightSampler
   for (int pass = 0; pass < 7; ++pass) {
     t.feed(rng);
     t.a->end_pass();
-    t.b->end_pass_with(run);
+    end_pass(*t.b);
     SCOPED_TRACE(pass);
     cells += expect_same_learning(*t.a, *t.b, tolerance);
     if (testing::Test::HasFailure()) break;

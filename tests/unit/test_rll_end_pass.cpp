@@ -38,7 +38,8 @@ RllPassCounts reversed_end_pass(const RllLearnView& v, RllPoolState<HostBackend>
 
 TEST(RllEndPass, AnyLoopOrderLearnsTheSameToTheBit) {
   for (const test::RllEndPassCase& c : test::rll_end_pass_cases()) {
-    const nlohmann::json d = test::run_end_pass_case(c, reversed_end_pass, 0);
+    const nlohmann::json d = test::run_end_pass_case(
+        c, [](RllLightSampler& s) { s.end_pass_with(reversed_end_pass); }, 0);
     // The cases reach what they are there for.
     const std::string label = c.label;
     if (label == "capacity40") {

@@ -95,5 +95,8 @@ RllPassCounts rll_end_pass_gpu(const RllLearnView&, RllPoolState<HostBackend>&, 
   cuda::require_gpu();
   return {};
 }
+void rll_end_pass_resident_gpu(RllLightSampler&) {
+  cuda::require_gpu();
+}
 
 }  // namespace rll

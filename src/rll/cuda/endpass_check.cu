@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "rll/cuda/backend.cuh"
+#include "rll/cuda/device_rll.cuh"
 #include "rll/cuda/device_scene.cuh"
 #include "rll/cuda/endpass_check.h"
 #include "rll/cuda/launch.cuh"
@@ -111,6 +112,14 @@ RllPassCounts rll_end_pass_gpu(const RllLearnView& v, RllPoolState<HostBackend>&
   pool.m2 = to_host(device_pool.m2);
   pool.n = to_host(device_pool.n);
   return counts;
+}
+
+void rll_end_pass_resident_gpu(RllLightSampler& s) {
+  s.sync();
+  const auto state = std::make_shared<cuda::DeviceRll>(s);
+  state->make_remote(s);
+  state->end_pass(s);
+  s.sync();
 }
 
 }  // namespace rll

@@ -11,6 +11,7 @@
 
 #include "rll/learn/cut_end_pass.h"
 #include "rll/lights/rll_end_pass.h"
+#include "rll/lights/rll_sampler.h"
 
 namespace rll {
 
@@ -24,5 +25,9 @@ std::vector<CutPassStats> cut_end_pass_gpu(const CutStoreEndView& v,
 // RllLightSampler::end_pass_with takes it.
 RllPassCounts rll_end_pass_gpu(const RllLearnView& v, RllPoolState<HostBackend>& pool,
                                uint32_t used_before, bool reset);
+
+// The sampler's state uploaded to the device as `rll render --device cuda` keeps it
+// (cuda/device_rll.cuh), one end of pass run there, and the state pulled back.
+void rll_end_pass_resident_gpu(RllLightSampler& s);
 
 }  // namespace rll

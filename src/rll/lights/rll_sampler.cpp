@@ -196,6 +196,7 @@ void RllLightSampler::refresh_view() {
 }
 
 SamplerView RllLightSampler::sampler_view() const {
+  sync();
   SamplerView v;
   v.kind = SamplerKind::Rll;
   v.tree = m_view.tree;
@@ -240,11 +241,20 @@ RllLearnView RllLightSampler::learn_view() {
   return v;
 }
 
-void RllLightSampler::end_pass() {
-  end_pass_with(nullptr);
+void RllLightSampler::sync() const {
+  if (!m_pull) return;
+  const auto pull = std::move(m_pull);
+  m_pull = nullptr;
+  m_remote = nullptr;
+  pull(m_pool);
 }
 
-void RllLightSampler::end_pass_with(EndPassRun run) {
+void RllLightSampler::end_pass() {
+  sync();
+  end_pass_with({});
+}
+
+void RllLightSampler::end_pass_with(const EndPassRun& run) {
   if (m_frozen) return;
   const bool reset = m_s.reset_every > 0 && (m_pass + 1) % m_s.reset_every == 0;
   const RllPassCounts c =
@@ -273,12 +283,14 @@ void RllLightSampler::end_pass_with(EndPassRun run) {
 }
 
 void RllLightSampler::lights_changed(const Scene& scene) {
+  sync();
   refresh_light_powers(scene);
   rll_lights_changed(HostBackend{}, learn_view(), m_pool, m_scratch);
   refresh_view();
 }
 
 void RllLightSampler::save_state(BinaryWriter& w) const {
+  sync();
   w.put(m_s.capacity);
   w.put(m_pass);
   w.put(m_resets);
@@ -303,6 +315,7 @@ void RllLightSampler::save_state(BinaryWriter& w) const {
 }
 
 void RllLightSampler::load_state(BinaryReader& r) {
+  sync();
   auto damaged = [&](const std::string& what) {
     fail("cannot read '{}': the file is damaged ({})", r.name(), what);
   };
@@ -364,6 +377,7 @@ void RllLightSampler::load_state(BinaryReader& r) {
 }
 
 nlohmann::json RllLightSampler::describe() const {
+  sync();
   double mean_cut = 0;
   uint32_t active = 0;
   for (uint32_t c = 0; c < m_s.capacity; ++c)
