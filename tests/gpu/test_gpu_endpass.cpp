@@ -14,6 +14,7 @@
 
 #include "rll/core/rng.h"
 #include "rll/cuda/endpass_check.h"
+#include "rll/lighttree/light_tree.h"
 #include "support/rll_twins.h"
 #include "support/test_support.h"
 
@@ -94,6 +95,26 @@ TEST(GpuEndPass, WholeEndPassMatchesTheCpu) {
 TEST(GpuEndPass, ResidentStateMatchesTheCpu) {
   for (const test::RllEndPassCase& c : test::rll_end_pass_cases())
     test::run_end_pass_case(c, rll_end_pass_resident_gpu, 1e-4f);
+}
+
+// An animated scene's frames: the light tree refit on the host, lights_changed run on the
+// device's copy (its tree and powers copied there, priors and tables anew) against the CPU's.
+TEST(GpuEndPass, ResidentLightsChangedMatchesTheCpu) {
+  test::RllTwins t("cornell-boxes-dynamic", "rll", {});
+  ASSERT_TRUE(bool(t.scene.animate));
+  Pcg32 rng(7);
+  for (int frame = 1; frame < 4; ++frame) {
+    t.feed(rng);
+    t.a->end_pass();
+    rll_end_pass_resident_gpu(*t.b);
+    t.scene.animate(t.scene, frame);
+    t.scene.refresh_lights_from_mesh();
+    refit_light_tree(t.scene);
+    t.a->lights_changed(t.scene);
+    rll_lights_changed_resident_gpu(*t.b, t.scene);
+    SCOPED_TRACE(frame);
+    EXPECT_GT(test::expect_same_learning(*t.a, *t.b, 1e-4f), 0u);
+  }
 }
 
 }  // namespace

@@ -98,5 +98,8 @@ RllPassCounts rll_end_pass_gpu(const RllLearnView&, RllPoolState<HostBackend>&, 
 void rll_end_pass_resident_gpu(RllLightSampler&) {
   cuda::require_gpu();
 }
+void rll_lights_changed_resident_gpu(RllLightSampler&, const Scene&) {
+  cuda::require_gpu();
+}
 
 }  // namespace rll

@@ -2,9 +2,10 @@
 // RllLightSampler (cell table, free list, last use, point sums, cuts with their values, tables,
 // anchors and reward sums) uploaded once, the coarse cells of pooling and the end of pass's
 // scratch kept there; the end of pass runs there (rll_end_pass over the CUDA backend) and only
-// its counters come back per pass. The sampler is told (RllLightSampler::set_remote) and pulls
-// the arrays back when the host reads them: a saved state, --stats, Python, a host end of pass,
-// lights_changed (an animated scene's frames: its light tree is refit on the host).
+// its counters come back per pass. When the lights change (an animated scene's frames), the
+// refit light tree and the light powers are copied into the device's arrays and the priors and
+// tables are made anew there (rll_lights_changed). The sampler is told (set_remote) and pulls
+// the arrays back when the host reads them: a saved state, --stats, Python, a host end of pass.
 #pragma once
 
 #include <cuda_runtime.h>
@@ -12,6 +13,7 @@
 #include <memory>
 #include <unordered_map>
 
+#include "rll/core/error.h"
 #include "rll/cuda/backend.cuh"
 #include "rll/cuda/device_scene.cuh"
 #include "rll/lights/rll_sampler.h"
@@ -102,7 +104,21 @@ class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
   // Tells the sampler that its state is here from now on, and how to pull it back.
   void make_remote(RllLightSampler& s) {
     std::shared_ptr<DeviceRll> self = shared_from_this();
-    s.set_remote(this, [self](RllPoolState<HostBackend>& pool) { self->pull(pool); });
+    s.set_remote(
+        this, [self](RllPoolState<HostBackend>& pool) { self->pull(pool); },
+        [self](const LightTreeView& tree, View<const double> power_prefix) {
+          self->lights_changed(tree, power_prefix);
+        });
+  }
+
+  // The lights moved or switched (the tree refit on the host, same shape): the tree's arrays and
+  // the powers copied into the device's, every prior and table made anew there.
+  void lights_changed(const LightTreeView& tree, View<const double> power_prefix) {
+    refill(m_learn.cuts.tree.nodes, tree.nodes);
+    refill(m_learn.cuts.tree.importance, tree.importance);
+    refill(m_learn.cuts.tree.leaf_of, tree.leaf_of);
+    refill(m_view.power_prefix, power_prefix);
+    rll_lights_changed(CudaBackend{}, m_learn, m_pool, m_scratch);
   }
 
   // The end of pass here; the sampler keeps its statistics and moves to the next pass, whose
@@ -146,6 +162,17 @@ class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
     const View<T> d = m_memory.mirror(v);
     m_device_of[key] = const_cast<std::remove_const_t<T>*>(d.data);
     return d;
+  }
+  // Copies a host array over the device array that mirrors one of its size.
+  template <typename T>
+  static void refill(View<const T> device, View<const T> host) {
+    if (device.size != host.size)
+      fail("rll: the light tree changed shape ({} entries, {} on the GPU): not a refit", host.size,
+           device.size);
+    if (host.size > 0)
+      check(cudaMemcpy(const_cast<T*>(device.data), host.data, host.size * sizeof(T),
+                       cudaMemcpyHostToDevice),
+            "cudaMemcpy");
   }
   template <typename T>
   static DeviceArray<T> upload(const HostBuffer<T>& h) {

@@ -122,4 +122,12 @@ void rll_end_pass_resident_gpu(RllLightSampler& s) {
   s.sync();
 }
 
+void rll_lights_changed_resident_gpu(RllLightSampler& s, const Scene& scene) {
+  s.sync();
+  const auto state = std::make_shared<cuda::DeviceRll>(s);
+  state->make_remote(s);
+  s.lights_changed(scene);
+  s.sync();
+}
+
 }  // namespace rll

@@ -246,6 +246,7 @@ void RllLightSampler::sync() const {
   const auto pull = std::move(m_pull);
   m_pull = nullptr;
   m_remote = nullptr;
+  m_remote_lights = nullptr;
   pull(m_pool);
 }
 
@@ -283,9 +284,13 @@ void RllLightSampler::end_pass_with(const EndPassRun& run) {
 }
 
 void RllLightSampler::lights_changed(const Scene& scene) {
-  sync();
   refresh_light_powers(scene);
-  rll_lights_changed(HostBackend{}, learn_view(), m_pool, m_scratch);
+  if (m_pull && m_remote_lights) {
+    m_remote_lights(m_tree.view(), view_of(std::as_const(m_power_prefix)));  // on the device
+  } else {
+    sync();
+    rll_lights_changed(HostBackend{}, learn_view(), m_pool, m_scratch);
+  }
   refresh_view();
 }
 

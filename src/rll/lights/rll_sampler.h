@@ -95,13 +95,19 @@ class RllLightSampler final : public LightSampler {
   // cuda`, `rll interactive`): set_remote says so, with `pull`, which copies the device's arrays
   // back into this sampler's and its coarse cells into `pool`; `remote` is the device state's
   // token (null: the host's arrays are current). Everything on the host that reads or changes
-  // the learnt state (end_pass, lights_changed, save and load, describe, sampler_view, cuts,
-  // table, pool) pulls first (sync) and the state is the host's again. prepare, sample, pmf
-  // and record do not (they are the CPU renderers' hot path, which reach the sampler through
-  // sampler_view or end_pass first; a session with a GPU renders every pass there).
-  void set_remote(const void* token, std::function<void(RllPoolState<HostBackend>& pool)> pull) {
+  // the learnt state (end_pass, save and load, describe, sampler_view, cuts, table, pool) pulls
+  // first (sync) and the state is the host's again. prepare, sample, pmf and record do not
+  // (they are the CPU renderers' hot path, which reach the sampler through sampler_view or
+  // end_pass first; a session with a GPU renders every pass there). lights_changed hands the
+  // new light tree and powers to `lights` where one is given, which runs it on the device's
+  // copy (rll_lights_changed), else it pulls too.
+  using RemoteLightsChanged =
+      std::function<void(const LightTreeView& tree, View<const double> power_prefix)>;
+  void set_remote(const void* token, std::function<void(RllPoolState<HostBackend>& pool)> pull,
+                  RemoteLightsChanged lights = {}) {
     m_remote = token;
     m_pull = std::move(pull);
+    m_remote_lights = std::move(lights);
   }
   const void* remote() const { return m_remote; }
   void sync() const;
@@ -145,6 +151,7 @@ class RllLightSampler final : public LightSampler {
   mutable RllPoolState<HostBackend> m_pool;
   mutable const void* m_remote = nullptr;
   mutable std::function<void(RllPoolState<HostBackend>&)> m_pull;
+  mutable RemoteLightsChanged m_remote_lights;
   RllScratch<HostBackend> m_scratch;  // the end of pass's, kept between passes
 
   const LightTree& m_tree;
