@@ -120,7 +120,15 @@ TEST(CutEndPass, ParallelLoopOverCellsEqualsTheClassCellByCell) {
       std::vector<CutPassStats> by_class(kCells), by_loop(kCells);
       for (uint32_t c = kCells; c-- > 0;) by_class[c] = t.a->end_pass(c);
       const CutStoreEndView ev = t.b->end_view();
-      host_parallel_for(kCells, [&](size_t c) { by_loop[c] = cut_end_pass(ev, uint32_t(c)); });
+      // Each cell's scratch its own slice of one arena, at a scan of the cells' rooms.
+      std::vector<uint64_t> at(kCells + 1, 0);
+      for (uint32_t c = 0; c < kCells; ++c) at[c + 1] = at[c] + cut_scratch_room(ev, c);
+      std::vector<double> d(at[kCells] * CutScratchArena::kDoubles);
+      std::vector<float> f(at[kCells] * CutScratchArena::kFloats);
+      const CutScratchArena arena{view_of(d), view_of(f)};
+      host_parallel_for(kCells, [&](size_t c) {
+        by_loop[c] = cut_end_pass(ev, uint32_t(c), arena.slice(at[c], uint32_t(at[c + 1] - at[c])));
+      });
       for (uint32_t c = 0; c < kCells; ++c) {
         EXPECT_EQ(by_class[c].splits, by_loop[c].splits);
         EXPECT_EQ(by_class[c].collapses, by_loop[c].collapses);
@@ -156,7 +164,7 @@ TEST(CutEndPass, GuidedFactorsEqualARecursiveBake) {
     ASSERT_GT(K, 1u);
     std::vector<double> pri(K), g(K);
     std::vector<float> val(K);
-    cut_cell_prior(ev, c, pri.data());
+    cut_cell_prior(ev, c, pri.data(), HostCutScratch(K));
     cut_values(ev, c, K, pri.data(), val.data());
     const double eps = t.a->learnt(c) ? t.a->defensive_weight(c) : 1.0;
     guide_factors(K, pri.data(), val.data(), eps, g.data());
@@ -246,7 +254,8 @@ TEST(RllPool, FoldEqualsSumsInTheOrderOfTheCellsKeys) {
     while (first + count < entries.size() && entries[first + count].coarse == keys[j]) ++count;
     std::vector<double> sum(K), sq(K);
     std::vector<uint64_t> rewards(K);
-    pool_fold(ev, &entries[first], count, old, next, j, sum.data(), sq.data(), rewards.data());
+    pool_fold(ev, &entries[first], count, old, next, j, sum.data(), sq.data(), rewards.data(),
+              HostCutScratch(uint32_t(K)));
     first += count;
     // The reference.
     std::vector<double> rsum(K, 0.0), rsq(K, 0.0);

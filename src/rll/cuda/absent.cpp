@@ -91,5 +91,15 @@ std::vector<CutPassStats> cut_end_pass_gpu(const CutStoreEndView&, const std::ve
   cuda::require_gpu();
   return {};
 }
+RllPassCounts rll_end_pass_gpu(const RllLearnView&, RllPoolState<HostBackend>&, uint32_t, bool) {
+  cuda::require_gpu();
+  return {};
+}
+void rll_end_pass_resident_gpu(RllLightSampler&) {
+  cuda::require_gpu();
+}
+void rll_lights_changed_resident_gpu(RllLightSampler&, const Scene&) {
+  cuda::require_gpu();
+}
 
 }  // namespace rll

@@ -1,6 +1,8 @@
 // The GPU's side of the wavefront renderer: the CUDA backend of wavefront/driver.h (device memory,
 // launches over queues, CUDA events), the scene, BVH, Sobol' tables and film in device memory, and
-// the light sampler's tables mirrored there around each end of pass.
+// the light sampler's tables there: rll's learning state resident across passes and renders, its
+// end of pass run there (cuda/device_rll.cuh); the other samplers' tables, which do not learn,
+// mirrored around each (empty) end of pass as before.
 #include <cuda_runtime.h>
 
 #include <algorithm>
@@ -11,6 +13,7 @@
 #include "rll/core/error.h"
 #include "rll/core/sobol.h"
 #include "rll/cuda/cuda.h"
+#include "rll/cuda/device_rll.cuh"
 #include "rll/cuda/device_sampler.cuh"
 #include "rll/cuda/device_scene.cuh"
 #include "rll/cuda/launch.cuh"
@@ -30,9 +33,9 @@ __global__ void queue_kernel(WavefrontQueue q, uint32_t upper, Body body) {
 }
 
 // The GPU's side of wavefront/driver.h.
-class CudaBackend {
+class CudaWavefrontBackend {
  public:
-  explicit CudaBackend(WavefrontTimes* times) : m_times(times) {}
+  explicit CudaWavefrontBackend(WavefrontTimes* times) : m_times(times) {}
 
   template <typename T>
   View<T> take(size_t n) {
@@ -89,8 +92,8 @@ class CudaBackend {
   EventTimer m_timer;
 };
 
-ViewSampler view_sampler(const DeviceSampler& d, const LightSampler& s) {
-  return {d.view(), s.prepares(), s.learns()};
+ViewSampler view_sampler(const SamplerView& v, const LightSampler& s) {
+  return {v, s.prepares(), s.learns()};
 }
 
 }  // namespace
@@ -105,6 +108,9 @@ struct GpuRenderer::Impl {
   BvhView bvh_view;
   SobolView sobol;
   size_t render_bytes = 0;  // the most the last render took besides the above
+  // rll's learning state, kept here from render to render while the sampler's state is this
+  // (RllLightSampler::remote); a sampler whose host arrays changed since is uploaded anew.
+  std::shared_ptr<DeviceRll> rll;
 
   // The scene and the BVH (again after a frame's refit).
   void upload(const Scene& s) {
@@ -157,8 +163,22 @@ RenderProgress GpuRenderer::render(
   require_device_version(sampler, sampler.name());
   const auto t_start = std::chrono::steady_clock::now();
   Impl& m = *m_impl;
+  // A learning rll or fermat: its state resident here (uploaded only where the host's arrays are
+  // newer); every other sampler's tables uploaded for this render.
+  auto* rll = dynamic_cast<RllLightSampler*>(&sampler);
+  if (rll && !rll->learns()) rll = nullptr;
   DeviceSampler device_sampler;
-  device_sampler.upload(sampler.sampler_view());
+  if (rll) {
+    if (!m.rll || rll->remote() != m.rll.get()) {
+      rll->sync();
+      m.rll.reset();  // (its memory first)
+      m.rll = std::make_shared<DeviceRll>(*rll);
+    }
+    m.rll->make_remote(*rll);
+  } else {
+    device_sampler.upload(sampler.sampler_view());
+  }
+  auto sampler_view = [&] { return rll ? m.rll->sampler_view() : device_sampler.view(); };
 
   // The film's sums and counts on the device, starting from the host film's.
   FilmView host_film = film.view();
@@ -166,31 +186,38 @@ RenderProgress GpuRenderer::render(
   const FilmView device_film = {film_memory.mirror(host_film.sum),
                                 film_memory.mirror(host_film.count), film.width()};
   const auto k = wavefront_kernels(scene, m.scene->view(), integrator, device_film, m.sobol,
-                                   BvhTracer{m.bvh_view}, view_sampler(device_sampler, sampler));
+                                   BvhTracer{m.bvh_view}, view_sampler(sampler_view(), sampler));
 
-  CudaBackend backend(wavefront.times);
-  WavefrontDriver<CudaBackend, BvhTracer, ViewSampler> driver(
+  CudaWavefrontBackend backend(wavefront.times);
+  WavefrontDriver<CudaWavefrontBackend, BvhTracer, ViewSampler> driver(
       backend, k, wavefront_slot_count(wavefront.path_slots, film, settings.spp));
   m.render_bytes = 0;
   auto note_bytes = [&] {
-    m.render_bytes =
-        std::max(m.render_bytes, backend.bytes() + device_sampler.bytes() + film_memory.bytes());
+    m.render_bytes = std::max(m.render_bytes, backend.bytes() + device_sampler.bytes() +
+                                                  (rll ? m.rll->bytes() : 0) + film_memory.bytes());
   };
   note_bytes();
+  // rll's end of pass on the device: only its counters come back. (Other samplers learn nothing
+  // on the device: their end_pass is the host's, as before.)
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] {
-      device_sampler.copy_back();
-      sampler.end_pass();
-      device_sampler.upload(sampler.sampler_view());
+      if (rll) {
+        m.rll->end_pass(*rll);
+      } else {
+        device_sampler.copy_back();
+        sampler.end_pass();
+        device_sampler.upload(sampler.sampler_view());
+      }
     });
     note_bytes();
-    driver.set_sampler(view_sampler(device_sampler, sampler));
+    driver.set_sampler(view_sampler(sampler_view(), sampler));
   };
   const RenderProgress progress = run_wavefront_passes(
       scene, driver, end_pass, [&] { film_memory.copy_back(); }, film, settings, cancel,
       after_pass);
-  // What the last pass learnt, for a state saved after the render.
-  device_sampler.copy_back();
+  // What the last pass learnt, for a state saved after the render (rll's: pulled when the host
+  // reads it).
+  if (!rll) device_sampler.copy_back();
   if (wavefront.times)
     wavefront.times->total_seconds +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

@@ -33,32 +33,18 @@ CellTable::CellTable(uint32_t capacity) : m_capacity(capacity) {
   m_mask = slots - 1;
   m_slots.assign(slots, 0);
   m_key_of.assign(capacity, 0);
+  m_free.assign(capacity, 0);
   remove_and_rebuild({});
 }
 
 size_t CellTable::bytes() const {
   return m_slot_count * sizeof(uint64_t) + m_key_of.size() * sizeof(uint64_t) +
-         m_free.size() * sizeof(uint32_t);
+         m_free.size() * sizeof(uint32_t);  // (the free list's array holds capacity ids)
 }
 
 void CellTable::remove_and_rebuild(const std::vector<uint32_t>& cells) {
   for (uint32_t c : cells) m_key_of[c] = 0;
-  std::fill(m_slots.begin(), m_slots.end(), 0);
-  m_free.clear();
-  m_used = 0;
-  for (uint32_t c = 0; c < m_capacity; ++c) {
-    uint64_t key = m_key_of[c];
-    if (key == 0) {
-      m_free.push_back(c);
-      continue;
-    }
-    ++m_used;
-    uint32_t slot = uint32_t(key >> 32) & m_mask;
-    while (m_slots[slot] != 0) slot = (slot + 1) & m_mask;
-    m_slots[slot] = detail::cell_tag(key) | c;
-  }
-  m_next_free = 0;
-  m_failed = 0;
+  m_used = cell_table_rebuild(HostBackend{}, view(), free_room());
   std::atomic_thread_fence(std::memory_order_release);
 }
 

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "rll/core/backend.h"
 #include "rll/core/device.h"
 #include "rll/core/hash.h"
 #include "rll/core/math.h"
@@ -256,6 +257,38 @@ RLL_HD inline uint32_t cell_find_or_insert(const CellTableView& t, uint64_t key,
   return CellTableView::kNone;
 }
 
+// Between passes: puts `cell` of `key` in the first free slot from the key's home (linear
+// probing, as cell_find looks). Safe in parallel: a slot is taken by compare-and-swap.
+RLL_HD inline void cell_place(View<uint64_t> slots, uint64_t key, uint32_t cell) {
+  const uint32_t mask = uint32_t(slots.size - 1);
+  for (uint32_t slot = uint32_t(key >> 32) & mask;; slot = (slot + 1) & mask)
+    if (atomic_cas(&slots[slot], 0, detail::cell_tag(key) | cell) == 0) return;
+}
+
+// Between passes, over a backend (core/backend.h): rebuilds the table's index from the cells'
+// keys (0: free) and its free list (free cells by id, into `free_room`, capacity long), and
+// starts a new pass's counters; returns the cells in use. The slots are filled in id order on
+// the host (the layout of earlier versions); in parallel on the GPU, where the order of the
+// compare-and-swaps moves keys between the slots of a run but no lookup's answer: cell_find
+// finds every key and, linear probing's set of taken slots not depending on the order of
+// inserts, cell_find_or_insert reaches the same free slot.
+template <typename B>
+uint32_t cell_table_rebuild(const B& b, const CellTableView& t, View<uint32_t> free_room) {
+  const View<uint64_t> slots = t.slots, key_of = t.key_of;
+  b.parallel_for(slots.size, [=] RLL_HD(size_t i) { slots[i] = 0; });
+  select_into(b, key_of.size, [=] RLL_HD(size_t c) { return key_of[c] == 0; }, free_room);
+  const auto used = select_indices(b, key_of.size, [=] RLL_HD(size_t c) { return key_of[c] != 0; });
+  const View<const uint32_t> u = used.view();
+  b.ordered_for(u.size, [=] RLL_HD(size_t i) { cell_place(slots, key_of[u[i]], u[i]); });
+  uint32_t* next_free = t.next_free;
+  uint64_t* failed = t.failed;
+  b.parallel_for(1, [=] RLL_HD(size_t) {
+    *next_free = 0;
+    *failed = 0;
+  });
+  return uint32_t(u.size);
+}
+
 // Open-addressing hash table from key to a cell id in [0, capacity): the owner of a
 // CellTableView's arrays; lookups and inserts are cell_find and cell_find_or_insert.
 class CellTable {
@@ -273,8 +306,13 @@ class CellTable {
   uint32_t find(uint64_t key) const { return cell_find(const_cast<CellTable*>(this)->view(), key); }
   // The arrays for cell_find / cell_find_or_insert; valid while the table lives.
   CellTableView view() {
-    return {view_of(m_slots), view_of(m_key_of), view_of(m_free), &m_next_free, &m_failed};
+    return {view_of(m_slots), view_of(m_key_of), {m_free.data(), m_capacity - m_used},
+            &m_next_free, &m_failed};
   }
+  // What cell_table_rebuild writes the free list into (capacity long); after a rebuild elsewhere
+  // (a device's, copied back), `rebuilt` takes the count of cells it found in use.
+  View<uint32_t> free_room() { return view_of(m_free); }
+  void rebuilt(uint32_t used) { m_used = used; }
 
   // Between passes only. Removes the given cells and rebuilds the index and the free list.
   void remove_and_rebuild(const std::vector<uint32_t>& cells);
@@ -292,7 +330,7 @@ class CellTable {
   uint32_t m_capacity, m_mask;
   std::vector<uint64_t> m_slots;   // CellTableView::slots
   std::vector<uint64_t> m_key_of;  // per cell: full key, 0 = free
-  std::vector<uint32_t> m_free;    // free cell ids, consumed from m_next_free up
+  std::vector<uint32_t> m_free;    // free cell ids (capacity - used), consumed from m_next_free up
   uint32_t m_next_free = 0;
   uint64_t m_failed = 0;
   uint32_t m_used = 0;

@@ -4,7 +4,8 @@
 // Cells are independent: the CPU runs cut_end_pass through host_parallel_for over the cells in
 // use, a GPU through cuda::parallel_for (cuda/endpass_check.cu); CutStore's methods forward
 // here. No allocation: a cell's cut is edited in place in its slice of the store (M clusters of
-// room), scratch lives in fixed-size arrays of kMaxCutSize.
+// room), and its scratch is its slice of an arena sized by the cells' cuts (CutScratch), which the
+// caller allocates once for all the cells of a loop.
 #pragma once
 
 #include <cmath>
@@ -12,13 +13,6 @@
 
 #include "rll/core/device.h"
 #include "rll/learn/cuts.h"
-
-// The scratch arrays are written for the K clusters in use before anything reads them; GCC cannot
-// see that through a loop of K iterations and warns of the whole array.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
 
 namespace rll {
 
@@ -45,6 +39,51 @@ struct CutStoreEndView {
 
   RLL_HD bool active(uint32_t cell) const { return size[cell] > 0; }
   RLL_HD size_t base(uint32_t cell) const { return size_t(cell) * m; }
+};
+
+// One cell's scratch during the end of pass: per cluster of its room (cut_scratch_room), two
+// doubles and three floats, in the named arrays below. The functions that take one say which
+// arrays they use; a function never hands an array it uses to one it calls.
+struct CutScratch {
+  double* pri;   // the prior of the cell's clusters
+  double* g;     // guided factors (cut_bake_guide)
+  float* val;    // effective values; pooling's shares
+  float* score;  // split scores; pooling's coarser shares (pool_up)
+  float* w;      // prior weights of the initial cut (cut_cell_prior)
+};
+
+// The clusters a cell's scratch must hold this pass: its cut (the initial one while it has none)
+// and the clusters split-collapse may add, at most M.
+RLL_HD inline uint32_t cut_scratch_room(const CutStoreEndView& v, uint32_t cell) {
+  const uint32_t K = v.active(cell) ? v.size[cell] : uint32_t(v.initial.size);
+  return std::min(v.m, K + uint32_t(std::max(v.s.splits, 0)));
+}
+
+// An arena of scratch for many cells (or coarse cells): cell i's slice starts at cluster offset
+// offset[i] (an exclusive scan of the rooms) and holds room clusters.
+struct CutScratchArena {
+  static constexpr size_t kDoubles = 2, kFloats = 3;  // per cluster of room
+  View<double> d;  // kDoubles per cluster of room in all
+  View<float> f;   // kFloats per cluster of room in all
+
+  RLL_HD CutScratch slice(uint64_t offset, uint32_t room) const {
+    double* d0 = &d[size_t(offset) * kDoubles];
+    float* f0 = &f[size_t(offset) * kFloats];
+    return {d0, d0 + room, f0, f0 + room, f0 + 2 * size_t(room)};
+  }
+};
+
+// Scratch for one cell at a time on the host (CutStore's methods, tests): an arena of one slice.
+class HostCutScratch {
+ public:
+  explicit HostCutScratch(uint32_t room)
+      : m_d(room * CutScratchArena::kDoubles), m_f(room * CutScratchArena::kFloats), m_room(room) {}
+  operator CutScratch() { return CutScratchArena{view_of(m_d), view_of(m_f)}.slice(0, m_room); }
+
+ private:
+  std::vector<double> m_d;
+  std::vector<float> m_f;
+  uint32_t m_room;
 };
 
 namespace detail {
@@ -103,14 +142,15 @@ RLL_HD inline void cut_prior(const CutStoreEndView& v, const uint32_t* nodes, co
 }
 
 // The prior of the cell's cut as its baked table mixes it in (of the initial cut at the cell's
-// anchor while it has no cut).
-RLL_HD inline void cut_cell_prior(const CutStoreEndView& v, uint32_t cell, double* out) {
+// anchor while it has no cut). Scratch: w.
+RLL_HD inline void cut_cell_prior(const CutStoreEndView& v, uint32_t cell, double* out,
+                                  const CutScratch& scratch) {
   if (v.active(cell)) {
     const size_t b = v.base(cell);
     cut_prior(v, &v.node[b], &v.weight[b], v.size[cell], out);
     return;
   }
-  float w[kMaxCutSize];
+  float* w = scratch.w;
   for (size_t k = 0; k < v.initial.size; ++k) w[k] = cut_weight_of(v, cell, v.initial[k]);
   cut_prior(v, v.initial.data, w, v.initial.size, out);
 }
@@ -170,10 +210,12 @@ RLL_HD inline void guide_factors(size_t K, const double* pri, const float* val, 
 // Guided descent: bakes the cell's guide_left/right from its values and prior (CutStore's
 // guide_left says what they are). The inner nodes above the cut are visited from the root as a
 // recursion would (children's sums first, left then right), on a stack as deep as the tree.
+// Scratch: g.
 RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint32_t K,
-                                  const double* pri, const float* val, double eps) {
+                                  const double* pri, const float* val, double eps,
+                                  const CutScratch& scratch) {
   const size_t b = v.base(cell);
-  double g[kMaxCutSize];
+  double* g = scratch.g;
   guide_factors(K, pri, val, eps, g);
   // Every inner node above the cut: its children's factors are the prior-weighted means of
   // their clusters' g (the unweighted mean where no cluster has prior).
@@ -215,10 +257,11 @@ RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint3
 // Bakes the cell's table from the first K clusters of its slice: P(s) = (1 - e) V(s) / sum V +
 // e prior(s), e the cell's defensive weight (folded in here when the prior lives in the CDF);
 // without any learnt value, the prior alone. Sets the cell's size, range ends, learnt flag and
-// defensive weight, and with the guided descent its factors.
-RLL_HD inline void cut_bake(const CutStoreEndView& v, uint32_t cell, uint32_t K) {
-  double pri[kMaxCutSize];
-  float val[kMaxCutSize];
+// defensive weight, and with the guided descent its factors. Scratch: pri, val, g.
+RLL_HD inline void cut_bake(const CutStoreEndView& v, uint32_t cell, uint32_t K,
+                            const CutScratch& scratch) {
+  double* pri = scratch.pri;
+  float* val = scratch.val;
   const size_t b = v.base(cell);
   v.size[cell] = K;
   cut_prior(v, &v.node[b], &v.weight[b], K, pri);
@@ -238,15 +281,16 @@ RLL_HD inline void cut_bake(const CutStoreEndView& v, uint32_t cell, uint32_t K)
   }
   for (size_t k = 0; k < K; ++k) v.cdf[b + k] = float(std::min(1.0, double(v.cdf[b + k]) / acc));
   v.cdf[b + K - 1] = 1.0f;
-  if (v.s.guided) cut_bake_guide(v, cell, K, pri, val, v_sum > 0 ? v.eps[cell] : 1.0);
+  if (v.s.guided) cut_bake_guide(v, cell, K, pri, val, v_sum > 0 ? v.eps[cell] : 1.0, scratch);
 }
 
-// Light powers or positions changed: the cell's prior weights anew, and its table.
-RLL_HD inline void cut_refresh(const CutStoreEndView& v, uint32_t cell) {
+// Light powers or positions changed: the cell's prior weights anew, and its table. Scratch: as
+// cut_bake.
+RLL_HD inline void cut_refresh(const CutStoreEndView& v, uint32_t cell, const CutScratch& scratch) {
   if (!v.active(cell)) return;
   const size_t b = v.base(cell);
   for (size_t k = 0; k < v.size[cell]; ++k) v.weight[b + k] = cut_weight_of(v, cell, v.node[b + k]);
-  cut_bake(v, cell, v.size[cell]);
+  cut_bake(v, cell, v.size[cell], scratch);
 }
 
 // The lights changed (forget=changes): every cluster's memory is cut back to the last 1/alpha
@@ -277,13 +321,13 @@ RLL_HD inline void cut_clear(const CutStoreEndView& v, uint32_t cell) {
 
 // Pooling: adds the pass's rewards of `cell` (under the shared cut's indices) in absolute units
 // to sum, sq and count (each initial.size long); with pool_ratio, each divided by the cell's
-// prior share of its cluster.
+// prior share of its cluster. Scratch (initial.size clusters): pri, w.
 RLL_HD inline void cut_pass_rewards(const CutStoreEndView& v, uint32_t cell, double* sum,
-                                    double* sq, uint64_t* count) {
+                                    double* sq, uint64_t* count, const CutScratch& scratch) {
   const size_t b = v.base(cell);
   const double unit = 1 / v.inv_unit[cell];
-  double pri[kMaxCutSize];
-  if (v.s.pool_ratio) cut_cell_prior(v, cell, pri);
+  double* pri = scratch.pri;
+  if (v.s.pool_ratio) cut_cell_prior(v, cell, pri, scratch);
   for (size_t k = 0; k < v.initial.size; ++k) {
     const uint32_t n = v.count[b + k];
     if (n == 0) continue;
@@ -296,8 +340,10 @@ RLL_HD inline void cut_pass_rewards(const CutStoreEndView& v, uint32_t cell, dou
 
 // End of pass for one cell (cells are independent). A cell without a cut gets the initial one;
 // the pass's rewards are folded into Q and M2, split-collapse runs, the table is baked. A cell
-// with a cut and no reward this pass keeps its cut and table.
-RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell) {
+// with a cut and no reward this pass keeps its cut and table. Scratch: all of it, of
+// cut_scratch_room(v, cell) clusters (taken before the call).
+RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell,
+                                        const CutScratch& scratch) {
   CutPassStats st;
   const size_t b = v.base(cell);
   const bool active = v.active(cell);
@@ -327,8 +373,9 @@ RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell)
   if (n_total > 0) {
     st.touched = true;
     v.seen[cell] += float(n_total);
-    double pri[kMaxCutSize];
-    float val[kMaxCutSize], score[kMaxCutSize];
+    double* pri = scratch.pri;
+    float* val = scratch.val;
+    float* score = scratch.score;
     cut_prior(v, &v.node[b], &v.weight[b], K, pri);
     cut_values(v, cell, K, pri, val);
     const bool moment = v.s.target == LearnTarget::Moment;
@@ -380,12 +427,9 @@ RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell)
       if (r == 1) ++st.collapses;
     }
   }
-  cut_bake(v, cell, K);
+  cut_bake(v, cell, K, scratch);  // (pri and val are free again: the bake recomputes them)
   return st;
 }
 
 }  // namespace rll
 
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif

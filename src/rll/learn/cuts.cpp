@@ -195,12 +195,12 @@ CutStoreEndView CutStore::end_view() const {
 }
 
 void CutStore::add_pass_rewards(uint32_t cell, double* sum, double* sq, uint64_t* count) const {
-  cut_pass_rewards(end_view(), cell, sum, sq, count);
+  cut_pass_rewards(end_view(), cell, sum, sq, count, HostCutScratch(initial_size()));
 }
 
 void CutStore::cell_prior(uint32_t cell, std::vector<double>& out) const {
   out.resize(active(cell) ? m_size[cell] : m_initial.size());
-  cut_cell_prior(end_view(), cell, out.data());
+  cut_cell_prior(end_view(), cell, out.data(), HostCutScratch(initial_size()));
 }
 
 void CutStore::set_pool(uint32_t cell, const float* shares) {
@@ -215,7 +215,7 @@ std::vector<double> CutStore::learnt_shares(uint32_t cell) const {
   const size_t K = m_size[cell];
   std::vector<double> pri(K);
   std::vector<float> val(K);
-  cut_cell_prior(v, cell, pri.data());
+  cut_cell_prior(v, cell, pri.data(), HostCutScratch(0));  // (active: no scratch)
   cut_values(v, cell, K, pri.data(), val.data());
   double sum = 0;
   for (float x : val) sum += x;
@@ -240,15 +240,16 @@ void CutStore::assign(uint32_t cell, const std::vector<uint32_t>& nodes,
     m_weight[base + k] = cut_weight_of(v, cell, nodes[k]);
   }
   m_seen[cell] = 1e30f;  // only the configured defensive weight
-  cut_bake(v, cell, uint32_t(nodes.size()));
+  cut_bake(v, cell, uint32_t(nodes.size()), HostCutScratch(uint32_t(nodes.size())));
 }
 
 void CutStore::refresh(uint32_t cell) {
-  cut_refresh(end_view(), cell);
+  cut_refresh(end_view(), cell, HostCutScratch(m_size[cell]));
 }
 
 CutStore::PassStats CutStore::end_pass(uint32_t cell) {
-  return cut_end_pass(end_view(), cell);
+  const CutStoreEndView v = end_view();
+  return cut_end_pass(v, cell, HostCutScratch(cut_scratch_room(v, cell)));
 }
 
 void CutStore::save_cell(uint32_t cell, BinaryWriter& w) const {
@@ -313,9 +314,10 @@ void CutStore::load_cell(uint32_t cell, BinaryReader& r) {
     const CutStoreEndView v = end_view();
     std::vector<double> pri(K);
     std::vector<float> val(K);
-    cut_cell_prior(v, cell, pri.data());
+    HostCutScratch scratch(K);
+    cut_cell_prior(v, cell, pri.data(), scratch);
     cut_values(v, cell, K, pri.data(), val.data());
-    cut_bake_guide(v, cell, K, pri.data(), val.data(), m_learnt[cell] ? m_eps[cell] : 1.0);
+    cut_bake_guide(v, cell, K, pri.data(), val.data(), m_learnt[cell] ? m_eps[cell] : 1.0, scratch);
   }
 }
 

@@ -41,8 +41,8 @@ enum class LearnTarget { Moment, Mean };
 // clusters, Q split half and half).
 enum class ClusterWeight { Importance, Power, Uniform };
 
-// The largest M (rll.cut_size) a CutStore accepts: the end of pass keeps a cell's scratch in
-// fixed-size arrays of this many clusters (learn/cut_end_pass.h), on either device.
+// The largest M (rll.cut_size) a CutStore accepts (the end of pass's scratch, CutScratch in
+// learn/cut_end_pass.h, is sized by each cell's cut, not by this bound).
 inline constexpr int kMaxCutSize = 4096;
 
 struct CutSettings {

@@ -1,13 +1,16 @@
 // RLL's end of pass above the single cell, as host-and-device functions (DESIGN 6): a new cell's
 // anchor from its first pass's point sums, and pooling (rll.pool) without a map: the coarse
 // cells as a sorted key array with K values each, the pass's rewards summed per coarse cell over
-// its cells in the order of their keys, folded, and given back to the cells as shares. The
-// sorts that order the cells stay host code (RllLightSampler::pool_pass; a device build sorts
-// with CUB); everything per cell or per coarse cell is here.
+// its cells in the order of their keys, folded, and given back to the cells as shares. Then the
+// whole end of pass (rll_end_pass) written once over a backend (core/backend.h): the cells in
+// use, their anchors, pooling with its sort, every cell's cut_end_pass, eviction, the table's
+// rebuild and Fermat's reset; the CPU runs it with HostBackend (RllLightSampler::end_pass), the
+// GPU with the CUDA backend (rll/cuda/backend.cuh), over the same functions.
 #pragma once
 
 #include <cstdint>
 
+#include "rll/core/backend.h"
 #include "rll/core/device.h"
 #include "rll/learn/cut_end_pass.h"
 #include "rll/lights/rll_view.h"
@@ -65,16 +68,18 @@ struct PoolEntry {
 // keys) summed into sum, sq and n_rewards (k each, scratch), then folded into the coarse cell
 // `slot` of `next` by the shrinkage rule without a prior (a cluster's first rewards are its
 // values), from its state in `old` if it had one, forgetting as the cells do (rll.forget);
-// returns the clusters whose rewards failed the change test.
+// returns the clusters whose rewards failed the change test. Scratch (k clusters): as
+// cut_pass_rewards.
 RLL_HD inline uint32_t pool_fold(const CutStoreEndView& v, const PoolEntry* entries, size_t count,
                                  const RllPoolView& old, const RllPoolView& next, size_t slot,
-                                 double* sum, double* sq, uint64_t* n_rewards) {
+                                 double* sum, double* sq, uint64_t* n_rewards,
+                                 const CutScratch& scratch) {
   const size_t K = next.k;
   for (size_t k = 0; k < K; ++k) {
     sum[k] = sq[k] = 0;
     n_rewards[k] = 0;
   }
-  for (size_t i = 0; i < count; ++i) cut_pass_rewards(v, entries[i].cell, sum, sq, n_rewards);
+  for (size_t i = 0; i < count; ++i) cut_pass_rewards(v, entries[i].cell, sum, sq, n_rewards, scratch);
   float* q = &next.q[slot * K];
   float* m2 = &next.m2[slot * K];
   float* n = &next.n[slot * K];
@@ -123,11 +128,14 @@ RLL_HD inline bool pool_values(const RllPoolView& p, size_t slot, bool moment, f
 // Gives `cell` the distribution its values are shrunk toward: its coarse cell's (`coarse`),
 // itself shrunk toward the coarser cell's (`upper`, if `has_upper`: pool_up), times the cell's
 // prior with pool_guess=ratio, normalized; none where the coarse cell has no positive value.
+// Scratch (k clusters): val, score, pri, w.
 RLL_HD inline void pool_give_shares(const CutStoreEndView& v, const RllPoolView& p, uint32_t cell,
-                                    uint64_t coarse, bool has_upper, uint64_t upper) {
+                                    uint64_t coarse, bool has_upper, uint64_t upper,
+                                    const CutScratch& scratch) {
   const size_t K = p.k;
   const bool moment = v.s.target == LearnTarget::Moment;
-  float shares[kMaxCutSize], above[kMaxCutSize];
+  float* shares = scratch.val;
+  float* above = scratch.score;
   double total = 0;
   if (const long c = pool_find(p, coarse); c >= 0) {
     const float* q = &p.q[size_t(c) * K];
@@ -140,8 +148,8 @@ RLL_HD inline void pool_give_shares(const CutStoreEndView& v, const RllPoolView&
             K, [&](size_t k) { return q[k] >= 0; }, &p.n[size_t(c) * K], above, v.s.pool_weight,
             shares);
     // pool_guess=ratio: the coarse cell's factors times this cell's prior.
-    double pri[kMaxCutSize];
-    if (v.s.pool_ratio) cut_cell_prior(v, cell, pri);
+    double* pri = scratch.pri;
+    if (v.s.pool_ratio) cut_cell_prior(v, cell, pri, scratch);
     for (size_t k = 0; k < K; ++k) {
       if (v.s.pool_ratio) shares[k] = float(shares[k] * pri[k]);
       total += shares[k];
@@ -152,6 +160,329 @@ RLL_HD inline void pool_give_shares(const CutStoreEndView& v, const RllPoolView&
   v.has_pool[cell] = total > 0;
   if (total > 0)
     for (size_t k = 0; k < K; ++k) v.pool[v.base(cell) + k] = shares[k];
+}
+
+// --- The end of pass over a backend -------------------------------------------------------------
+
+// What RLL's end of pass reads and writes, as views into one backend's memory.
+struct RllLearnView {
+  CutStoreEndView cuts;
+  CellTableView table;
+  View<uint32_t> free_room;  // the table's free list, capacity long (CellTable::free_room)
+  View<uint32_t> last_used;  // per cell: the pass of its last lookup
+  View<uint64_t> points;     // per cell, kRllPointWords: the point sums of its first pass
+  CellKeyer keyer;           // this pass's
+  Vec3 origin;               // of the point sums
+  float extent = 1;
+  uint32_t capacity = 0;     // cells
+};
+
+// Pooling's coarse cells (RllPoolView's arrays) in a backend's memory.
+template <typename B>
+struct RllPoolState {
+  typename B::template Buffer<uint64_t> keys;
+  typename B::template Buffer<float> q, m2, n;
+  RllPoolView view(uint32_t k) {
+    return {k, keys.view(), q.view(), m2.view(), n.view()};
+  }
+  void clear(const B& b) {
+    keys = b.template buffer<uint64_t>(0);
+    q = b.template buffer<float>(0);
+    m2 = b.template buffer<float>(0);
+    n = b.template buffer<float>(0);
+  }
+};
+
+// The end of pass's scratch (CutScratch per cell), kept from pass to pass and grown as needed.
+template <typename B>
+struct RllScratch {
+  typename B::template Buffer<double> d;
+  typename B::template Buffer<float> f;
+  // An arena of at least `clusters` clusters of room.
+  CutScratchArena arena(const B& b, uint64_t clusters) {
+    if (d.size() < clusters * CutScratchArena::kDoubles) {
+      d = b.template buffer<double>(clusters * CutScratchArena::kDoubles);
+      f = b.template buffer<float>(clusters * CutScratchArena::kFloats);
+    }
+    return {d.view(), f.view()};
+  }
+  size_t bytes() const { return d.size() * sizeof(double) + f.size() * sizeof(float); }
+};
+
+// What one end of pass did: the few numbers the host keeps per pass.
+struct RllPassCounts {
+  uint32_t splits = 0, collapses = 0, touched = 0, changes = 0;
+  uint32_t pool_changes = 0;  // pooling's coarse cells' changes (forget=changes)
+  uint64_t failed = 0;        // points that found no cell during the pass
+  uint32_t evicted = 0;
+  uint32_t used = 0;  // cells in use after the rebuild
+};
+
+// Pooling: the coarse key of each of `cells` in tier 0 (its anchor, pool levels up) or tier 1
+// (pool + pool_up levels up).
+template <typename B>
+typename B::template Buffer<uint64_t> rll_coarse_keys(const B& b, const RllLearnView& v,
+                                                       View<const uint32_t> cells, int tier) {
+  const int up = v.cuts.s.pool_levels + (tier > 0 ? v.cuts.s.pool_up : 0);
+  auto keys = b.template buffer<uint64_t>(cells.size);
+  const View<uint64_t> out = keys.view();
+  const View<CellAnchor> anchor = v.cuts.anchor;
+  const CellKeyer keyer = v.keyer;
+  b.parallel_for(cells.size, [=] RLL_HD(size_t i) {
+    // The anchor, a mean of the cell's points, lies inside the cell, so the coarse cell holds it.
+    const CellAnchor& a = anchor[cells[i]];
+    out[i] = keyer.key(keyer.locate_at_level(a.p, a.n, a.level + up));
+  });
+  return keys;
+}
+
+// Pooling: gives each of `cells` its coarse cell's shares (`coarse`, and `upper` with pool_up:
+// empty otherwise); scratch of k clusters per cell.
+template <typename B>
+void rll_give_pool_shares(const B& b, const RllLearnView& v, RllPoolState<B>& pool,
+                          View<const uint32_t> cells, View<const uint64_t> coarse,
+                          View<const uint64_t> upper, RllScratch<B>& scratch) {
+  const uint32_t K = uint32_t(v.cuts.initial.size);
+  const CutScratchArena arena = scratch.arena(b, uint64_t(cells.size) * K);
+  const CutStoreEndView ev = v.cuts;
+  const RllPoolView p = pool.view(K);
+  b.parallel_for(cells.size, [=] RLL_HD(size_t i) {
+    pool_give_shares(ev, p, cells[i], coarse[i], !upper.empty(), upper.empty() ? 0 : upper[i],
+                     arena.slice(uint64_t(i) * K, K));
+  });
+}
+
+// The same for every cell in use, from their anchors (after a load or a change of the lights).
+template <typename B>
+void rll_give_pool_shares(const B& b, const RllLearnView& v, RllPoolState<B>& pool,
+                          RllScratch<B>& scratch) {
+  const View<uint64_t> key_of = v.table.key_of;
+  const auto cells =
+      select_indices(b, v.capacity, [=] RLL_HD(size_t c) { return key_of[c] != 0; });
+  const auto coarse = rll_coarse_keys(b, v, cells.view(), 0);
+  const auto upper = rll_coarse_keys(
+      b, v, v.cuts.s.pool_tiers() > 1 ? cells.view() : View<const uint32_t>{}, 1);
+  rll_give_pool_shares(b, v, pool, cells.view(), coarse.view(), upper.view(), scratch);
+}
+
+// Pooling (rll.pool): pools this pass's rewards of `cells` into their coarse cells, folds them
+// into the coarse cells' values (coarse cells no cell uses any more are forgotten) and gives
+// every cell its coarse cell's shares; returns the coarse clusters' changes.
+template <typename B>
+uint32_t rll_pool_pass(const B& b, const RllLearnView& v, RllPoolState<B>& pool,
+                       View<const uint32_t> cells, RllScratch<B>& scratch) {
+  const uint32_t K = uint32_t(v.cuts.initial.size);
+  const size_t n = cells.size;
+  // Two tiers (pool_up): every cell's rewards also reach the cell pool_up levels coarser still.
+  // Keys hold the level, so both tiers share one key space; a coarse cell of either tier sums
+  // the cells under it.
+  const size_t tiers = v.cuts.s.pool_tiers() > 1 ? 2 : 1;
+  const auto coarse = rll_coarse_keys(b, v, cells, 0);
+  const auto upper = rll_coarse_keys(b, v, tiers > 1 ? cells : View<const uint32_t>{}, 1);
+  // One entry per cell and tier, sorted by (coarse key, cell key): each coarse cell's cells in
+  // the order of their keys, so that the sums do not depend on which thread created which cell
+  // id. Two stable sorts: by cell key, then by coarse key. (Entries equal in both are one cell's,
+  // alike.)
+  const size_t E = n * tiers;
+  auto sort_keys = b.template buffer<uint64_t>(E);
+  auto order = b.template buffer<uint32_t>(E);
+  {
+    const View<uint64_t> sk = sort_keys.view();
+    const View<uint32_t> o = order.view();
+    const View<uint64_t> key_of = v.table.key_of;
+    b.parallel_for(E, [=] RLL_HD(size_t e) {
+      sk[e] = key_of[cells[e / tiers]];
+      o[e] = uint32_t(e);
+    });
+    b.sort_pairs(sk, o);
+    const View<const uint64_t> c0 = coarse.view(), c1 = upper.view();
+    b.parallel_for(E, [=] RLL_HD(size_t j) {
+      const uint32_t e = o[j];
+      sk[j] = e % tiers == 0 ? c0[e / tiers] : c1[e / tiers];
+    });
+    b.sort_pairs(sk, o);
+  }
+  // The entries in that order, and the coarse cells of this pass, each a segment of them.
+  auto entries = b.template buffer<PoolEntry>(E);
+  auto head = b.template buffer<uint32_t>(E);
+  auto slot_of = b.template buffer<uint64_t>(E);
+  const View<const uint64_t> sk = sort_keys.view();
+  {
+    const View<PoolEntry> en = entries.view();
+    const View<uint32_t> h = head.view();
+    const View<const uint32_t> o = order.view();
+    const View<uint64_t> key_of = v.table.key_of;
+    b.parallel_for(E, [=] RLL_HD(size_t j) {
+      const uint32_t cell = cells[o[j] / tiers];
+      en[j] = {sk[j], key_of[cell], cell};
+      h[j] = j == 0 || sk[j] != sk[j - 1];
+    });
+  }
+  const size_t coarse_count = b.exclusive_scan(head.view(), slot_of.view());
+  auto keys = b.template buffer<uint64_t>(coarse_count);
+  auto first = b.template buffer<uint64_t>(coarse_count + 1);
+  {
+    const View<uint64_t> ks = keys.view(), fi = first.view();
+    const View<const uint32_t> h = head.view();
+    const View<const uint64_t> at = slot_of.view();
+    b.parallel_for(E, [=] RLL_HD(size_t j) {
+      if (h[j]) {
+        ks[at[j]] = sk[j];
+        fi[at[j]] = j;
+      }
+    });
+    b.parallel_for(1, [=] RLL_HD(size_t) { fi[coarse_count] = E; });
+  }
+  // Each coarse cell's fold, from its state of the last pass.
+  RllPoolState<B> next{std::move(keys), b.template buffer<float>(coarse_count * K),
+                       b.template buffer<float>(coarse_count * K),
+                       b.template buffer<float>(coarse_count * K)};
+  auto sum = b.template buffer<double>(coarse_count * K);
+  auto sq = b.template buffer<double>(coarse_count * K);
+  auto count = b.template buffer<uint64_t>(coarse_count * K);
+  auto changes = b.template buffer<uint32_t>(coarse_count);
+  {
+    const CutStoreEndView ev = v.cuts;
+    const RllPoolView old = pool.view(K), nv = next.view(K);
+    const CutScratchArena arena = scratch.arena(b, uint64_t(coarse_count) * K);
+    const View<const PoolEntry> en = entries.view();
+    const View<const uint64_t> fi = first.view();
+    const View<double> su = sum.view(), sqv = sq.view();
+    const View<uint64_t> co = count.view();
+    const View<uint32_t> ch = changes.view();
+    b.parallel_for(coarse_count, [=] RLL_HD(size_t j) {
+      const size_t at = j * K;
+      ch[j] = pool_fold(ev, &en[fi[j]], fi[j + 1] - fi[j], old, nv, j, &su[at], &sqv[at], &co[at],
+                        arena.slice(at, K));
+    });
+  }
+  const uint32_t total = uint32_t(b.sum(changes.view()));
+  pool = std::move(next);
+  rll_give_pool_shares(b, v, pool, cells, coarse.view(), upper.view(), scratch);
+  return total;
+}
+
+// RLL's end of pass over a backend: new cells' anchors, pooling, every cell's cut_end_pass
+// (rewards folded, split-collapse, tables baked) in scratch sized by its cut, then, when the
+// table is nearly full or turned points away, eviction of the least recently used cells until
+// it is 70% full (ties: the lower cell id), cells whose insert lost a race or were evicted back
+// on the free list, the table rebuilt; and with `reset` (Fermat's periodic reset), every cell
+// forgotten. `used_before`: the cells in use at the last rebuild. Nothing here depends on the
+// order threads run in: sums are of integers, the sorts' keys hold the cell key or id.
+template <typename B>
+RllPassCounts rll_end_pass(const B& b, const RllLearnView& v, RllPoolState<B>& pool,
+                           RllScratch<B>& scratch, uint32_t used_before, bool reset) {
+  RllPassCounts out;
+  const CutStoreEndView ev = v.cuts;
+  const uint32_t cap = v.capacity;
+  const View<uint64_t> key_of = v.table.key_of;
+  const auto cells_buffer = select_indices(b, cap, [=] RLL_HD(size_t c) { return key_of[c] != 0; });
+  const View<const uint32_t> cells = cells_buffer.view();
+  const size_t n = cells.size;
+  {
+    const View<uint64_t> points = v.points;
+    const Vec3 origin = v.origin;
+    const float extent = v.extent;
+    b.parallel_for(n, [=] RLL_HD(size_t i) {
+      rll_anchor_from_points(ev, cells[i], &points[size_t(cells[i]) * kRllPointWords], origin,
+                             extent);
+    });
+  }
+  if (ev.s.pool_levels > 0) out.pool_changes = rll_pool_pass(b, v, pool, cells, scratch);
+  {
+    // Each cell's scratch: its slice of an arena, at an exclusive scan of the cells' rooms.
+    auto room = b.template buffer<uint32_t>(n);
+    auto offset = b.template buffer<uint64_t>(n);
+    auto stats = b.template buffer<uint32_t>(4 * n);  // splits, collapses, touched, changes
+    const View<uint32_t> r = room.view(), st = stats.view();
+    b.parallel_for(n, [=] RLL_HD(size_t i) { r[i] = cut_scratch_room(ev, cells[i]); });
+    const uint64_t clusters = b.exclusive_scan(r, offset.view());
+    const CutScratchArena arena = scratch.arena(b, clusters);
+    const View<const uint64_t> at = offset.view();
+    b.parallel_for(n, [=] RLL_HD(size_t i) {
+      const CutPassStats s = cut_end_pass(ev, cells[i], arena.slice(at[i], r[i]));
+      st[i] = s.splits;
+      st[n + i] = s.collapses;
+      st[2 * n + i] = s.touched;
+      st[3 * n + i] = s.changes;
+    });
+    uint32_t* fields[4] = {&out.splits, &out.collapses, &out.touched, &out.changes};
+    for (size_t f = 0; f < 4; ++f)
+      *fields[f] = uint32_t(b.sum(View<const uint32_t>{st.data + f * n, n}));
+  }
+  out.failed = b.read(v.table.failed);
+  if (out.failed > 0 || used_before > cap * 9ull / 10) {
+    const size_t target = cap * 7ull / 10;
+    if (n > target) {
+      auto last = b.template buffer<uint64_t>(n);
+      auto lru = b.template buffer<uint32_t>(n);
+      const View<uint64_t> l = last.view();
+      const View<uint32_t> ids = lru.view();
+      const View<uint32_t> last_used = v.last_used;
+      b.parallel_for(n, [=] RLL_HD(size_t i) {
+        l[i] = last_used[cells[i]];
+        ids[i] = cells[i];
+      });
+      b.sort_pairs(l, ids);  // stable: ties keep the order of cell ids
+      out.evicted = uint32_t(n - target);
+      b.parallel_for(out.evicted, [=] RLL_HD(size_t i) {
+        cut_clear(ev, ids[i]);
+        key_of[ids[i]] = 0;
+      });
+    }
+  }
+  // Cells whose insert lost a race, or were evicted, go back to the free list.
+  b.parallel_for(cap, [=] RLL_HD(size_t c) {
+    if (key_of[c] == 0 && ev.active(uint32_t(c))) cut_clear(ev, uint32_t(c));
+  });
+  out.used = cell_table_rebuild(b, v.table, v.free_room);
+  if (reset) {
+    // Fermat's periodic reset: every cell starts over.
+    b.parallel_for(cap, [=] RLL_HD(size_t c) {
+      if (key_of[c] != 0) {
+        cut_clear(ev, uint32_t(c));
+        key_of[c] = 0;
+      }
+    });
+    out.used = cell_table_rebuild(b, v.table, v.free_room);
+    pool.clear(b);
+  }
+  return out;
+}
+
+// Every cell's prior weights and table anew (cut_refresh), in scratch sized by its cut.
+template <typename B>
+void rll_refresh_all(const B& b, const RllLearnView& v, RllScratch<B>& scratch) {
+  const CutStoreEndView ev = v.cuts;
+  const uint32_t cap = v.capacity;
+  auto room = b.template buffer<uint32_t>(cap);
+  auto offset = b.template buffer<uint64_t>(cap);
+  const View<uint32_t> r = room.view();
+  b.parallel_for(cap, [=] RLL_HD(size_t c) { r[c] = ev.active(uint32_t(c)) ? ev.size[c] : 0; });
+  const CutScratchArena arena = scratch.arena(b, b.exclusive_scan(r, offset.view()));
+  const View<const uint64_t> at = offset.view();
+  b.parallel_for(cap, [=] RLL_HD(size_t c) {
+    cut_refresh(ev, uint32_t(c), arena.slice(at[c], r[c]));
+  });
+}
+
+// The lights changed: under forget=changes every cluster's memory, a cell's and a coarse cell's,
+// is cut back to the last 1/alpha rewards (what a cluster learnt under the old lights may be
+// wrong under the new); every cell's prior weights and table anew; with pool_guess=ratio, whose
+// pool shares are the coarse factors times a cell's prior (a lamp switched off has prior 0), the
+// shares given again from the new priors and the tables baked once more.
+template <typename B>
+void rll_lights_changed(const B& b, const RllLearnView& v, RllPoolState<B>& pool,
+                        RllScratch<B>& scratch) {
+  const CutStoreEndView ev = v.cuts;
+  b.parallel_for(v.capacity, [=] RLL_HD(size_t c) { cut_forget(ev, uint32_t(c)); });
+  const RllPoolView p = pool.view(uint32_t(ev.initial.size));
+  b.parallel_for(p.keys.size, [=] RLL_HD(size_t j) { pool_forget(ev, p, j); });
+  rll_refresh_all(b, v, scratch);
+  if (ev.s.pool_levels > 0 && ev.s.pool_ratio && p.keys.size > 0) {
+    rll_give_pool_shares(b, v, pool, scratch);
+    rll_refresh_all(b, v, scratch);
+  }
 }
 
 }  // namespace rll

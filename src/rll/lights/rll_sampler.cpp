@@ -134,11 +134,16 @@ RllSettings fermat_settings() {
 
 namespace {
 void check_memory(const RllSettings& s) {
-  // The cell table, the cuts and the point sums, allocated up front: refuse a configuration the
-  // machine cannot hold rather than grow towards the out-of-memory killer.
+  // The cell table, the cuts and the point sums, allocated up front, and the end of pass's
+  // scratch at its largest (every cell's cut full; pooling's coarse cells, one per cell and tier):
+  // refuse a configuration the machine cannot hold rather than grow towards the out-of-memory
+  // killer.
+  const double scratch_per_cluster =
+      CutScratchArena::kDoubles * sizeof(double) + CutScratchArena::kFloats * sizeof(float);
   const double needed =
       double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_tiers())) +
-      double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t));
+      double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t)) +
+      double(s.capacity) * s.cut.cut_size * scratch_per_cluster * std::max(1, s.cut.pool_tiers());
   if (needed > double(memory_budget_bytes()))
     fail(
         "{0}.capacity={1} with {0}.cut_size={2} needs {3} for its cells, more than {4}; lower "
@@ -191,6 +196,7 @@ void RllLightSampler::refresh_view() {
 }
 
 SamplerView RllLightSampler::sampler_view() const {
+  sync();
   SamplerView v;
   v.kind = SamplerKind::Rll;
   v.tree = m_view.tree;
@@ -201,7 +207,7 @@ SamplerView RllLightSampler::sampler_view() const {
 size_t RllLightSampler::bytes() const {
   return m_table->bytes() + m_cuts->bytes() +
          m_s.capacity * (sizeof(uint32_t) + kPointWords * sizeof(int64_t)) +
-         m_power_prefix.size() * sizeof(double);
+         m_power_prefix.size() * sizeof(double) + m_scratch.bytes();
 }
 
 void RllLightSampler::prepare(LightContext& ctx, float u) const {
@@ -221,212 +227,75 @@ void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, con
   rll_record(m_view, ctx, s, r);
 }
 
-void RllLightSampler::end_pass() {
-  if (m_frozen) return;
-  const uint32_t cap = m_s.capacity;
-  const std::vector<uint32_t> cells = cells_in_use();
-  const CutStoreEndView ev = m_cuts->end_view();
-  {
-    const View<uint64_t> points = view_of(m_points);
-    const Vec3 origin = m_origin;
-    const float extent = m_extent;
-    host_parallel_for(cells.size(), [&](size_t i) {
-      rll_anchor_from_points(ev, cells[i], &points[size_t(cells[i]) * kPointWords], origin, extent);
-    });
-  }
-  if (m_s.cut.pool_levels > 0) pool_pass(cells);
-  std::vector<CutPassStats> stats(cells.size());
-  host_parallel_for(cells.size(), [&](size_t i) { stats[i] = cut_end_pass(ev, cells[i]); });
-  uint32_t splits = 0, collapses = 0, touched = 0, changes = 0;
-  for (const CutPassStats& st : stats) {
-    splits += st.splits;
-    collapses += st.collapses;
-    touched += st.touched;
-    changes += st.changes;
-  }
-  m_changes_per_pass.push_back(changes);
-  m_splits_per_pass.push_back(splits);
-  m_collapses_per_pass.push_back(collapses);
-  m_touched_per_pass.push_back(touched);
+RllLearnView RllLightSampler::learn_view() {
+  RllLearnView v;
+  v.cuts = m_cuts->end_view();
+  v.table = m_table->view();
+  v.free_room = m_table->free_room();
+  v.last_used = view_of(m_last_used);
+  v.points = view_of(m_points);
+  v.keyer = m_keyer;
+  v.origin = m_origin;
+  v.extent = m_extent;
+  v.capacity = m_s.capacity;
+  return v;
+}
 
-  // Eviction: when the table is nearly full or turned points away, forget the least recently
-  // used cells until it is 70% full. Ties go to the lower cell id.
-  uint64_t failed = m_table->failed_inserts();
-  m_failed_inserts += failed;
-  if (failed > 0 && !m_warned_full) {
+void RllLightSampler::sync() const {
+  if (!m_pull) return;
+  const auto pull = std::move(m_pull);
+  m_pull = nullptr;
+  m_remote = nullptr;
+  m_remote_lights = nullptr;
+  pull(m_pool);
+}
+
+void RllLightSampler::end_pass() {
+  sync();
+  end_pass_with({});
+}
+
+void RllLightSampler::end_pass_with(const EndPassRun& run) {
+  if (m_frozen) return;
+  const bool reset = m_s.reset_every > 0 && (m_pass + 1) % m_s.reset_every == 0;
+  const RllPassCounts c =
+      run ? run(learn_view(), m_pool, m_table->used(), reset)
+          : rll_end_pass(HostBackend{}, learn_view(), m_pool, m_scratch, m_table->used(), reset);
+  m_table->rebuilt(c.used);
+  if (m_s.cut.pool_levels > 0) m_pool_changes_per_pass.push_back(c.pool_changes);
+  m_changes_per_pass.push_back(c.changes);
+  m_splits_per_pass.push_back(c.splits);
+  m_collapses_per_pass.push_back(c.collapses);
+  m_touched_per_pass.push_back(c.touched);
+  m_failed_inserts += c.failed;
+  m_evictions += c.evicted;
+  if (c.failed > 0 && !m_warned_full) {
     // Said once: points without a cell sample like the tree and teach nothing.
     fmt::print(stderr,
                "rll: warning: {0}'s cell table is full ({0}.capacity={1}): {2} points this pass "
                "found no cell and sampled without learning; raise {0}.capacity\n",
-               m_s.name, m_s.capacity, failed);
+               m_s.name, m_s.capacity, c.failed);
     m_warned_full = true;
   }
-  std::vector<uint32_t> evict;
-  if (failed > 0 || m_table->used() > cap * 9ull / 10) {
-    std::vector<uint32_t> used = cells_in_use();
-    size_t target = cap * 7ull / 10;
-    if (used.size() > target) {
-      std::stable_sort(used.begin(), used.end(),
-                       [&](uint32_t a, uint32_t b) { return m_last_used[a] < m_last_used[b]; });
-      evict.assign(used.begin(), used.begin() + long(used.size() - target));
-      host_parallel_for(evict.size(), [&](size_t i) { cut_clear(ev, evict[i]); });
-      m_evictions += evict.size();
-    }
-  }
-  // Cells whose insert lost a race, or were evicted, go back to the free list.
-  host_parallel_for(cap, [&](size_t c) {
-    if (!m_table->in_use(uint32_t(c)) && ev.active(uint32_t(c))) cut_clear(ev, uint32_t(c));
-  });
-  m_table->remove_and_rebuild(evict);
   ++m_pass;
   m_keyer.set_pass(m_pass, 0);
-  if (m_s.reset_every > 0 && m_pass % m_s.reset_every == 0) {
-    // Fermat's periodic reset: every cell starts over.
-    const std::vector<uint32_t> all = cells_in_use();
-    host_parallel_for(all.size(), [&](size_t i) { cut_clear(ev, all[i]); });
-    m_table->remove_and_rebuild(all);
-    clear_pool();
-    ++m_resets;
-  }
+  m_resets += reset;
   refresh_view();
-}
-
-std::vector<uint32_t> RllLightSampler::cells_in_use() const {
-  std::vector<uint32_t> cells;
-  for (uint32_t c = 0; c < m_s.capacity; ++c)
-    if (m_table->in_use(c)) cells.push_back(c);
-  return cells;
-}
-
-void RllLightSampler::give_pool_shares() {
-  const std::vector<uint32_t> cells = cells_in_use();
-  give_pool_shares(cells, coarse_keys(cells, 0), coarse_keys(cells, 1));
-}
-
-std::vector<uint64_t> RllLightSampler::coarse_keys(const std::vector<uint32_t>& cells,
-                                                   int tier) const {
-  if (tier >= m_s.cut.pool_tiers()) return {};
-  const int up = m_s.cut.pool_levels + (tier > 0 ? m_s.cut.pool_up : 0);
-  std::vector<uint64_t> keys(cells.size());
-  parallel_for(cells.size(), 256, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-      // The anchor, a mean of the cell's points, lies inside the cell, so the coarse cell holds it.
-      const CellAnchor& a = m_cuts->anchor(cells[i]);
-      keys[i] = m_keyer.key(m_keyer.locate_at_level(a.p, a.n, a.level + up));
-    }
-  });
-  return keys;
-}
-
-RllPoolView RllLightSampler::pool_view() {
-  RllPoolView p;
-  p.k = m_cuts->initial_size();
-  p.keys = view_of(std::as_const(m_pool_keys));
-  p.q = view_of(m_pool_q);
-  p.m2 = view_of(m_pool_m2);
-  p.n = view_of(m_pool_n);
-  return p;
-}
-
-void RllLightSampler::clear_pool() {
-  m_pool_keys.clear();
-  m_pool_q.clear();
-  m_pool_m2.clear();
-  m_pool_n.clear();
-}
-
-void RllLightSampler::pool_pass(const std::vector<uint32_t>& cells) {
-  const size_t K = m_cuts->initial_size();
-  const std::vector<uint64_t> coarse = coarse_keys(cells, 0);
-  // Two tiers (pool_up): every cell's rewards also reach the cell pool_up levels coarser still.
-  // Keys hold the level, so both tiers share one key space; a coarse cell of either tier sums the
-  // cells under it.
-  const std::vector<uint64_t> upper = coarse_keys(cells, 1);
-  // (coarse key, cell key) pairs sorted: each coarse cell's cells in the order of their keys, so
-  // that the sums do not depend on which thread created which cell id. (Host sort; a device
-  // build sorts the pairs with CUB.)
-  std::vector<PoolEntry> entries;
-  entries.reserve(cells.size() * (upper.empty() ? 1 : 2));
-  for (size_t i = 0; i < cells.size(); ++i) {
-    const uint64_t key = m_table->key_of(cells[i]);
-    entries.push_back({coarse[i], key, cells[i]});
-    if (!upper.empty()) entries.push_back({upper[i], key, cells[i]});
-  }
-  std::sort(entries.begin(), entries.end(), [](const PoolEntry& a, const PoolEntry& b) {
-    return a.coarse != b.coarse ? a.coarse < b.coarse : a.cell_key < b.cell_key;
-  });
-  // The coarse cells of this pass, each a segment of the entries; coarse cells no cell uses any
-  // more are forgotten.
-  std::vector<uint64_t> keys;
-  std::vector<size_t> first;
-  for (size_t i = 0; i < entries.size(); ++i)
-    if (i == 0 || entries[i].coarse != entries[i - 1].coarse) {
-      keys.push_back(entries[i].coarse);
-      first.push_back(i);
-    }
-  first.push_back(entries.size());
-  std::vector<float> q(keys.size() * K), m2(keys.size() * K), n(keys.size() * K);
-  RllPoolView next;
-  next.k = uint32_t(K);
-  next.keys = view_of(std::as_const(keys));
-  next.q = view_of(q);
-  next.m2 = view_of(m2);
-  next.n = view_of(n);
-  std::vector<double> sum(keys.size() * K), sq(keys.size() * K);
-  std::vector<uint64_t> count(keys.size() * K);
-  const CutStoreEndView ev = m_cuts->end_view();
-  const RllPoolView old = pool_view();
-  std::vector<uint32_t> changes(keys.size());
-  host_parallel_for(keys.size(), [&](size_t j) {
-    changes[j] = pool_fold(ev, &entries[first[j]], first[j + 1] - first[j], old, next, j,
-                           &sum[j * K], &sq[j * K], &count[j * K]);
-  });
-  uint32_t total = 0;
-  for (uint32_t c : changes) total += c;
-  m_pool_changes_per_pass.push_back(total);
-  m_pool_keys = std::move(keys);
-  m_pool_q = std::move(q);
-  m_pool_m2 = std::move(m2);
-  m_pool_n = std::move(n);
-  give_pool_shares(cells, coarse, upper);
-}
-
-void RllLightSampler::give_pool_shares(const std::vector<uint32_t>& cells,
-                                       const std::vector<uint64_t>& coarse,
-                                       const std::vector<uint64_t>& upper) {
-  const CutStoreEndView ev = m_cuts->end_view();
-  const RllPoolView pool = pool_view();
-  host_parallel_for(cells.size(), [&](size_t i) {
-    pool_give_shares(ev, pool, cells[i], coarse[i], !upper.empty(), upper.empty() ? 0 : upper[i]);
-  });
 }
 
 void RllLightSampler::lights_changed(const Scene& scene) {
   refresh_light_powers(scene);
-  {
-    // forget=changes: every cluster's memory, a cell's and a coarse cell's, is cut back to the
-    // last 1/alpha rewards (what a cluster learnt under the old lights may be wrong under the new).
-    const CutStoreEndView ev = m_cuts->end_view();
-    host_parallel_for(m_s.capacity, [&](size_t c) { cut_forget(ev, uint32_t(c)); });
-    const RllPoolView pool = pool_view();
-    for (size_t j = 0; j < m_pool_keys.size(); ++j) pool_forget(ev, pool, j);
-  }
-  auto refresh_all = [&] {
-    const CutStoreEndView ev = m_cuts->end_view();
-    host_parallel_for(m_s.capacity, [&](size_t c) { cut_refresh(ev, uint32_t(c)); });
-  };
-  refresh_all();
-  // pool_guess=ratio: a cell's pool shares are the coarse factors times its prior, which has just
-  // changed (a lamp switched off has prior 0): give them again from the new priors and bake the
-  // tables once more, instead of guessing with the old priors until the end of the next pass.
-  if (m_s.cut.pool_levels > 0 && m_s.cut.pool_ratio && !m_pool_keys.empty()) {
-    give_pool_shares();
-    refresh_all();
+  if (m_pull && m_remote_lights) {
+    m_remote_lights(m_tree.view(), view_of(std::as_const(m_power_prefix)));  // on the device
+  } else {
+    sync();
+    rll_lights_changed(HostBackend{}, learn_view(), m_pool, m_scratch);
   }
   refresh_view();
 }
 
 void RllLightSampler::save_state(BinaryWriter& w) const {
+  sync();
   w.put(m_s.capacity);
   w.put(m_pass);
   w.put(m_resets);
@@ -440,17 +309,18 @@ void RllLightSampler::save_state(BinaryWriter& w) const {
   }
   if (m_s.cut.pool_levels > 0) {  // the coarse cells, in key order
     const size_t K = m_cuts->initial_size();
-    w.put(uint32_t(m_pool_keys.size()));
-    for (size_t i = 0; i < m_pool_keys.size(); ++i) {
-      w.put(m_pool_keys[i]);
-      w.put_array(&m_pool_q[i * K], K);
-      w.put_array(&m_pool_m2[i * K], K);
-      w.put_array(&m_pool_n[i * K], K);
+    w.put(uint32_t(m_pool.keys.size()));
+    for (size_t i = 0; i < m_pool.keys.size(); ++i) {
+      w.put(m_pool.keys[i]);
+      w.put_array(&m_pool.q[i * K], K);
+      w.put_array(&m_pool.m2[i * K], K);
+      w.put_array(&m_pool.n[i * K], K);
     }
   }
 }
 
 void RllLightSampler::load_state(BinaryReader& r) {
+  sync();
   auto damaged = [&](const std::string& what) {
     fail("cannot read '{}': the file is damaged ({})", r.name(), what);
   };
@@ -475,7 +345,7 @@ void RllLightSampler::load_state(BinaryReader& r) {
     m_last_used[c] = last;
     m_cuts->load_cell(c, r);
   }
-  clear_pool();
+  m_pool.clear(HostBackend{});
   if (m_s.cut.pool_levels > 0) {
     const size_t K = m_cuts->initial_size();
     const uint32_t count = r.get<uint32_t>();
@@ -486,16 +356,18 @@ void RllLightSampler::load_state(BinaryReader& r) {
       const uint64_t key = r.get<uint64_t>();
       if (i > 0 && key <= last) damaged("coarse cells out of order");
       last = key;
-      m_pool_keys.push_back(key);
-      for (auto* a : {&m_pool_q, &m_pool_m2, &m_pool_n}) a->resize(m_pool_keys.size() * K);
-      const size_t at = (m_pool_keys.size() - 1) * K;
-      r.get_array(&m_pool_q[at], K);
-      r.get_array(&m_pool_m2[at], K);
-      r.get_array(&m_pool_n[at], K);
+      m_pool.keys.push_back(key);
+      for (auto* a : {&m_pool.q, &m_pool.m2, &m_pool.n}) a->resize(m_pool.keys.size() * K);
+      const size_t at = (m_pool.keys.size() - 1) * K;
+      r.get_array(&m_pool.q[at], K);
+      r.get_array(&m_pool.m2[at], K);
+      r.get_array(&m_pool.n[at], K);
+      const auto& q = m_pool.q;
+      const auto& m2 = m_pool.m2;
+      const auto& n = m_pool.n;
       for (size_t k = at; k < at + K; ++k)
-        if (!((m_pool_q[k] >= 0 || m_pool_q[k] == -1) && std::isfinite(m_pool_q[k]) &&
-              m_pool_m2[k] >= 0 && std::isfinite(m_pool_m2[k]) && m_pool_n[k] >= 0 &&
-              std::isfinite(m_pool_n[k])))
+        if (!((q[k] >= 0 || q[k] == -1) && std::isfinite(q[k]) && m2[k] >= 0 &&
+              std::isfinite(m2[k]) && n[k] >= 0 && std::isfinite(n[k])))
           damaged("a coarse cell's value is negative or not finite");
     }
   }
@@ -505,11 +377,12 @@ void RllLightSampler::load_state(BinaryReader& r) {
   m_pass = pass;
   m_resets = resets;
   m_keyer.set_pass(m_pass, 0);
-  if (m_s.cut.pool_levels > 0) give_pool_shares();
+  if (m_s.cut.pool_levels > 0) rll_give_pool_shares(HostBackend{}, learn_view(), m_pool, m_scratch);
   refresh_view();
 }
 
 nlohmann::json RllLightSampler::describe() const {
+  sync();
   double mean_cut = 0;
   uint32_t active = 0;
   for (uint32_t c = 0; c < m_s.capacity; ++c)
@@ -567,7 +440,7 @@ nlohmann::json RllLightSampler::describe() const {
       {"evictions", m_evictions},
       {"failed_inserts", m_failed_inserts},
       {"mean_cut_size", active ? mean_cut / active : 0.0},
-      {"pool_cells", m_pool_keys.size()},
+      {"pool_cells", m_pool.keys.size()},
       {"splits_per_pass", m_splits_per_pass},
       {"collapses_per_pass", m_collapses_per_pass},
       {"cells_touched_per_pass", m_touched_per_pass},

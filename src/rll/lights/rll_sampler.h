@@ -6,6 +6,7 @@
 // the tables are baked again.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -81,12 +82,61 @@ class RllLightSampler final : public LightSampler {
   void load_state(BinaryReader& r) override;
   SamplerView sampler_view() const override;
 
+  // The end of pass with its whole-array work (rll_end_pass over this sampler's learning arrays,
+  // its pool and the cells in use at the last rebuild; with Fermat's reset) done by `run`, on
+  // another device (the GPU: cuda/device_rll.cuh, cuda/endpass_check.h), the bookkeeping (the
+  // statistics, the pass, the keyer's jitter, the table's count) as end_pass does it. Does not
+  // pull a remote state (below): run works on the device's copy.
+  using EndPassRun = std::function<RllPassCounts(const RllLearnView& v,
+                                                 RllPoolState<HostBackend>& pool,
+                                                 uint32_t used_before, bool reset)>;
+  void end_pass_with(const EndPassRun& run);
+  // The learning state may live on a device between passes and renders (`rll render --device
+  // cuda`, `rll interactive`): set_remote says so, with `pull`, which copies the device's arrays
+  // back into this sampler's and its coarse cells into `pool`; `remote` is the device state's
+  // token (null: the host's arrays are current). Everything on the host that reads or changes
+  // the learnt state (end_pass, save and load, describe, sampler_view, cuts, table, pool) pulls
+  // first (sync) and the state is the host's again. prepare, sample, pmf and record do not
+  // (they are the CPU renderers' hot path, which reach the sampler through sampler_view or
+  // end_pass first; a session with a GPU renders every pass there). lights_changed hands the
+  // new light tree and powers to `lights` where one is given, which runs it on the device's
+  // copy (rll_lights_changed), else it pulls too.
+  using RemoteLightsChanged =
+      std::function<void(const LightTreeView& tree, View<const double> power_prefix)>;
+  void set_remote(const void* token, std::function<void(RllPoolState<HostBackend>& pool)> pull,
+                  RemoteLightsChanged lights = {}) {
+    m_remote = token;
+    m_pull = std::move(pull);
+    m_remote_lights = std::move(lights);
+  }
+  const void* remote() const { return m_remote; }
+  void sync() const;
+  // What the end of pass reads and writes (rll_end_pass.h), this sampler's host arrays, without
+  // pulling (for a device's copy).
+  RllLearnView learn_view();
+  // The sampling view (its pass, keyer and free cells) without pulling: for the device's copy.
+  const RllView& rll_view() const { return m_view; }
+  // For tests: the coarse cells of pooling.
+  const RllPoolState<HostBackend>& pool() const {
+    sync();
+    return m_pool;
+  }
+
   // Stops learning: record() and end_pass() do nothing from now on (the oracle).
   void freeze() { m_frozen = true; }
   // For tests and the oracle: the learnt state.
-  const CutStore& cuts() const { return *m_cuts; }
-  CutStore& cuts() { return *m_cuts; }
-  const CellTable& table() const { return *m_table; }
+  const CutStore& cuts() const {
+    sync();
+    return *m_cuts;
+  }
+  CutStore& cuts() {
+    sync();
+    return *m_cuts;
+  }
+  const CellTable& table() const {
+    sync();
+    return *m_table;
+  }
   uint64_t passes() const { return m_pass; }
   size_t bytes() const;
 
@@ -94,28 +144,15 @@ class RllLightSampler final : public LightSampler {
   // Points m_view at this sampler's arrays, pass and keyer (after anything that changes them).
   void refresh_view();
   void refresh_light_powers(const Scene& scene);
-  // Pooling (rll.pool): pools this pass's rewards of the cells into their coarse cells, folds
-  // them into the coarse cells' values and gives every cell its coarse cell's shares.
-  void pool_pass(const std::vector<uint32_t>& cells);
-  // Pooling: the coarse cell of each cell in tier 0 (its anchor, pool levels up) or tier 1 (pool +
-  // pool_up levels up); empty for a tier the settings do not have.
-  std::vector<uint64_t> coarse_keys(const std::vector<uint32_t>& cells, int tier) const;
-  // Pooling: gives each cell its coarse cell's shares (none where that has no values);
-  // `coarse[i]` is the coarse key of cells[i], `upper[i]` (pool_up; empty: none) that of the
-  // cell the coarse cell's values are shrunk toward.
-  void give_pool_shares(const std::vector<uint32_t>& cells, const std::vector<uint64_t>& coarse,
-                        const std::vector<uint64_t>& upper);
-  // The same for every cell in use, from their anchors.
-  void give_pool_shares();
-  // The cells in use, in id order.
-  std::vector<uint32_t> cells_in_use() const;
 
   // The coarse cells of pooling (rll_end_pass.h): keys ascending, and per coarse cell Q, M2 and
   // reward weight of each cluster of the shared cut (initial_size() per coarse cell, key order).
-  std::vector<uint64_t> m_pool_keys;
-  std::vector<float> m_pool_q, m_pool_m2, m_pool_n;
-  RllPoolView pool_view();
-  void clear_pool();
+  // (mutable: sync, from const readers, pulls a device's copy into it and the arrays.)
+  mutable RllPoolState<HostBackend> m_pool;
+  mutable const void* m_remote = nullptr;
+  mutable std::function<void(RllPoolState<HostBackend>&)> m_pull;
+  mutable RemoteLightsChanged m_remote_lights;
+  RllScratch<HostBackend> m_scratch;  // the end of pass's, kept between passes
 
   const LightTree& m_tree;
   RllSettings m_s;

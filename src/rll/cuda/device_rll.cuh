@@ -1,0 +1,199 @@
+// RLL's learning state resident in device memory (nvcc only, issue 31 item 4): every array of an
+// RllLightSampler (cell table, free list, last use, point sums, cuts with their values, tables,
+// anchors and reward sums) uploaded once, the coarse cells of pooling and the end of pass's
+// scratch kept there; the end of pass runs there (rll_end_pass over the CUDA backend) and only
+// its counters come back per pass. When the lights change (an animated scene's frames), the
+// refit light tree and the light powers are copied into the device's arrays and the priors and
+// tables are made anew there (rll_lights_changed). The sampler is told (set_remote) and pulls
+// the arrays back when the host reads them: a saved state, --stats, Python, a host end of pass.
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <memory>
+#include <unordered_map>
+
+#include "rll/core/error.h"
+#include "rll/cuda/backend.cuh"
+#include "rll/cuda/device_scene.cuh"
+#include "rll/lights/rll_sampler.h"
+
+namespace rll::cuda {
+
+class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
+ public:
+  // Uploads the sampler's state (its host arrays must be current: sync() first).
+  explicit DeviceRll(RllLightSampler& s) {
+    const RllView& h = s.rll_view();
+    // The learning view first: its writable arrays are mirrored to be copied back; the sampling
+    // view's arrays are the same host arrays and take the same device arrays.
+    m_learn = s.learn_view();
+    const RllLearnView host_learn = m_learn;
+    CutStoreEndView& e = m_learn.cuts;
+    e.tree.nodes = once(e.tree.nodes);
+    e.tree.importance = once(e.tree.importance);
+    e.tree.leaf_of = once(e.tree.leaf_of);
+    e.initial = once(e.initial);
+    e.initial_ends = once(e.initial_ends);
+    e.size = once(e.size);
+    e.node = once(e.node);
+    e.end = once(e.end);
+    e.q = once(e.q);
+    e.m2 = once(e.m2);
+    e.n = once(e.n);
+    e.weight = once(e.weight);
+    e.cdf = once(e.cdf);
+    e.gl = once(e.gl);
+    e.gr = once(e.gr);
+    e.learnt = once(e.learnt);
+    e.seen = once(e.seen);
+    e.eps = once(e.eps);
+    e.anchor = once(e.anchor);
+    e.pool = once(e.pool);
+    e.has_pool = once(e.has_pool);
+    e.inv_unit = once(e.inv_unit);
+    e.sum = once(e.sum);
+    e.sq = once(e.sq);
+    e.count = once(e.count);
+    m_learn.table.slots = once(m_learn.table.slots);
+    m_learn.table.key_of = once(m_learn.table.key_of);
+    m_learn.free_room = once(m_learn.free_room);
+    m_learn.table.free = {m_learn.free_room.data, host_learn.table.free.size};
+    m_learn.table.next_free = once(View<uint32_t>{host_learn.table.next_free, 1}).data;
+    m_learn.table.failed = once(View<uint64_t>{host_learn.table.failed, 1}).data;
+    m_learn.last_used = once(m_learn.last_used);
+    m_learn.points = once(m_learn.points);
+    // The sampling view over the same device arrays.
+    RllView& r = m_view;
+    r = h;
+    r.tree = e.tree;
+    r.table = m_learn.table;
+    CutStoreView& c = r.cuts;
+    c.size = e.size;
+    c.node = e.node;
+    c.end = e.end;
+    c.cdf = e.cdf;
+    c.gl = e.gl;
+    c.gr = e.gr;
+    c.eps = e.eps;
+    c.initial = e.initial;
+    c.initial_ends = e.initial_ends;
+    c.anchor = e.anchor;
+    c.inv_unit = e.inv_unit;
+    c.sum = e.sum;
+    c.sq = e.sq;
+    c.count = e.count;
+    r.last_used = m_learn.last_used;
+    r.points = m_learn.points;
+    r.power_prefix = once(h.power_prefix);
+    m_device_view = DeviceArray<RllView>(1);
+    m_device_view.upload(&m_view, 1);
+    const RllPoolState<HostBackend>& pool = s.pool();
+    m_pool = {upload(pool.keys), upload(pool.q), upload(pool.m2), upload(pool.n)};
+  }
+
+  // The sampler's view with its arrays here.
+  SamplerView sampler_view() const {
+    SamplerView v;
+    v.kind = SamplerKind::Rll;
+    v.tree = m_view.tree;
+    v.rll = m_device_view.view().data;
+    return v;
+  }
+
+  // Tells the sampler that its state is here from now on, and how to pull it back.
+  void make_remote(RllLightSampler& s) {
+    std::shared_ptr<DeviceRll> self = shared_from_this();
+    s.set_remote(
+        this, [self](RllPoolState<HostBackend>& pool) { self->pull(pool); },
+        [self](const LightTreeView& tree, View<const double> power_prefix) {
+          self->lights_changed(tree, power_prefix);
+        });
+  }
+
+  // The lights moved or switched (the tree refit on the host, same shape): the tree's arrays and
+  // the powers copied into the device's, every prior and table made anew there.
+  void lights_changed(const LightTreeView& tree, View<const double> power_prefix) {
+    refill(m_learn.cuts.tree.nodes, tree.nodes);
+    refill(m_learn.cuts.tree.importance, tree.importance);
+    refill(m_learn.cuts.tree.leaf_of, tree.leaf_of);
+    refill(m_view.power_prefix, power_prefix);
+    rll_lights_changed(CudaBackend{}, m_learn, m_pool, m_scratch);
+  }
+
+  // The end of pass here; the sampler keeps its statistics and moves to the next pass, whose
+  // pass number, jitter and free cells the sampling view then takes.
+  void end_pass(RllLightSampler& s) {
+    s.end_pass_with([this](const RllLearnView& host, RllPoolState<HostBackend>&,
+                           uint32_t used_before, bool reset) {
+      m_learn.keyer = host.keyer;  // this pass's
+      return rll_end_pass(CudaBackend{}, m_learn, m_pool, m_scratch, used_before, reset);
+    });
+    const RllView& h = s.rll_view();
+    m_view.pass = h.pass;
+    m_view.keyer = h.keyer;
+    m_view.table.free.size = h.table.free.size;
+    m_learn.table.free.size = h.table.free.size;
+    m_device_view.upload(&m_view, 1);
+  }
+
+  // Copies every array back into the sampler's host arrays, the coarse cells into `pool`.
+  void pull(RllPoolState<HostBackend>& pool) const {
+    m_memory.copy_back();
+    pool.keys = download(m_pool.keys);
+    pool.q = download(m_pool.q);
+    pool.m2 = download(m_pool.m2);
+    pool.n = download(m_pool.n);
+  }
+
+  size_t bytes() const {
+    return m_memory.bytes() + m_device_view.bytes() + m_scratch.bytes() + m_pool.keys.bytes() +
+           m_pool.q.bytes() + m_pool.m2.bytes() + m_pool.n.bytes();
+  }
+
+ private:
+  // A device copy of a host array, one per host array (writable ones copied back by pull).
+  template <typename T>
+  View<T> once(View<T> v) {
+    if (v.size == 0) return {nullptr, 0};
+    const void* key = v.data;
+    if (const auto it = m_device_of.find(key); it != m_device_of.end())
+      return {static_cast<T*>(it->second), v.size};
+    const View<T> d = m_memory.mirror(v);
+    m_device_of[key] = const_cast<std::remove_const_t<T>*>(d.data);
+    return d;
+  }
+  // Copies a host array over the device array that mirrors one of its size.
+  template <typename T>
+  static void refill(View<const T> device, View<const T> host) {
+    if (device.size != host.size)
+      fail("rll: the light tree changed shape ({} entries, {} on the GPU): not a refit", host.size,
+           device.size);
+    if (host.size > 0)
+      check(cudaMemcpy(const_cast<T*>(device.data), host.data, host.size * sizeof(T),
+                       cudaMemcpyHostToDevice),
+            "cudaMemcpy");
+  }
+  template <typename T>
+  static DeviceArray<T> upload(const HostBuffer<T>& h) {
+    DeviceArray<T> d(h.size());
+    d.upload(h);
+    return d;
+  }
+  template <typename T>
+  static HostBuffer<T> download(const DeviceArray<T>& d) {
+    HostBuffer<T> h(d.size());
+    d.download(h.data());
+    return h;
+  }
+
+  DeviceMirror m_memory;
+  std::unordered_map<const void*, void*> m_device_of;
+  RllLearnView m_learn;  // the end of pass's view, over device arrays
+  RllView m_view;        // the sampling view, over the same arrays (a host copy of the struct)
+  DeviceArray<RllView> m_device_view;
+  RllPoolState<CudaBackend> m_pool;
+  RllScratch<CudaBackend> m_scratch;
+};
+
+}  // namespace rll::cuda
