@@ -228,3 +228,16 @@ TEST(SamplerAgreement, RhtMatchesTreeManyLightsDirect) {
   expect_matches_tree_by_region(small_scene("many-lights-open", 32, 24), IntegratorType::Direct, 64,
                                 "rht", 0.095);
 }
+
+// screen-hall: three large textured emitters (split into ~5,000 lights of nearly equal power)
+// beside 12 small lamps, behind partitions. Every sampler renders tree's image, region by region.
+TEST(SamplerAgreement, TexturedEmittersMatchTreeByRegionPath) {
+  const Scene scene = small_scene("screen-hall", 32, 24);
+  for (const char* sampler : {"power", "rll", "ltc", "rht", "fermat"})
+    expect_matches_tree_by_region(scene, IntegratorType::Path, 64, sampler, 0.10);
+}
+
+TEST(SamplerAgreement, TexturedEmitterRegionBoundsSeeAFivePercentBias) {
+  expect_regions_see_group_bias(small_scene("screen-hall", 32, 24), IntegratorType::Path, 64, 400);
+}
+
