@@ -88,7 +88,7 @@ TEST(TexturedEmitterRender, IrradianceFromAPlaneIsTheIntegralOfItsTexture) {
   for (const Light& l : s.lights) cdf.push_back(total += light_power(l, s.radius));
   Pcg32 rng(43);
   Mean nee, bsdf;
-  for (int k = 0; k < 200000; ++k) {
+  for (int k = 0; k < 800000; ++k) {
     const double u = rng.next_double() * total;
     const size_t i = std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin()),
                               cdf.size() - 1);

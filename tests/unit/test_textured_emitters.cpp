@@ -8,6 +8,7 @@
 
 #include "rll/core/error.h"
 #include "rll/core/rng.h"
+#include "rll/core/sampling.h"
 #include "rll/io/load.h"
 #include "rll/io/save.h"
 #include "rll/scene/builder.h"
@@ -326,5 +327,69 @@ TEST(TexturedEmitters, JsonEmissionTextureAndWritersKeepIt) {
       back_power += light_power(l, back.radius);
     }
     EXPECT_NEAR(back_power, power, 1e-4 * power) << name;
+  }
+}
+
+namespace {
+
+// The luminance flux through a sphere of radius 6 around the origin: 4 pi R^2 times the mean
+// irradiance at uniform points on it (one sample_li of every light at each), with its standard
+// error.
+std::pair<double, double> flux_through_sphere(const Scene& s, int points) {
+  SceneData data(s);
+  const SceneView& v = data.view();
+  const double R = 6;
+  Pcg32 rng(53);
+  double sum = 0, sum2 = 0;
+  for (int k = 0; k < points; ++k) {
+    const Vec3 d = sample_uniform_sphere(Vec2{rng.next_float(), rng.next_float()});
+    const Vec3 y = d * float(R);
+    double e = 0;
+    for (const Light& l : s.lights) {
+      const LightLiSample ls = sample_li(v, l, y, Vec2{rng.next_float(), rng.next_float()});
+      const float c = -dot(ls.wi, d);
+      if (ls.pdf > 0 && c > 0) e += double(luminance(ls.L)) * c / ls.pdf;
+    }
+    sum += e;
+    sum2 += e * e;
+  }
+  const double area = 4 * kPi * R * R, mean = sum / points;
+  return {area * mean, area * std::sqrt(std::max(0.0, sum2 / points - mean * mean) / points)};
+}
+
+}  // namespace
+
+// pbrt-v4's "power": the flux a light emits, measured through a sphere around it, is the stated
+// watts (a mesh's area light: each triangle's, as pbrt-v4 normalizes each).
+TEST(TexturedEmitters, StatedWattsAreEmitted) {
+  test::TempDir dir;
+  write_image(dir / "glow.exr", random_texture(8, 4, 37));
+  struct Case {
+    std::string text;
+    double watts;
+  };
+  const Case cases[] = {
+      {"LightSource \"point\" \"rgb I\" [ 1 1 1 ] \"float power\" 10\n", 10},
+      {"LightSource \"spot\" \"rgb I\" [ 1 1 1 ] \"float coneangle\" 40 \"float conedeltaangle\" 10 "
+       "\"float power\" 10\n",
+       10},
+      {"AreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ] \"float power\" 10\n"
+       "Shape \"disk\" \"float radius\" 1\n",
+       10},
+      {"AreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ] \"float power\" 10 \"bool twosided\" true\n"
+       "Shape \"disk\" \"float radius\" 1\n",
+       10},
+      // Two triangles, each normalized to 10 W by the image's mean luminance; over the whole
+      // period of the texture their exact means average to the image's mean: 20 W in all.
+      {std::string("AreaLightSource \"diffuse\" \"string filename\" \"glow.exr\" \"float power\" 10\n") +
+           kPbrtQuad,
+       20},
+  };
+  for (const Case& c : cases) {
+    Scene s = read_pbrt(dir, c.text);
+    s.finalize();
+    const auto [flux, error] = flux_through_sphere(s, 40000);
+    EXPECT_NEAR(flux, c.watts, 4.5 * error + 1e-4 * c.watts) << c.text << flux << " +- " << error;
+    EXPECT_LT(4.5 * error, 0.02 * c.watts) << c.text;  // the bound sees a 2% error
   }
 }

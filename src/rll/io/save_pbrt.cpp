@@ -285,20 +285,20 @@ std::vector<std::string> save_pbrt_scene(const Scene& scene, const fs::path& pat
     if (m.is_emissive() && m.emission_texture >= 0) {
       // pbrt-v4's image area light has a grey scale only: a coloured factor is baked into the
       // image written for this material.
-      std::string file = fmt::format("{}_tex{}.exr", stem, m.emission_texture);
+      std::string image_file = fmt::format("{}_tex{}.exr", stem, m.emission_texture);
       float scale = m.emission.x;
       if (grey(m.emission)) {
-        if (textures.insert(file).second)
-          write_image(dir / file, scene.textures[size_t(m.emission_texture)]);
+        if (textures.insert(image_file).second)
+          write_image(dir / image_file, scene.textures[size_t(m.emission_texture)]);
       } else {
-        file = fmt::format("{}_emission{}.exr", stem, index);
+        image_file = fmt::format("{}_emission{}.exr", stem, index);
         Image baked = scene.textures[size_t(m.emission_texture)];
         for (Rgb& c : baked.pixels()) c = c * m.emission;
-        write_image(dir / file, baked);
+        write_image(dir / image_file, baked);
         scale = 1;
       }
       out += fmt::format("  AreaLightSource \"diffuse\" \"string filename\" \"{}\" \"float scale\" {}{}\n",
-                         file, scale, m.two_sided_emission ? " \"bool twosided\" true" : "");
+                         image_file, scale, m.two_sided_emission ? " \"bool twosided\" true" : "");
     } else if (m.is_emissive()) {
       out += fmt::format("  AreaLightSource \"diffuse\" \"rgb L\" {}{}\n", rgb(m.emission),
                          m.two_sided_emission ? " \"bool twosided\" true" : "");
