@@ -59,9 +59,10 @@ const std::vector<SamplerCase>& sampler_cases() {
 }
 
 // spot-hall-small: spot lights (whose cones exclude most points), a point light, a lamp and a
-// sun in one tree.
-const std::vector<std::string> kScenes = {"cornell-box", "cornell-boxes-room", "arch-interior",
-                                          "many-lights-open", "furnace", "spot-hall-small"};
+// sun in one tree. screen-hall: large textured emitters split into pieces of nearly equal power.
+const std::vector<std::string> kScenes = {"cornell-box",      "cornell-boxes-room", "arch-interior",
+                                          "many-lights-open", "furnace",            "spot-hall-small",
+                                          "screen-hall"};
 constexpr int kContexts = 200;
 constexpr int kChiContexts = 6;
 constexpr int kChiSamples = 20000;

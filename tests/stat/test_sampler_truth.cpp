@@ -60,8 +60,9 @@ const std::vector<TruthCase>& truth_cases() {
   return cases;
 }
 
+// spot-hall-small: every light kind in one tree; screen-hall: textured emitters split into pieces.
 const std::vector<std::string> kScenes = {"cornell-boxes-room", "arch-interior", "many-lights-open",
-                                          "glazed-room"};
+                                          "glazed-room", "spot-hall-small", "screen-hall"};
 constexpr int kContexts = 120;
 constexpr int kChiSamples = 2000;
 // The demonstrations bias a group of at most kGroupLights lights that the tree keeps together (one

@@ -207,7 +207,7 @@ TEST(GltfReader, MaterialsEmissionAndLights) {
   EXPECT_EQ(s.width, 2 * s.height);
 }
 
-TEST(GltfReader, EmissiveTextureMakesEachTriangleALightOfItsOwnColour) {
+TEST(GltfReader, EmissiveTextureIsTheMaterialsEmissionTexture) {
   TempDir dir;
   // Left half red, right half black, as PNG (sRGB 255 is linear 1).
   Image tex(8, 8);
@@ -232,10 +232,24 @@ TEST(GltfReader, EmissiveTextureMakesEachTriangleALightOfItsOwnColour) {
   d.scene({d.node({{"mesh", 0}})});
   Scene s = read(d.write_gltf(dir));
   ASSERT_EQ(s.mesh.triangle_count(), 2u);
-  EXPECT_TRUE(near(s.materials[s.mesh.material[0]].emission, Rgb(5, 0, 0), 1e-4f));
-  EXPECT_FALSE(s.materials[s.mesh.material[1]].is_emissive());
+  // One material: the factor times the strength, and the texture (read from sRGB).
+  EXPECT_EQ(s.mesh.material[0], s.mesh.material[1]);
+  const Material& m = s.materials[s.mesh.material[0]];
+  EXPECT_TRUE(near(m.emission, Rgb(5, 5, 5), 1e-4f));
+  ASSERT_GE(m.emission_texture, 0);
+  EXPECT_TRUE(near(s.textures[size_t(m.emission_texture)].at(0, 0), Rgb(1, 0, 0), 1e-4f));
   s.finalize();
-  EXPECT_EQ(s.lights.size(), 1u);
+  // Each triangle a light of the texture's exact mean over it: the first mostly red, the second
+  // (over the black half, reaching red only through the wrapped bilinear edge) much dimmer.
+  ASSERT_GE(s.lights.size(), 1u);
+  double red[2] = {0, 0};
+  for (const Light& l : s.lights) {
+    EXPECT_TRUE(l.textured);
+    red[l.triangle] = l.radiance.x;
+    EXPECT_EQ(l.radiance.y, 0.0f);
+  }
+  EXPECT_GT(red[0], 3.0);
+  EXPECT_LT(red[1], 0.5 * red[0]);
 }
 
 TEST(GltfReader, BaseColourTextureIsDecodedFromSrgb) {

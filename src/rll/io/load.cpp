@@ -30,7 +30,7 @@ void drop_unused_materials(Scene& scene) {
   std::vector<int> texture_id(scene.textures.size(), -1);
   std::vector<Image> textures;
   for (auto& m : kept)
-    for (int* tex : {&m.albedo_texture, &m.roughness_texture}) {
+    for (int* tex : {&m.albedo_texture, &m.roughness_texture, &m.emission_texture}) {
       if (*tex < 0 || *tex >= int(scene.textures.size())) continue;
       int& id = texture_id[size_t(*tex)];
       if (id < 0) {

@@ -590,51 +590,29 @@ class GltfReader {
 
   struct Converted {
     uint32_t material = 0;
-    int emissive_texture = -1;  // a texture index into Scene::textures, with its base emission
-    Rgb emission;
+    int emissive_texture = -1;  // the material's emission texture (Scene::textures), or -1
   };
 
   void assign_materials(int index, Mesh& mesh, const std::string& where) {
     const Converted& c = material(index, where);
     mesh.material.assign(mesh.triangle_count(), c.material);
-    if (c.emissive_texture < 0) return;
-    // An emissive texture: each triangle emits the texture's mean over it (times the factor),
-    // so that each is a light of its own colour. Triangles of equal emission share a material.
-    const Image& tex = m_scene.textures[size_t(c.emissive_texture)];
-    Rgb mean_all(0);
-    if (mesh.uvs.empty()) {
-      for (const auto& px : tex.pixels()) mean_all += px;
-      mean_all = mean_all / float(std::max<size_t>(1, tex.pixel_count()));
-      warn(fmt::format("{}: an emissive texture without TEXCOORD_0 emits its mean colour", where));
+    if (c.emissive_texture < 0 || !mesh.uvs.empty()) return;
+    // An emissive texture needs TEXCOORD_0: without, the primitive emits the factor times the
+    // texture's mean (one material per glTF material).
+    auto it = m_untextured_emitters.find(c.material);
+    if (it == m_untextured_emitters.end()) {
+      const Image& tex = m_scene.textures[size_t(c.emissive_texture)];
+      Rgb mean(0);
+      for (const auto& px : tex.pixels()) mean += px;
+      mean = mean / float(std::max<size_t>(1, tex.pixel_count()));
+      Material m = m_scene.materials[c.material];
+      m.emission = m.emission * mean;
+      m.emission_texture = -1;
+      m_scene.materials.push_back(m);
+      it = m_untextured_emitters.emplace(c.material, uint32_t(m_scene.materials.size() - 1)).first;
     }
-    const int grid = 4;
-    for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-      Rgb mean = mean_all;
-      if (!mesh.uvs.empty()) {
-        const auto& tri = mesh.triangles[t];
-        const Vec2 a = mesh.uvs[tri[0]], b = mesh.uvs[tri[1]], d = mesh.uvs[tri[2]];
-        Rgb sum(0);
-        for (int i = 0; i < grid; ++i)
-          for (int j = 0; j < grid; ++j) {
-            float u = (i + 0.5f) / grid, v = (j + 0.5f) / grid;
-            if (u + v > 1) u = 1 - u, v = 1 - v;
-            const float w = 1 - u - v;
-            sum +=
-                sample_texture(tex, Vec2{a.x * w + b.x * u + d.x * v, a.y * w + b.y * u + d.y * v});
-          }
-        mean = sum / float(grid * grid);
-      }
-      const Rgb e = c.emission * mean;
-      auto key = std::make_tuple(c.material, e.x, e.y, e.z);
-      auto it = m_textured_emitters.find(key);
-      if (it == m_textured_emitters.end()) {
-        Material m = m_scene.materials[c.material];
-        m.emission = e;
-        m_scene.materials.push_back(m);
-        it = m_textured_emitters.emplace(key, uint32_t(m_scene.materials.size() - 1)).first;
-      }
-      mesh.material[t] = it->second;
-    }
+    warn(fmt::format("{}: an emissive texture without TEXCOORD_0 emits its mean colour", where));
+    mesh.material.assign(mesh.triangle_count(), it->second);
   }
 
   const Converted& material(int index, const std::string& where) {
@@ -800,11 +778,12 @@ class GltfReader {
     if (!is_finite(emission) || min_component(emission) < 0)
       fail("{}: the emission must be finite and >= 0", mw);
     m.two_sided_emission = gm.doubleSided;
+    m.emission = emission;
     if (gm.emissiveTexture.index >= 0 && !is_black(emission)) {
-      c.emissive_texture = texture(gm.emissiveTexture.index, mw + " emissiveTexture");
-      c.emission = emission;
-    } else {
-      m.emission = emission;
+      c.emissive_texture = m.emission_texture =
+          texture(gm.emissiveTexture.index, mw + " emissiveTexture");
+      if (gm.emissiveTexture.texCoord != 0)
+        warn(fmt::format("{}: only TEXCOORD_0 is read; the emissive texture uses it", mw));
     }
     if (gm.alphaMode != "OPAQUE" && !gm.alphaMode.empty())
       warn(fmt::format("{}: alphaMode {} is not supported; rendered opaque", mw, gm.alphaMode));
@@ -960,7 +939,8 @@ class GltfReader {
   std::map<int, Converted> m_materials;
   std::map<std::pair<int, bool>, int> m_images;  // (image, sRGB) -> Scene::textures
   std::map<std::pair<int, float>, int> m_roughness;  // (linear image, factor) -> alpha texture
-  std::map<std::tuple<uint32_t, float, float, float>, uint32_t> m_textured_emitters;
+  // A material with an emission texture -> its variant for primitives without TEXCOORD_0.
+  std::map<uint32_t, uint32_t> m_untextured_emitters;
   std::set<std::string> m_warned;
 };
 

@@ -236,7 +236,7 @@ class JsonSceneReader {
   uint32_t add_material(const json& v, const std::string& ptr, const std::string& name) {
     check_object(v, ptr,
                  {"type", "albedo", "roughness", "eta", "k", "ior", "specular", "emission",
-                  "two_sided", "texture", "roughness_texture", "thickness"});
+                  "two_sided", "texture", "roughness_texture", "thickness", "emission_texture"});
     Material m;
     m.name = name;
     std::string type = optional_field(v, ptr, "type", to_string).value_or("diffuse");
@@ -268,7 +268,7 @@ class JsonSceneReader {
           "thindielectric, coateddiffuse)",
           child(ptr, "type"), printable(type));
     }
-    applies.insert(applies.end(), {"type", "emission", "two_sided"});
+    applies.insert(applies.end(), {"type", "emission", "two_sided", "emission_texture"});
     for (const auto& item : v.items())
       if (std::find(applies.begin(), applies.end(), item.key()) == applies.end())
         fail("{}: field \"{}\" does not apply to a {} material", ptr, printable(item.key()), type);
@@ -285,13 +285,17 @@ class JsonSceneReader {
     m.thickness = optional_field(v, ptr, "thickness", to_number).value_or(m.thickness);
     if (!(m.thickness > 0))
       fail("{} must be positive (got {})", child(ptr, "thickness"), m.thickness);
-    m.emission = optional_field(v, ptr, "emission", to_colour).value_or(m.emission);
+    // With an emission texture, the emission (its factor) defaults to 1.
+    m.emission = optional_field(v, ptr, "emission", to_colour)
+                     .value_or(v.contains("emission_texture") ? Rgb(1) : m.emission);
     m.two_sided_emission = optional_field(v, ptr, "two_sided", to_bool).value_or(false);
     if (v.contains("texture"))
       m.albedo_texture = texture(v["texture"], child(ptr, "texture"), true);
     if (v.contains("roughness_texture"))
       m.roughness_texture =
           texture(v["roughness_texture"], child(ptr, "roughness_texture"), false);
+    if (v.contains("emission_texture"))
+      m.emission_texture = texture(v["emission_texture"], child(ptr, "emission_texture"), true);
     m_scene.materials.push_back(m);
     return uint32_t(m_scene.materials.size() - 1);
   }
@@ -341,7 +345,7 @@ class JsonSceneReader {
   void quad_uvs(uint32_t material, size_t v0) {
     Mesh& mesh = m_scene.mesh;
     const Material& m = m_scene.materials[material];
-    if (m.albedo_texture < 0 && m.roughness_texture < 0) return;
+    if (m.albedo_texture < 0 && m.roughness_texture < 0 && m.emission_texture < 0) return;
     mesh.uvs.resize(mesh.positions.size(), Vec2{});
     static const Vec2 kCorners[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
     for (size_t i = v0; i < mesh.positions.size(); ++i) mesh.uvs[i] = kCorners[(i - v0) % 4];

@@ -425,16 +425,50 @@ void PbrtReader::area_light(const Token& t) {
     ++m_skipped_lights["area " + type];
     return;
   }
-  Rgb L = p.get_spectrum("L").value_or(Rgb(1));
+  const std::optional<Rgb> given_L = p.get_spectrum("L");
   const float s = p.get_float("scale", 1);
-  if (!(s >= 0)) syntax(t, "AreaLightSource: scale must not be negative");
+  if (!(s >= 0) || !std::isfinite(s))
+    syntax(t, "AreaLightSource: scale must be finite and not negative");
   m_state.emissive = true;
-  m_state.emission = L * s;
+  m_state.emission = given_L.value_or(Rgb(1)) * s;
+  m_state.emission_texture = -1;
+  m_state.texture_luminance = 1;
+  if (const auto file = p.get_string("filename")) {
+    // pbrt-v4's image area light: the emission at a point is scale times the image at its uv.
+    if (given_L)
+      syntax(t, "AreaLightSource \"diffuse\": give either \"L\" or \"filename\", not both "
+                "(as pbrt-v4)");
+    const fs::path path = referenced_file(t, "AreaLightSource", *file);
+    const std::string key = path.string() + "|sRGB";
+    auto cached = m_image_cache.find(key);
+    if (cached == m_image_cache.end()) {
+      Image image;
+      try {
+        image = read_image(path);
+      } catch (const Error& e) {
+        fail("{}: AreaLightSource: {}", where(t), e.what());
+      }
+      for (const Rgb& c : image.pixels())
+        if (!is_finite(c) || min_component(c) < 0)
+          syntax(t, fmt::format("AreaLightSource: '{}' has a negative or non-finite pixel, which "
+                                "no light can emit",
+                                *file));
+      m_scene.textures.push_back(std::move(image));
+      cached = m_image_cache.emplace(key, int(m_scene.textures.size() - 1)).first;
+    }
+    m_state.emission_texture = cached->second;
+    const Image& image = m_scene.textures[size_t(cached->second)];
+    double sum = 0;
+    for (const Rgb& c : image.pixels()) sum += double(luminance(c));
+    m_state.texture_luminance = float(sum / double(std::max<size_t>(1, image.pixel_count())));
+    m_state.emission = Rgb(s);
+  }
   m_state.two_sided = p.get_bool("twosided", false);
   // pbrt-v4 normalizes each of its shapes to the power: the whole of a sphere or disk, each
   // triangle of a mesh (see add_mesh).
   m_state.area_power = normalization(t, p, "power").value_or(0.0f);
-  if (p.find("filename")) unsupported(t, "AreaLightSource \"filename\" (an image emitter)");
+  if (m_state.emission_texture >= 0 && m_state.area_power > 0 && !(m_state.texture_luminance > 0))
+    syntax(t, "AreaLightSource: \"power\" with an image that is black everywhere");
   p.warn_unused();
 }
 

@@ -113,6 +113,10 @@ struct GraphicsState {
   Rgb emission;
   bool two_sided = false;
   float area_power = 0;  // the AreaLightSource's "power" (> 0), or 0
+  // An image area light ("filename"): its image (index into Scene::textures), emission being its
+  // scale, and the image's mean luminance (pbrt-v4's power normalization divides by it).
+  int emission_texture = -1;
+  float texture_luminance = 1;
 };
 
 // A texture as materials see it: an image (index into Scene::textures) times `scale`, or, with
@@ -412,7 +416,7 @@ class PbrtReader {
   std::set<std::string> m_unread_textures;  // names of the Texture directives rll skipped
   std::map<std::string, int> m_image_cache;
   std::map<std::tuple<int, int, float, float, bool>, ImageTexture> m_alpha_cache;
-  std::map<std::tuple<int, float, float, float, bool>, uint32_t> m_emissive;
+  std::map<std::tuple<int, float, float, float, bool, int>, uint32_t> m_emissive;
   int m_default_material = -1;
 
   bool m_object = false;

@@ -22,7 +22,7 @@ uint32_t PbrtReader::shape_material(float k) {
   }
   if (!m_state.emissive) return uint32_t(base);
   const Rgb e = m_state.emission * k;
-  auto key = std::make_tuple(base, e.x, e.y, e.z, m_state.two_sided);
+  auto key = std::make_tuple(base, e.x, e.y, e.z, m_state.two_sided, m_state.emission_texture);
   auto it = m_emissive.find(key);
   if (it != m_emissive.end()) return it->second;
   if (m_emissive.size() >= kMaxEmissiveMaterials)
@@ -31,6 +31,7 @@ uint32_t PbrtReader::shape_material(float k) {
          m_names[0], kMaxEmissiveMaterials);
   Material m = m_scene.materials[size_t(base)];
   m.emission = e;
+  m.emission_texture = m_state.emission_texture;
   m.two_sided_emission = m_state.two_sided;
   m.name += " (emitting)";
   m_scene.materials.push_back(m);
@@ -106,12 +107,20 @@ void PbrtReader::add_mesh(const Token& t, Mesh mesh, bool quadric) {
       !why.empty())
     syntax(t, why);
   mesh.light.assign(mesh.triangle_count(), -1);
+  if (m_state.emissive && m_state.emission_texture >= 0 && mesh.uvs.empty())
+    warn("image area light without uv",
+         fmt::format("{}: a shape without \"uv\": its image area light is looked up at "
+                     "each triangle's barycentrics (0,0), (1,0), (0,1), where pbrt-v4 uses (0,0), "
+                     "(1,0), (1,1)",
+                     where(t)));
   if (m_state.emissive && m_state.area_power > 0) {
     // pbrt-v4 normalizes each of its shapes to the power: a sphere or disk as a whole, each
     // triangle of a mesh on its own. k_e = pi A (x2 two-sided): the power of unit radiance.
     const double sides = m_state.two_sided ? 2.0 : 1.0;
     auto factor = [&](double area) {
-      return area > 0 ? float(m_state.area_power / (kPi * sides * area)) : 0.0f;
+      return area > 0 ? float(m_state.area_power /
+                              (kPi * sides * area * double(m_state.texture_luminance)))
+                      : 0.0f;
     };
     // pbrt-v4's shape of each triangle: the whole quadric, a bilinear patch, or itself.
     const uint32_t n = uint32_t(mesh.triangle_count());

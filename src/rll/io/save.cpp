@@ -165,6 +165,7 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
     const MaterialType t = scene.materials[m].type;
     if (t != MaterialType::Diffuse && t != MaterialType::ThinDielectric)  // where it applies
       add_texture(scene.materials[m].roughness_texture);
+    if (scene.materials[m].is_emissive()) add_texture(scene.materials[m].emission_texture);
   }
   auto texture_of = [&](int tex) { return tex >= 0 ? texture_files.at(tex) : std::string(); };
 
@@ -251,6 +252,8 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
       const bool rough = texture_files.count(m.roughness_texture) > 0;
       materials[names[i]] = material_json(m, texture_of(m.albedo_texture),
                                           rough ? texture_of(m.roughness_texture) : "");
+      if (m.is_emissive() && m.emission_texture >= 0)
+        materials[names[i]]["emission_texture"] = texture_of(m.emission_texture);
       material_map[names[i]] = names[i];
     }
 

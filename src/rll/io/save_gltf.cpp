@@ -244,9 +244,13 @@ class GltfWriter {
     }
     g["pbrMetallicRoughness"] = pbr;
     if (m.is_emissive()) {
-      // emissiveFactor is at most 1; the strength extension carries the rest.
-      const float strength = max_component(m.emission);
-      g["emissiveFactor"] = vec(m.emission / strength);
+      // emissiveFactor is at most 1; the strength extension carries the rest (and an emission
+      // texture's largest value, its PNG being scaled into [0, 1]).
+      float texture_max = 1;
+      if (m.emission_texture >= 0)
+        g["emissiveTexture"] = {{"index", emissive_texture(m.emission_texture, texture_max)}};
+      const float strength = max_component(m.emission) * texture_max;
+      g["emissiveFactor"] = vec(m.emission / max_component(m.emission));
       if (strength != 1) {
         extensions["KHR_materials_emissive_strength"] = {{"emissiveStrength", strength}};
         m_extensions.insert("KHR_materials_emissive_strength");
@@ -269,6 +273,28 @@ class GltfWriter {
     m_images.push_back({{"uri", file}});
     m_textures.push_back({{"source", m_images.size() - 1}});
     return m_texture_index[index] = int(m_textures.size() - 1);
+  }
+
+  // An emission texture as an sRGB PNG divided by its largest value (`largest`, >= 1), which the
+  // material's emissive strength carries, so that values above 1 survive to 8 bits.
+  int emissive_texture(int index, float& largest) {
+    const Image& img = m_scene.textures[size_t(index)];
+    largest = 1;
+    for (const Rgb& c : img.pixels()) largest = std::max(largest, max_component(c));
+    if (largest == 1) return texture(index);
+    const auto key = std::make_pair(index, true);
+    if (auto it = m_emissive_index.find(key); it != m_emissive_index.end()) return it->second;
+    const std::string file = fmt::format("{}_emission{}.png", m_path.stem().string(), index);
+    Image scaled = img;
+    for (Rgb& c : scaled.pixels()) c = c / largest;
+    m_warnings.push_back(fmt::format(
+        "texture {}: an emission texture with values up to {} is written as an 8-bit PNG scaled "
+        "by 1/{} (the emissive strength carries the factor)",
+        index, largest, largest));
+    write_image(m_path.parent_path() / file, scaled);
+    m_images.push_back({{"uri", file}});
+    m_textures.push_back({{"source", m_images.size() - 1}});
+    return m_emissive_index[key] = int(m_textures.size() - 1);
   }
 
   // A roughness texture as glTF's metallic-roughness PNG: green = sqrt(alpha), blue = metallic,
@@ -325,6 +351,7 @@ class GltfWriter {
   std::map<uint32_t, int> m_material_index;
   std::map<int, int> m_texture_index;
   std::map<std::pair<int, bool>, int> m_roughness_index;
+  std::map<std::pair<int, bool>, int> m_emissive_index;
   std::set<std::string> m_extensions;
   std::vector<std::string> m_warnings;
 };

@@ -282,9 +282,27 @@ std::vector<std::string> save_pbrt_scene(const Scene& scene, const fs::path& pat
     const std::string file = fmt::format("{}_mesh{}.ply", stem, index++);
     write_file_atomic(dir / file, ply_bytes(part.mesh, PlyEncoding::BinaryLittleEndian));
     out += "AttributeBegin\n  " + material + "\n";
-    if (m.is_emissive())
+    if (m.is_emissive() && m.emission_texture >= 0) {
+      // pbrt-v4's image area light has a grey scale only: a coloured factor is baked into the
+      // image written for this material.
+      std::string image_file = fmt::format("{}_tex{}.exr", stem, m.emission_texture);
+      float scale = m.emission.x;
+      if (grey(m.emission)) {
+        if (textures.insert(image_file).second)
+          write_image(dir / image_file, scene.textures[size_t(m.emission_texture)]);
+      } else {
+        image_file = fmt::format("{}_emission{}.exr", stem, index);
+        Image baked = scene.textures[size_t(m.emission_texture)];
+        for (Rgb& c : baked.pixels()) c = c * m.emission;
+        write_image(dir / image_file, baked);
+        scale = 1;
+      }
+      out += fmt::format("  AreaLightSource \"diffuse\" \"string filename\" \"{}\" \"float scale\" {}{}\n",
+                         image_file, scale, m.two_sided_emission ? " \"bool twosided\" true" : "");
+    } else if (m.is_emissive()) {
       out += fmt::format("  AreaLightSource \"diffuse\" \"rgb L\" {}{}\n", rgb(m.emission),
                          m.two_sided_emission ? " \"bool twosided\" true" : "");
+    }
     out += fmt::format("  Shape \"plymesh\" \"string filename\" \"{}\"\nAttributeEnd\n", file);
   }
   write_file_atomic(path, out);

@@ -115,7 +115,7 @@ RLL_HD inline HitEmission hit_emission(const PathConstants& c, const PathState& 
                                        const SurfaceHit& sh, const Vec3& wo, int depth) {
   HitEmission e;
   if (sh.light < 0) return e;
-  e.Le = emitted_radiance(c.scene.lights[sh.light], wo);
+  e.Le = emitted_radiance(c.scene, c.scene.lights[sh.light], sh, wo);
   if (is_black(e.Le)) return e;
   if (depth == 0 || c.strategy == LightStrategy::Bsdf || s.prev_delta) {
     e.counts = true;

@@ -449,6 +449,111 @@ Scene glazed_room_scene() {
   return s;
 }
 
+// A quad whose uvs span [0, 1]^2 (u along e1, v along e2), whatever the mesh held before.
+void textured_quad(SceneBuilder& b, const Vec3& p, const Vec3& e1, const Vec3& e2, uint32_t material) {
+  Mesh& mesh = b.scene().mesh;
+  b.quad(p, e1, e2, material);
+  mesh.uvs.resize(mesh.positions.size(), Vec2{});
+  static const Vec2 kCorners[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  for (size_t k = 0; k < 4; ++k) mesh.uvs[mesh.positions.size() - 4 + k] = kCorners[k];
+}
+
+// The screens' pictures, made here (no image files): colour bars over a ramp with a bright disc,
+// a stained-glass window of coloured panes between dark leads, and a dim checkerboard with a
+// bright diagonal band. Linear radiance factors, row 0 at the top.
+Image colour_bars_picture() {
+  const int w = 64, h = 36;
+  const Rgb bars[8] = {{1, 1, 1},       {1, 1, 0.1f},   {0.1f, 1, 1}, {0.1f, 1, 0.1f},
+                       {1, 0.1f, 1},    {1, 0.1f, 0.1f}, {0.1f, 0.1f, 1}, {0.05f, 0.05f, 0.05f}};
+  Image img(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      Rgb c = y < 24 ? bars[x * 8 / w] : Rgb(float(x) / float(w - 1)) * 0.8f;
+      const float dx = float(x) - 44.5f, dy = float(y) - 12.5f;
+      if (dx * dx + dy * dy < 30) c = Rgb(4.0f, 3.6f, 3.0f);
+      img.at(x, y) = c;
+    }
+  return img;
+}
+
+Image stained_glass_picture() {
+  const int w = 48, h = 96;
+  const Rgb glass[6] = {{0.9f, 0.15f, 0.1f}, {0.15f, 0.3f, 1.0f}, {1.0f, 0.8f, 0.1f},
+                        {0.1f, 0.8f, 0.3f},  {0.7f, 0.2f, 0.9f},  {1.0f, 1.0f, 0.9f}};
+  Image img(w, h);
+  Pcg32 rng(7);
+  std::vector<Rgb> panes(6 * 12);
+  for (Rgb& p : panes) p = glass[rng.next_u32() % 6] * (0.6f + 0.8f * rng.next_float());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool lead = x % 8 == 0 || y % 8 == 0;
+      img.at(x, y) = lead ? Rgb(0.0f) : panes[size_t(y / 8) * 6 + size_t(x / 8)];
+    }
+  return img;
+}
+
+Image checker_band_picture() {
+  const int w = 40, h = 40;
+  Image img(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      Rgb c = ((x / 5 + y / 5) % 2) ? Rgb(0.15f, 0.2f, 0.3f) : Rgb(0.02f);
+      if (std::abs(x - y) < 3) c = Rgb(3.0f, 2.2f, 1.2f);
+      img.at(x, y) = c;
+    }
+  return img;
+}
+
+// A hall lit by three large textured emitters (a screen, a stained-glass window, a light panel)
+// and 12 small lamps, with partitions and pillars in between so that visibility matters.
+Scene screen_hall_scene() {
+  Scene s;
+  s.width = 400;
+  s.height = 300;
+  SceneBuilder b(s);
+  const float W = 12, H = 4, D = 10;
+  uint32_t wall = b.diffuse(Rgb(0.7f, 0.7f, 0.68f), "plaster");
+  uint32_t floor = b.diffuse(Rgb(0.4f, 0.33f, 0.27f), "oak");
+  uint32_t grey = b.diffuse(Rgb(0.45f), "grey");
+  b.box(Vec3(0, 0, 0), Vec3(W, H, D), wall, true, 1u << 5);  // open towards the camera (+z)
+  b.quad(Vec3(0, 0.001f, 0), Vec3(0, 0, D), Vec3(W, 0, 0), floor);
+  auto picture = [&](Image img, const Rgb& factor, const std::string& name) {
+    s.textures.push_back(std::move(img));
+    Material m;
+    m.name = name;
+    m.albedo = Rgb(0.05f);
+    m.emission = factor;
+    m.emission_texture = int(s.textures.size() - 1);
+    return b.material(m);
+  };
+  // The screen on the back wall (faces +z), the window on the left wall (faces +x), the panel on
+  // the right wall (faces -x).
+  textured_quad(b, Vec3(3.0f, 0.8f, 0.01f), Vec3(6.0f, 0, 0), Vec3(0, 3.0f, 0),
+                picture(colour_bars_picture(), Rgb(2.5f), "screen"));
+  textured_quad(b, Vec3(0.01f, 0.6f, 6.5f), Vec3(0, 0, -3.0f), Vec3(0, 3.0f, 0),
+                picture(stained_glass_picture(), Rgb(3.0f), "stained-glass"));
+  textured_quad(b, Vec3(W - 0.01f, 1.0f, 2.0f), Vec3(0, 0, 2.5f), Vec3(0, 2.5f, 0),
+                picture(checker_band_picture(), Rgb(2.0f), "panel"));
+  // Partitions and pillars between the emitters and the room.
+  b.box(Vec3(2.0f, 0, 3.0f), Vec3(5.5f, 2.4f, 3.15f), grey);
+  b.box(Vec3(7.0f, 0, 4.0f), Vec3(10.5f, 2.0f, 4.15f), grey);
+  b.box(Vec3(1.2f, 0, 2.0f), Vec3(1.5f, H, 2.3f), grey);
+  for (float x : {4.0f, 8.0f}) b.box(Vec3(x, 0, 6.5f), Vec3(x + 0.35f, H, 6.85f), grey);
+  b.box(Vec3(5.5f, 0, 7.0f), Vec3(6.5f, 0.9f, 8.0f), grey);
+  // Small lamps under the ceiling (facing down), some behind the partitions.
+  uint32_t lamp = b.emitter(Rgb(40.0f, 32.0f, 22.0f), false, "lamp");
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const float x = 1.2f + 3.0f * float(i), z = 1.5f + 3.0f * float(k);
+      b.quad(Vec3(x, H - 0.01f, z), Vec3(0.2f, 0, 0), Vec3(0, 0, 0.2f), lamp);
+    }
+  s.camera.position = Vec3(W * 0.5f, 2.0f, D + 3.5f);
+  s.camera.target = Vec3(W * 0.45f, 1.6f, 0);
+  s.camera.fov = 60;
+  s.has_camera = true;
+  return s;
+}
+
 Scene furnace_scene() {
   Scene s;
   s.width = s.height = 32;
@@ -503,6 +608,10 @@ const std::vector<Entry>& entries() {
         "spot-hall's 2 x 2 rooms with 36 spots each, a point light, a 2-triangle lamp, a dim sun, a "
         "goniometric light and a projector (every light kind in one tree; for tests)"},
        [] { return spot_hall_scene(2, 2, 6, true); }},
+      {{"screen-hall",
+        "a hall lit by three large textured emitters (a screen, a stained-glass window, a light "
+        "panel; pictures made in code) and 12 small lamps, behind partitions and pillars"},
+       screen_hall_scene},
       {{"furnace", "inside an emissive diffuse sphere (Le = 1, albedo 0.5): radiance sum of 0.5^k"},
        furnace_scene},
   };

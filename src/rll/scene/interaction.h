@@ -77,23 +77,6 @@ RLL_HD inline Ray spawn_ray_to(const Vec3& p, const Vec3& ng, const Vec3& y, con
   return r;
 }
 
-// Bilinear lookup with repeat wrapping, v pointing up the image.
-RLL_HD inline Rgb sample_texture(const TexelView& tex, Vec2 uv) {
-  if (tex.width == 0) return Rgb(1);
-  float x = (uv.x - std::floor(uv.x)) * tex.width - 0.5f;
-  float y = (1 - (uv.y - std::floor(uv.y))) * tex.height - 0.5f;
-  int x0 = int(std::floor(x)), y0 = int(std::floor(y));
-  float fx = x - x0, fy = y - y0;
-  auto texel = [&](int i, int j) {
-    i %= tex.width;
-    j %= tex.height;
-    if (i < 0) i += tex.width;
-    if (j < 0) j += tex.height;
-    return tex.at(i, j);
-  };
-  return (texel(x0, y0) * (1 - fx) + texel(x0 + 1, y0) * fx) * (1 - fy) +
-         (texel(x0, y0 + 1) * (1 - fx) + texel(x0 + 1, y0 + 1) * fx) * fy;
-}
 inline Rgb sample_texture(const Image& texture, Vec2 uv) {
   return sample_texture(texture.texel_view(), uv);
 }
@@ -110,6 +93,15 @@ RLL_HD inline float roughness_at(const SceneView& scene, const SurfaceHit& hit) 
   const MaterialData& m = scene.materials[hit.material];
   if (m.roughness_texture < 0) return m.roughness;
   return std::max(0.0f, sample_texture(scene.textures[m.roughness_texture], hit.uv).x);
+}
+
+// Radiance the light of a hit emits towards w (pointing away): a textured light's emission at
+// the hit's uv, any other light's radiance.
+RLL_HD inline Rgb emitted_radiance(const SceneView& scene, const Light& light, const SurfaceHit& sh,
+                                   const Vec3& w) {
+  const Rgb L = emitted_radiance(light, w);
+  if (!light.textured || is_black(L)) return L;
+  return emission_at(scene, scene.materials[sh.material], sh.uv);
 }
 
 }  // namespace rll

@@ -29,6 +29,10 @@ struct Light {
   // irradiance.
   Rgb radiance;
   bool two_sided = false;
+  // A triangle light whose material has an emission texture: `radiance` is the exact mean of
+  // its emission over the triangle (its power and bounds follow from it), and the radiance at a
+  // point is the material's emission times the texture there (scene_view.h).
+  bool textured = false;
   uint32_t triangle = ~0u;  // the mesh triangle of a triangle light; an image light's texture
 
   RLL_HD bool is_delta() const { return type != LightType::Triangle; }
@@ -118,7 +122,8 @@ RLL_HD inline float spot_falloff(const Light& l, const Vec3& w) {
   return smooth_step(dot(l.n, w), l.p1.y, l.p1.x);
 }
 
-// Radiance a triangle light emits from its surface towards direction w (pointing away).
+// Radiance a triangle light emits from its surface towards direction w (pointing away); for a
+// textured light, its mean radiance (the emission at a point: emitted_radiance of interaction.h).
 RLL_HD inline Rgb emitted_radiance(const Light& l, const Vec3& w) {
   if (l.type != LightType::Triangle) return Rgb(0);
   float c = dot(l.n, w);

@@ -36,6 +36,9 @@ struct MaterialData {
   int roughness_texture = -1;  // index into Scene::textures (its first channel): replaces roughness
   float thickness = 0.01f;     // CoatedDiffuse: the coating's thickness (pbrt-v4's default)
   Rgb emission{0.0f};          // emitted radiance; nonzero makes each triangle a light
+  // Index into Scene::textures: the emitted radiance at a point is emission times this
+  // texture's bilinear lookup there (emission_at, scene_view.h); -1: none.
+  int emission_texture = -1;
   bool two_sided_emission = false;
   RLL_HD bool is_emissive() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
 };

@@ -8,6 +8,7 @@
 #include "rll/core/error.h"
 #include "rll/core/hash.h"
 #include "rll/scene/interaction.h"
+#include "rll/scene/textured_emitters.h"
 
 namespace rll {
 
@@ -238,6 +239,15 @@ void Scene::finalize() {
     if (m.albedo_texture >= int(textures.size()))
       fail("{}: material '{}' uses a texture that was not loaded", source, m.name);
   for (const auto& m : materials)
+    if (m.emission_texture >= int(textures.size()))
+      fail("{}: material '{}' uses an emission texture that was not loaded", source, m.name);
+  for (const auto& m : materials)
+    if (m.emission_texture >= 0 && m.is_emissive())
+      for (const Rgb& c : textures[size_t(m.emission_texture)].pixels())
+        if (!is_finite(c) || min_component(c) < 0)
+          fail("{}: material '{}': its emission texture has a negative or non-finite texel",
+               source, m.name);
+  for (const auto& m : materials)
     if (m.roughness_texture >= int(textures.size()))
       fail("{}: material '{}' uses a roughness texture that was not loaded", source, m.name);
   for (const auto& l : lights)
@@ -262,6 +272,8 @@ void Scene::finalize() {
 
   if (sky && sky_triangle_count == 0) add_sky_dome(*this, *sky, bounds.center(), radius * sky->radius_scale);
 
+  // Textured emitters: split where large, and each triangle's exact mean emission.
+  const std::vector<Rgb> texture_means = prepare_textured_emitters(*this);
   mesh.light.assign(mesh.triangles.size(), -1);
   // Drop triangle lights from an earlier finalize() (finalize is idempotent), and the tree over
   // them, which would no longer match the lights.
@@ -271,9 +283,15 @@ void Scene::finalize() {
     const Material& m = materials[mesh.material[t]];
     if (!m.is_emissive()) continue;
     if (mesh.area(t) <= 0) continue;  // degenerate: emits nothing, cannot be sampled
+    const bool textured = m.emission_texture >= 0;
+    // A textured triangle is a light of its mean emission (its power and bounds), and none
+    // where the texture is black all over it.
+    const Rgb radiance = textured ? m.emission * texture_means[t] : m.emission;
+    if (textured && !(max_component(radiance) > 0)) continue;
     mesh.light[t] = int32_t(lights.size());
     lights.push_back(make_triangle_light(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2),
-                                         m.emission, m.two_sided_emission, t));
+                                         radiance, m.two_sided_emission, t));
+    lights.back().textured = textured;
   }
   // Before the lights: a mesh scaled to nothing has lost its emitters too, and is the cause.
   size_t surfaces = 0, visible = 0;
@@ -335,7 +353,8 @@ void Scene::refresh_lights_from_mesh() {
     l.p0 = mesh.vertex(l.triangle, 0);
     l.p1 = mesh.vertex(l.triangle, 1);
     l.p2 = mesh.vertex(l.triangle, 2);
-    l.radiance = materials[mesh.material[l.triangle]].emission;
+    // A textured light's mean emission depends on its uvs, which do not move.
+    if (!l.textured) l.radiance = materials[mesh.material[l.triangle]].emission;
     refresh_triangle_light(l);
   }
 }
@@ -369,6 +388,7 @@ uint64_t Scene::fingerprint() const {
       h.add(int64_t(m.roughness_texture));
       h.add(m.thickness);
     }
+    if (m.emission_texture >= 0) h.add(int64_t(m.emission_texture) + 0x7e47);
   }
   h.word(s.textures.size());
   for (const Image& t : s.textures) {

@@ -75,6 +75,9 @@ struct Scene {
   bool is_sky_triangle(size_t t) const {
     return t >= sky_first_triangle && t < sky_first_triangle + sky_triangle_count;
   }
+  // True once finalize() has split the large textured emitters into pieces (textured_emitters.h),
+  // so that a second finalize does not split them again.
+  bool textured_emitters_split = false;
   // The light tree over `lights`: null until build_light_tree (rll/lighttree/) builds it.
   std::shared_ptr<LightTree> light_tree;
 
