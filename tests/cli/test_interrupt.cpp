@@ -1,7 +1,8 @@
-// Ctrl-C (SIGINT), SIGTERM and SIGHUP stop a render at the next tile and still write the image
-// so far, with the exit code 128 + signal; the image is complete (written atomically), never a
-// partial file. A second signal does not cut the write short. An interrupted `reference -o`
-// writes its sample counts; an interrupted merge leaves no temporary and says so.
+// Ctrl-C (SIGINT), SIGTERM and SIGHUP stop a render within its pass (a tile looks every 64
+// samples) and still write the image so far, with the exit code 128 + signal; the image is
+// complete (written atomically), never a partial file. A second signal does not cut the write
+// short. An interrupted `reference -o` writes its sample counts; an interrupted merge leaves no
+// temporary and says so.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
