@@ -558,8 +558,8 @@ void add_compare_command(CLI::App& app) {
   std::string aov_help =
       "Per-pixel diagnostics of the first repeat's run of every sampler, measured at the camera "
       "vertex as `rll render --aov` measures them and shown in report.html beside the error maps "
-      "(flippable with the reference like them; the image is the same to the bit, that run a "
-      "little slower); a comma-separated list of:";
+      "(flippable with the reference like them; the image is the same to the bit, that run's time "
+      "includes the measuring: leave --aov out when timing); a comma-separated list of:";
   for (const auto& a : aov_list()) aov_help += fmt::format(" {} ({});", a.name, a.meaning);
   cmd->add_option("--aov", o->aov, aov_help);
   cmd->add_flag("--quiet", o->quiet, "No progress output");

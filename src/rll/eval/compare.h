@@ -76,7 +76,8 @@ class RenderSession;
 // against `reference` (its noise subtracted with `reference_variance`). Cancelled (`cancelled`
 // set, no result) when `cancel` is raised during any frame. With `aovs`, the last frame's film
 // keeps its camera vertices and `aovs` of the result holds those diagnostics (render/aov.h), as
-// `rll render --aov` measures them: the image is the same to the bit, the time a little longer.
+// `rll render --aov` measures them: the image is the same to the bit, the time includes the
+// measuring.
 struct MeasuredRun {
   RunResult result;
   Image image;
