@@ -26,6 +26,7 @@
 #include "rll/eval/report.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/lights/oracle_sampler.h"
+#include "rll/render/aov.h"
 #include "rll/render/progress.h"
 
 namespace rll::cli {
@@ -50,6 +51,7 @@ struct CompareOptions {
   std::string out;
   float exposure = 0;
   std::string plot_metric = "relmse";
+  std::string aov;  // --aov NAME[,NAME]: the first repeat's diagnostics, shown in the report
   bool quiet = false;
 };
 
@@ -116,6 +118,13 @@ std::vector<std::string> check_flags(const CompareOptions& o) {
         "with {} repeats): the reference would share their noise",
         o.reference_request.seed, o.reference_request.seed + 1, o.seed, o.repeats);
   metric_label(o.plot_metric);  // throws for an unknown name
+  if (!o.aov.empty()) {
+    parse_aovs(o.aov, "--aov");
+    if (o.session.wavefront || o.session.device != "cpu")
+      fail(
+          "--aov: the diagnostics are measured by the megakernel; leave out --wavefront and "
+          "--device");
+  }
   if (o.out.empty()) fail("--out DIR is required");
   return samplers;
 }
@@ -187,10 +196,12 @@ std::string interrupted_text(const CompareOptions& o, const std::string& name) {
 }
 
 // One render of one sampler, fresh (a learning sampler starts cold every run), with relMSE
-// checkpoints; the image is returned in `image`, and the sampler in `kept` when it is given.
+// checkpoints; the image is returned in `image`, and the sampler in `kept` and the --aov
+// diagnostics in `aovs` when they are given.
 RunResult run_once(const CompareOptions& o, RenderSession& session, const std::string& name,
                    int repeat, const ChosenReference& reference, Image& image,
-                   std::unique_ptr<LightSampler>* kept = nullptr) {
+                   std::unique_ptr<LightSampler>* kept = nullptr,
+                   std::vector<std::pair<std::string, std::vector<float>>>* aovs = nullptr) {
   RenderSettings rs;
   rs.spp = o.time > 0 ? kUnlimitedSpp : o.spp;
   rs.time_limit = o.time;
@@ -201,10 +212,13 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
       o.repeats > 1 ? fmt::format("{} ({}/{})", name, repeat + 1, o.repeats) : name;
   MeasuredRun m = measure_run(session, name, repeat, rs, o.frames, reference.image,
                               reference.variance.pixel_count() ? &reference.variance : nullptr,
-                              label, !o.quiet, interrupt_flag());
+                              label, !o.quiet, interrupt_flag(), {},
+                              aovs && !o.aov.empty() ? parse_aovs(o.aov, "--aov")
+                                                     : std::vector<Aov>());
   if (m.cancelled || interrupted()) throw Interrupted(interrupted_text(o, name));
   image = std::move(m.image);
   if (kept) *kept = std::move(m.sampler);
+  if (aovs) *aovs = std::move(m.aovs);
   const RunResult& run = m.result;
   if (!o.quiet)
     fmt::print(stderr, "{}: {} spp in {}, relMSE {:.4e}\n", label, run.spp,
@@ -308,6 +322,7 @@ void run(const CompareOptions& o) {
   // sampler always runs first (on a cold cache) or last (on a machine warmed by the others).
   std::vector<RunResult> runs;
   std::map<std::string, Image> first_images;  // repeat 0's, shown in the report
+  std::map<std::string, std::vector<std::pair<std::string, std::vector<float>>>> first_aovs;
   // Repeat 0's learning samplers (rll, fermat) and oracle, for the report's cell chart.
   std::map<std::string, std::unique_ptr<LightSampler>> charted;
   const OracleLightSampler* oracle = nullptr;
@@ -320,7 +335,10 @@ void run(const CompareOptions& o) {
       order.back().push_back(name);
       Image image;
       std::unique_ptr<LightSampler> sampler;
-      runs.push_back(run_once(o, session, name, r, ref, image, r == 0 ? &sampler : nullptr));
+      std::vector<std::pair<std::string, std::vector<float>>> aovs;
+      runs.push_back(run_once(o, session, name, r, ref, image, r == 0 ? &sampler : nullptr,
+                              r == 0 ? &aovs : nullptr));
+      if (!aovs.empty()) first_aovs.emplace(name, std::move(aovs));
       const auto* as_oracle = dynamic_cast<const OracleLightSampler*>(sampler.get());
       if (as_oracle) oracle = as_oracle;
       if (as_oracle || dynamic_cast<const RllLightSampler*>(sampler.get()))
@@ -415,7 +433,8 @@ void run(const CompareOptions& o) {
                                           first.relmse, first.spp, format_duration(first.seconds),
                                           first.visible_ratio),
                               series_colour(i), &first_images.at(s.name), &errors.at(s.name),
-                              fmt::format("repeat 1 of {}, seed {}", o.repeats, o.seed)});
+                              fmt::format("repeat 1 of {}, seed {}", o.repeats, o.seed),
+                              first_aovs.contains(s.name) ? &first_aovs.at(s.name) : nullptr});
     report.samplers.push_back({s.name,
                                s.describe.is_object() && s.describe.contains("parameters")
                                    ? s.describe["parameters"].dump(2)
@@ -443,6 +462,7 @@ void run(const CompareOptions& o) {
   j["pass_spp"] = {{"first", o.pass_spp}, {"max", o.max_pass_spp}};
   j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
   j["set"] = o.session.set;
+  if (!o.aov.empty()) j["aov"] = o.aov;  // the first repeat's diagnostics, in report.html
   j["reference"] = ref.json;
   j["reference"]["image"] = "reference.exr";
   if (ref.variance.pixel_count()) j["reference"]["variance_image"] = "reference.variance.exr";
@@ -535,6 +555,13 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("--plot-metric", o->plot_metric,
                   "Metric of the convergence plot: relmse, trimmed_relmse, mrse or mse")
       ->capture_default_str();
+  std::string aov_help =
+      "Per-pixel diagnostics of the first repeat's run of every sampler, measured at the camera "
+      "vertex as `rll render --aov` measures them and shown in report.html beside the error maps "
+      "(flippable with the reference like them; the image is the same to the bit, that run's time "
+      "includes the measuring: leave --aov out when timing); a comma-separated list of:";
+  for (const auto& a : aov_list()) aov_help += fmt::format(" {} ({});", a.name, a.meaning);
+  cmd->add_option("--aov", o->aov, aov_help);
   cmd->add_flag("--quiet", o->quiet, "No progress output");
   // Numbers are checked as every command checks them (commands.h).
   time->check(number_in(0, kMaxSeconds, true));

@@ -139,12 +139,11 @@ py::dict py_compare(PyScene& scene, const std::vector<std::string>& samplers,
       rs.time_limit = time.value_or(0);
       rs.seed = seed + uint64_t(r);
       MeasuredRun m;
-      {
-        py::gil_scoped_release release;
+      run_watched(watch, [&] {
         m = measure_run(*session, name, r, rs, 1, ref.image,
                         ref.variance.pixel_count() ? &ref.variance : nullptr, name, false,
                         &watch.cancel, [&](const RenderProgress& p, const Film&) { watch(p); });
-      }
+      });
       watch.rethrow();
       if (m.cancelled) break;
       runs.push_back(std::move(m.result));

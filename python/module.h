@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <exception>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -66,18 +67,28 @@ std::shared_ptr<RenderSession> session_for(PyScene& scene, const SessionSettings
 // errors naming the argument: "sampler: ..." or "params: ...".
 std::shared_ptr<LightSampler> named_sampler(const RenderSession& session, const std::string& spec);
 
-// Between passes, on the rendering thread: Ctrl-C (Python's SIGINT handler raising
-// KeyboardInterrupt) raises `cancel` as SIGINT cancels `rll render`, and `progress(dict)` (None:
-// none) runs with the GIL; an exception of it cancels too and is rethrown by rethrow().
+// Watches a render run by run_watched(): Ctrl-C (Python's SIGINT handler raising
+// KeyboardInterrupt, seen by check_signals on the main thread) raises `cancel` as SIGINT cancels
+// `rll render`, and between passes, on the rendering thread, `progress(dict)` (None: none) runs
+// with the GIL; an exception of it (or of another signal handler) cancels too and is rethrown by
+// rethrow(). Its members are touched only with the GIL held.
 struct PassWatcher {
   explicit PassWatcher(py::object progress_callback) : progress(std::move(progress_callback)) {}
   void operator()(const RenderProgress& p);
+  // Runs Python's pending signal handlers (a no-op off the main thread); call with the GIL.
+  void check_signals();
   void rethrow() const;
   py::object progress;
   std::atomic<bool> cancel{false};
   bool interrupted = false;
   std::exception_ptr callback_error;
 };
+// Runs `work` (a render that reads `watch.cancel`) on a thread of its own while this thread, the
+// caller's with the GIL, waits without it and every kSignalPollMs takes it for
+// watch.check_signals(): Ctrl-C is seen within that time, inside a pass as between passes, and
+// the render stops at its next look at the flag (render/render.h). Rethrows `work`'s exception.
+inline constexpr int kSignalPollMs = 20;
+void run_watched(PassWatcher& watch, const std::function<void()>& work);
 // A render's progress as the callback gets it: passes, spp, spp_target, seconds, samples.
 py::dict progress_dict(const RenderProgress& p);
 // JSON as Python's json.loads makes it.

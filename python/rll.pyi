@@ -87,6 +87,8 @@ def render(
     aov: Union[None, str, Sequence[str]] = None,
     wavefront: bool = False,
     device: str = "cpu",
+    pass_spp: int = 1,
+    max_pass_spp: int = 8,
 ) -> Render: ...
 def load_state(
     path: _Path, scene: Scene, sampler: str = "rll", params: dict[str, Any] = {}

@@ -4,12 +4,15 @@
 #include <pybind11/stl.h>
 
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstring>
 #include <exception>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "module.h"
@@ -68,6 +71,7 @@ namespace {
 // The limits of the command line's flags (apps/commands.h), so that Python takes what `rll render`
 // takes.
 constexpr long long kMaxSpp = (1 << 30) - 1;
+constexpr int kMaxPassSpp = 1024;  // as `rll render --pass-spp`
 constexpr int kMaxThreads = 4096;
 constexpr double kMaxSeconds = 1e7;
 
@@ -170,7 +174,6 @@ py::object to_python(const nlohmann::json& j) {
 void PassWatcher::operator()(const RenderProgress& p) {
   py::gil_scoped_acquire gil;
   try {
-    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
     if (!progress.is_none()) progress(progress_dict(p));
   } catch (py::error_already_set& e) {
     if (e.matches(PyExc_KeyboardInterrupt))
@@ -179,6 +182,46 @@ void PassWatcher::operator()(const RenderProgress& p) {
       callback_error = std::current_exception();
     cancel = true;
   }
+}
+
+void PassWatcher::check_signals() {
+  if (PyErr_CheckSignals() == 0) return;
+  py::error_already_set e;  // takes the exception the handler raised
+  if (e.matches(PyExc_KeyboardInterrupt))
+    interrupted = true;
+  else if (!callback_error)
+    callback_error = std::make_exception_ptr(std::move(e));
+  cancel = true;
+}
+
+void run_watched(PassWatcher& watch, const std::function<void()>& work) {
+  std::mutex m;
+  std::condition_variable cv;
+  bool done = false;
+  std::exception_ptr error;
+  py::gil_scoped_release release;
+  std::thread worker([&] {
+    try {
+      work();
+    } catch (...) {
+      error = std::current_exception();
+    }
+    std::lock_guard lock(m);
+    done = true;
+    cv.notify_all();
+  });
+  std::unique_lock lock(m);
+  while (!cv.wait_for(lock, std::chrono::milliseconds(kSignalPollMs), [&] { return done; })) {
+    lock.unlock();
+    {
+      py::gil_scoped_acquire gil;
+      watch.check_signals();
+    }
+    lock.lock();
+  }
+  lock.unlock();
+  worker.join();
+  if (error) std::rethrow_exception(error);
 }
 
 void PassWatcher::rethrow() const {
@@ -192,7 +235,8 @@ namespace {
 PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::string& integrator,
                    int max_depth, long long spp, std::optional<double> time, const py::object& res,
                    uint64_t seed, const py::dict& params, int threads, const py::object& progress,
-                   const py::object& aov, bool wavefront, const std::string& device) {
+                   const py::object& aov, bool wavefront, const std::string& device,
+                   int pass_spp, long long max_pass_spp) {
   std::vector<Aov> aovs;
   if (!aov.is_none()) {
     std::string list;
@@ -210,6 +254,10 @@ PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::s
   if (time && !(*time > 0 && *time <= kMaxSeconds))
     fail("time: {} seconds is not in (0, {}] (None: no limit)", *time, kMaxSeconds);
   if (max_depth < 1) fail("max_depth: {} is not at least 1", max_depth);
+  if (pass_spp < 1 || pass_spp > kMaxPassSpp)
+    fail("pass_spp: {} is not in [1, {}]", pass_spp, kMaxPassSpp);
+  if (max_pass_spp < 1 || max_pass_spp > kMaxSpp)
+    fail("max_pass_spp: {} is not in [1, {}]", max_pass_spp, kMaxSpp);
   if (threads < 0 || threads > kMaxThreads)
     fail("threads: {} is not in [0, {}] (0: all cores)", threads, kMaxThreads);
   if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
@@ -235,15 +283,18 @@ PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::s
   rs.spp = int(spp);
   rs.time_limit = time.value_or(0);
   rs.seed = seed;
+  rs.pass_spp = pass_spp;
+  rs.max_pass_spp = int(max_pass_spp);
   Film film(session->scene().width, session->scene().height);
   if (!aovs.empty()) film.track_camera_vertex();
   PassWatcher watch(progress);
   RenderProgress p;
   {
     ThreadLimit limit(threads);
-    py::gil_scoped_release release;
-    p = session->render(*sampler, film, rs, "render", false, &watch.cancel,
-                        [&](const RenderProgress& pr, const Film&) { watch(pr); });
+    run_watched(watch, [&] {
+      p = session->render(*sampler, film, rs, "render", false, &watch.cancel,
+                          [&](const RenderProgress& pr, const Film&) { watch(pr); });
+    });
   }
   watch.rethrow();
 
@@ -392,16 +443,20 @@ PYBIND11_MODULE(rll, m) {
         py::arg("time") = py::none(), py::arg("res") = py::none(), py::arg("seed") = 1,
         py::arg("params") = py::dict(), py::arg("threads") = 0, py::arg("progress") = py::none(),
         py::arg("aov") = py::none(), py::arg("wavefront") = false, py::arg("device") = "cpu",
+        py::arg("pass_spp") = 1, py::arg("max_pass_spp") = 8,
         "Renders `scene` with a light sampler (see samplers()) as `rll render` does with the\n"
         "same settings, to the same image: `spp` samples per pixel, or fewer when `time`\n"
         "seconds run out; `max_depth` bounds the path length (`--max-depth`); `params` are `--set` "
         "parameters (key: value); `threads` 0 uses every\n"
         "core. `progress(dict)` is called after every pass (passes, spp, spp_target, seconds,\n"
-        "samples). The GIL is released while rendering; Ctrl-C stops the render and returns\n"
-        "what it has (Render.interrupted is then True). `aov`: per-pixel diagnostics at the\n"
+        "samples). The GIL is released while rendering; Ctrl-C stops the render within\n"
+        "milliseconds, inside a pass too, and returns what it has (Render.interrupted is then\n"
+        "True; Render.counts has each pixel's samples, Render.spp the fewest). `aov`: per-pixel diagnostics at the\n"
         "camera vertex, names as `rll render --aov` takes them (a list or 'a,b'; aov_names()),\n"
         "returned in Render.aov; the image is the same with or without. `wavefront` and\n"
-        "`device` ('cpu' or 'cuda') as `--wavefront` and `--device`.");
+        "`device` ('cpu' or 'cuda') as `--wavefront` and `--device`; `pass_spp` and\n"
+        "`max_pass_spp` as `--pass-spp` and `--max-pass-spp` (the first passes' size, the\n"
+        "largest pass).");
   m.def("error", &py_error, py::arg("img"), py::arg("ref"),
         py::arg("reference_variance") = py::none(),
         "Errors of an HxWx3 image against a reference as `rll error` measures them: a dict of\n"

@@ -2,8 +2,10 @@
 // way a user would (exposure, zoom, flip with the reference) and checks the layout (the colour
 // scale's labels, the repeat labels, the convergence plot's text inside its picture and clear of
 // each other), clicks a pixel of a learning sampler's image where the report has a cell chart and
-// reads its bars; records the outcome in the body's data-selftest attribute, "ok" or "fail: why",
-// and data-cell-chart "checked" when a chart was checked. (Not spelled out as markup here: this
+// reads its bars (and again through its cell-id map, where compare measured the diagnostics),
+// flips every diagnostics map with the reference and back; records the outcome in the body's
+// data-selftest attribute, "ok" or "fail: why", data-cell-chart "checked" when a chart was checked
+// and data-diagnostics the number of diagnostics maps flipped. (Not spelled out as markup here: this
 // text is in the dumped DOM too.)
 (function () {
   'use strict';
@@ -76,22 +78,23 @@
   // Clicks the first probed pixel that has a cell, in the chart's own image, and reads the bars:
   // one per cluster shown and kind, and one for the others' sum, the learnt ones (and the
   // oracle's) summing to 1, the values those of the report's data.
-  function checkCellChart() {
+  function checkCellChart(prefix) {
     var el = document.querySelector('script.cell-data');
     if (!el) return '';
     var d = JSON.parse(el.textContent);
-    var view = document.querySelector('canvas.view[data-source="image-' + d.entry + '"]');
-    if (!view) return 'no view of the charted image';
+    var view = document.querySelector('canvas.view[data-source="' + prefix + d.entry + '"]');
+    if (!view) return prefix === 'image-' ? 'no view of the charted image' : '';
     var probe = -1;
     for (var i = 0; i < d.probes.length && probe < 0; ++i) if (d.probes[i] >= 0) probe = i;
     if (probe < 0) return 'the chart has no probe with a cell';
     var W = view.width, H = view.height;
     var x = Math.min(W - 1, (probe % d.columns) * d.stride + Math.floor(d.stride / 2));
     var y = Math.min(H - 1, Math.floor(probe / d.columns) * d.stride + Math.floor(d.stride / 2));
+    var box = document.getElementById('cell-chart');
+    box.dataset.cell = '';  // (a chart shown by an earlier click is not taken for this one's)
     var r = view.getBoundingClientRect();
     view.dispatchEvent(new MouseEvent('click', { clientX: r.left + (x + 0.5) / W * r.width,
                                                  clientY: r.top + (y + 0.5) / H * r.height, bubbles: true }));
-    var box = document.getElementById('cell-chart');
     var cell = d.cells[d.probes[probe]];
     if (box.dataset.cell !== String(cell.id))
       return 'clicking pixel (' + x + ', ' + y + ') showed cell "' + box.dataset.cell + '", not ' + cell.id;
@@ -108,6 +111,27 @@
       if (!(bars[0].getBoundingClientRect().width > 0) && sum > 0) return 'a ' + kinds[k] + ' bar is not drawn';
     }
     document.body.dataset.cellChart = 'checked';
+    return '';
+  }
+  // The diagnostics maps (compare --aov): each view shows its own picture, which its flip button
+  // turns into the reference's (same zoom and exposure) and back; the maps are not all alike.
+  function checkDiagnostics(views) {
+    var maps = Array.prototype.filter.call(views, function (c) { return /^aov-/.test(c.dataset.source); });
+    if (!maps.length) return '';
+    var ref = checksum(views[0]), pictures = {};
+    for (var i = 0; i < maps.length; ++i) {
+      var c = maps[i], own = checksum(c), b = flipButton(c);
+      if (!b) return 'diagnostics map ' + c.dataset.source + ' has no flip button';
+      if (own === ref) return 'diagnostics map ' + c.dataset.source + ' shows the reference before the flip';
+      b.click();
+      if (checksum(c) !== ref) return 'the flip button did not show the reference in ' + c.dataset.source;
+      if (!c.closest('figure').classList.contains('flipped')) return 'flipped map ' + c.dataset.source + ' is not marked';
+      b.click();
+      if (checksum(c) !== own) return 'flipping ' + c.dataset.source + ' back did not restore its map';
+      pictures[own] = true;
+    }
+    if (Object.keys(pictures).length < 2) return 'every diagnostics map shows the same picture';
+    document.body.dataset.diagnostics = String(maps.length);
     return '';
   }
   function flipButton(view) { return view.closest('figure').querySelector('button.flip'); }
@@ -166,7 +190,9 @@
     if (legend) return fail(legend);
     var plot = checkPlot();
     if (plot) return fail(plot);
-    var chart = checkCellChart();
+    var diagnostics = checkDiagnostics(views);
+    if (diagnostics) return fail(diagnostics);
+    var chart = checkCellChart('aov-cell-') || checkCellChart('image-');
     if (chart) return fail(chart);
     // Every sampler's image and map says which repeat it shows (the comparison has 2 repeats).
     var captions = document.querySelectorAll('figure canvas.view:not([data-source="reference"])');

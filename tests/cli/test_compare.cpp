@@ -1,5 +1,6 @@
 // `rll compare` and `rll reference` end to end: the files a compare writes, the reference cache,
 // the HTML report in a headless browser, and bad flags.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <stb/stb_image.h>
 
@@ -192,16 +193,30 @@ TEST_F(CompareOutput, ReportLoadsInChromiumWithoutScriptErrors) {
 
 // The cell chart of a compare with rll and the oracle: per probed cell, rll's baked table and the
 // oracle's probabilities each sum to 1 over the cell's clusters, and so do the tree's; and in
-// Chromium a click on a pixel of rll's image shows that cell's bars.
+// Chromium a click on a pixel of rll's image (and of its cell-id map) shows that cell's bars.
+// With --aov every sampler's diagnostics are views of their own, each flipped with the reference
+// and back in Chromium.
 TEST(Compare, ReportChartsRllsCellsAgainstTheTreeAndTheOracle) {
   test::TempDir tmp;
   auto r = run_rll({"compare", "builtin:cornell-boxes-room", "--res", "32x24", "--samplers",
                     "power,rll,oracle", "--spp", "8", "--reference-spp", "32", "--set",
                     "oracle.points=4", "--set", "oracle.rays=2", "--set",
-                    "oracle.discovery_spp=4", "--cache-dir",
-                    (tmp / "cache").string(), "--out", (tmp / "out").string(), "--quiet"});
+                    "oracle.discovery_spp=4", "--aov", "cell,probability,entropy,visible,rewards",
+                    "--cache-dir", (tmp / "cache").string(), "--out", (tmp / "out").string(),
+                    "--quiet"});
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string html = read_text(tmp / "out" / "report.html");
+  // Every sampler's probability and visible maps; the cells' maps of rll and the oracle (power
+  // has no cells: those maps would show nothing and are left out).
+  for (const char* name : {"cell", "probability", "entropy", "visible", "rewards"})
+    for (int entry = 0; entry < 3; ++entry) {
+      const bool cells = std::string(name) != "probability" && std::string(name) != "visible";
+      EXPECT_EQ(contains(html, fmt::format("data-map=\"aov-{}-{}\"", name, entry)),
+                entry > 0 || !cells)
+          << name << " of entry " << entry;
+    }
+  EXPECT_EQ(nlohmann::json::parse(read_text(tmp / "out" / "summary.json"))["aov"],
+            "cell,probability,entropy,visible,rewards");
   const std::string open = "<script type=\"application/json\" class=\"cell-data\">";
   const size_t at = html.find(open);
   ASSERT_NE(at, std::string::npos);
@@ -247,6 +262,20 @@ TEST(Compare, ReportChartsRllsCellsAgainstTheTreeAndTheOracle) {
     GTEST_SKIP() << "chromium is not installed (make test installs it): chart not clicked";
   const std::string body = run_selftest(tmp / "out" / "report.html", tmp.path());
   EXPECT_TRUE(contains(body, "data-cell-chart=\"checked\"")) << "the chart was not clicked: " << body;
+  EXPECT_TRUE(contains(body, "data-diagnostics=\"12\"")) << "the maps were not flipped: " << body;
+}
+
+TEST(Compare, AovRefusesUnknownNamesAndTheWavefront) {
+  test::TempDir tmp;
+  auto r = run_rll({"compare", "builtin:cornell-box", "--res", "16x16", "--samplers", "power",
+                    "--spp", "1", "--aov", "cell,colour", "--out", (tmp / "out").string()});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_TRUE(contains(r.output, "--aov: unknown diagnostic 'colour'")) << r.output;
+  r = run_rll({"compare", "builtin:cornell-box", "--res", "16x16", "--samplers", "power", "--spp",
+               "1", "--aov", "visible", "--wavefront", "--out", (tmp / "out").string()});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_TRUE(contains(r.output, "--aov: the diagnostics are measured by the megakernel"))
+      << r.output;
 }
 
 TEST(Compare, EqualTimeStopsAtTheBudget) {

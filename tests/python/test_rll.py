@@ -168,18 +168,59 @@ def test_time_budget(box):
 
 
 def test_ctrl_c_stops_a_render_and_returns_what_it_has(box):
-    # SIGINT to this process while the render runs with the GIL released, no callback given.
+    # SIGINT to this process while the render runs with the GIL released, 0.5 s after its first
+    # pass (the callback only times the signal: a signal before any pass would stop the render
+    # with nothing in it, and loading the scene at this size takes a while).
     timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+
+    def first_pass(p):
+        if p["passes"] == 1:
+            timer.start()
+
     t0 = time.monotonic()
-    timer.start()
     try:
-        r = rll.render(box, spp=1 << 20, res=(64, 48))
+        r = rll.render(box, spp=1 << 20, res=(64, 48), progress=first_pass)
     finally:
         timer.cancel()
     assert r.interrupted and r.stats["interrupted"]
     assert 1 <= r.spp < 1 << 20
     assert time.monotonic() - t0 < 30
     assert r.image.shape == (48, 64, 3) and r.image.mean() > 0
+
+
+def test_ctrl_c_stops_inside_a_long_pass():
+    # One pass of 1024 spp (12.6 M samples at 128x96, seconds on two cores; a tile of it 262,144
+    # samples): SIGINT a second in stops the render within a bound, not at the end of the pass,
+    # and it returns what it has, each pixel with the samples it took (Render.counts).
+    sent = []
+
+    def interrupt():
+        sent.append(time.monotonic())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    scene = rll.load(BOX, res=(128, 96))
+    timer = threading.Timer(1.0, interrupt)
+    timer.start()
+    try:
+        r = rll.render(scene, spp=1024, pass_spp=1024, max_pass_spp=1024)
+    finally:
+        timer.cancel()
+    done = time.monotonic()
+    assert r.interrupted and sent
+    assert done - sent[0] < 4.0, "the render did not stop inside its pass"
+    assert r.stats["passes"] == 1
+    counts = r.counts
+    assert r.spp == counts.min() == 0, "the pass ran to its end"
+    assert counts.sum() > 0
+    assert ((counts > 0) & (counts < 1024)).any(), "threads finished their pixels or tiles first"
+    assert np.isfinite(r.image).all() and (r.image[counts == 0] == 0).all()
+
+
+def test_render_checks_its_pass_sizes(box):
+    with pytest.raises(rll.Error, match=r"pass_spp: 0 is not in \[1, 1024\]"):
+        rll.render(box, spp=1, pass_spp=0)
+    with pytest.raises(rll.Error, match="max_pass_spp: 0"):
+        rll.render(box, spp=1, max_pass_spp=0)
 
 
 def test_error_matches_the_cli(box, tmp_path):

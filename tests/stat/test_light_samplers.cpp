@@ -9,10 +9,7 @@
 #include <fmt/format.h>
 
 #include "rll/accel/accel.h"
-#include "rll/core/params.h"
 #include "rll/core/rng.h"
-#include "rll/lighttree/light_tree.h"
-#include "rll/scene/builtin.h"
 #include "support/sampler_contexts.h"
 #include "support/statistics.h"
 
@@ -70,24 +67,12 @@ constexpr int kChiSamples = 20000;
 const int kChiTests = int(kScenes.size() * sampler_cases().size()) * kChiContexts * 2;
 using Param = std::tuple<size_t, std::string, PointSet>;
 
-struct Fixture {
-  Scene scene;
-  std::unique_ptr<Accel> accel;
-  std::unique_ptr<LightSampler> sampler;
+struct Fixture : SamplerScene {
   std::vector<LightContext> contexts;
 };
 
 Fixture make_fixture(const SamplerCase& c, const std::string& scene_name, PointSet points) {
-  Fixture f;
-  f.scene = make_builtin_scene(scene_name);
-  f.scene.width = 48;
-  f.scene.height = 36;
-  f.scene.finalize();
-  build_light_tree(f.scene);
-  f.accel = std::make_unique<Accel>(f.scene.mesh);
-  Params params = Params::parse(c.set);
-  f.sampler = make_light_sampler(c.sampler, f.scene, params);
-  params.check_all_used();
+  Fixture f{sampler_scene(scene_name, c.sampler, c.set), {}};
   train_sampler(f.scene, *f.accel, *f.sampler, 32,
                 points);  // RLL: strongly non-uniform cells (test_rll_learning)
   f.contexts = make_contexts(f.scene, *f.accel, kContexts, 1234);

@@ -10,11 +10,9 @@
 #include <cmath>
 
 #include "rll/accel/accel.h"
-#include "rll/core/params.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/lights/rht_sampler.h"
 #include "rll/render/rht_nee.h"
-#include "rll/scene/builtin.h"
 #include "support/sampler_contexts.h"
 #include "support/statistics.h"
 
@@ -28,25 +26,13 @@ constexpr int kContexts = 120;      // reachability and exact pdfs
 constexpr int kFreqContexts = 24;   // yield frequencies
 constexpr int kDraws = 12000;       // draws per frequency context
 
-struct Fixture {
-  Scene scene;
-  std::unique_ptr<Accel> accel;
-  std::unique_ptr<LightSampler> sampler;
+struct Fixture : SamplerScene {
   const RhtView* view = nullptr;
   std::vector<LightContext> contexts;
 };
 
 Fixture make_fixture(const std::string& scene_name, const std::vector<std::string>& set) {
-  Fixture f;
-  f.scene = make_builtin_scene(scene_name);
-  f.scene.width = 48;
-  f.scene.height = 36;
-  f.scene.finalize();
-  build_light_tree(f.scene);
-  f.accel = std::make_unique<Accel>(f.scene.mesh);
-  Params params = Params::parse(set);
-  f.sampler = make_light_sampler("rht", f.scene, params);
-  params.check_all_used();
+  Fixture f{sampler_scene(scene_name, "rht", set), nullptr, {}};
   f.view = f.sampler->rht_view();
   f.contexts = make_contexts(f.scene, *f.accel, kContexts, 4321);
   return f;

@@ -17,10 +17,8 @@
 #include <cstdio>
 
 #include "rll/accel/accel.h"
-#include "rll/core/params.h"
 #include "rll/lights/simple_samplers.h"
 #include "rll/lighttree/light_tree.h"
-#include "rll/scene/builtin.h"
 #include "support/biased_sampler.h"
 #include "support/sampler_contexts.h"
 #include "support/statistics.h"
@@ -210,15 +208,10 @@ class SamplerTruth : public ::testing::TestWithParam<Param> {};
 
 TEST_P(SamplerTruth, StratifiedCountsAndChiSquareAtManyContexts) {
   const TruthCase& c = truth_cases()[std::get<0>(GetParam())];
-  Scene scene = make_builtin_scene(std::get<1>(GetParam()));
-  scene.width = 48;
-  scene.height = 36;
-  scene.finalize();
-  build_light_tree(scene);
-  const Accel accel(scene.mesh);
-  Params params = Params::parse(c.set);
-  auto sampler = make_light_sampler(c.sampler, scene, params, &accel);
-  params.check_all_used();
+  const SamplerScene s = sampler_scene(std::get<1>(GetParam()), c.sampler, c.set);
+  const Scene& scene = s.scene;
+  const Accel& accel = *s.accel;
+  const std::unique_ptr<LightSampler>& sampler = s.sampler;
   if (c.passes > 0) train_sampler(scene, accel, *sampler, c.passes);
   std::vector<LightContext> contexts = truth_contexts(scene, accel);
   for (size_t i = 0; i < contexts.size(); ++i) sampler->prepare(contexts[i], float(i % 97) / 97.0f);

@@ -1,14 +1,32 @@
 #include "support/sampler_contexts.h"
 
+#include "rll/core/params.h"
 #include "rll/core/rng.h"
 #include "rll/core/sampling.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/render/render.h"
+#include "rll/scene/builtin.h"
 #include "rll/scene/interaction.h"
 #include "support/statistics.h"
 
 #include <gtest/gtest.h>
 
 namespace rll::test {
+
+SamplerScene sampler_scene(const std::string& scene_name, const std::string& sampler,
+                           const std::vector<std::string>& set) {
+  SamplerScene s;
+  s.scene = make_builtin_scene(scene_name);
+  s.scene.width = 48;
+  s.scene.height = 36;
+  s.scene.finalize();
+  build_light_tree(s.scene);
+  s.accel = std::make_unique<Accel>(s.scene.mesh);
+  Params params = Params::parse(set);
+  s.sampler = make_light_sampler(sampler, s.scene, params, s.accel.get());
+  params.check_all_used();
+  return s;
+}
 
 std::vector<LightContext> make_contexts(const Scene& scene, const Accel& accel, int count,
                                         uint64_t seed) {

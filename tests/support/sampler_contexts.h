@@ -1,6 +1,9 @@
-// Shading contexts for light-sampler tests: points seen by the camera and random surface points.
+// Light-sampler tests' set-up: a built-in scene ready for sampler checks, and shading contexts in
+// it (points seen by the camera and random surface points).
 #pragma once
 
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "rll/accel/accel.h"
@@ -9,6 +12,18 @@
 #include "rll/scene/scene.h"
 
 namespace rll::test {
+
+// A built-in scene ready for sampler checks: at 48x36 pixels (the cells' level of detail reads the
+// camera's pixel footprint), finalized, with its light tree and ray tracer, and the light sampler
+// `sampler` made with `set` (`--set` key=value, each key checked used; the oracle gets the
+// tracer, which no other sampler reads).
+struct SamplerScene {
+  Scene scene;
+  std::unique_ptr<Accel> accel;
+  std::unique_ptr<LightSampler> sampler;
+};
+SamplerScene sampler_scene(const std::string& scene_name, const std::string& sampler,
+                           const std::vector<std::string>& set);
 
 // `count` contexts: half on surfaces seen through random pixels, half uniformly by area over
 // the non-sky triangles with a random side. Deterministic for a given seed.

@@ -39,10 +39,7 @@ bool first_vertex(const PathConstants& c, const Scene& scene, const Accel& accel
 // rounded to the nearest (u = 0.5 with stochastic rounding picks the nearer level), the pass's
 // jitter as the last pass left it, no per-sample jitter.
 uint32_t find_cell(const RllView& v, const LightContext& ctx) {
-  CellCoord coord = v.keyer.locate(ctx.p, ctx.n, ctx.footprint, 0.5f);
-  if (v.keyer.settings().direction_bins > 0 && ctx.glossy && length_sq(ctx.wo) > 0)
-    coord.dir = v.keyer.direction_bin(ctx.wo);
-  const uint32_t cell = cell_find(v.table, v.keyer.key(coord));
+  const uint32_t cell = cell_find(v.table, v.keyer.key(rll_cell_coord(v, ctx, 0.5f, false)));
   return cell == CellTableView::kNone ? kNoCell : cell;
 }
 

@@ -46,7 +46,8 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
                         const RenderSettings& settings, int frames, const Image& reference,
                         const Image* reference_variance, const std::string& label,
                         bool show_progress, const std::atomic<bool>* cancel,
-                        const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
+                        const std::function<void(const RenderProgress&, const Film&)>& after_pass,
+                        const std::vector<Aov>& aovs) {
   reset_peak_rss();
   MeasuredRun out;
   const auto t0 = std::chrono::steady_clock::now();
@@ -72,6 +73,7 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
   rs.frame = frames - 1;
   ConvergenceRecorder recorder(reference, reference_variance);
   Film film(scene.width, scene.height);
+  if (!aovs.empty()) film.track_camera_vertex();
   const RenderProgress p = session.render(*sampler, film, rs, label, show_progress, cancel,
                                           [&](const RenderProgress& pr, const Film& f) {
                                             recorder.after_pass(pr, f);
@@ -84,6 +86,7 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
   }
   out.image = film.resolve();
   recorder.finish(p, out.image);
+  if (!aovs.empty()) out.aovs = resolve_aovs(film, *sampler, aovs);
 
   RunResult& run = out.result;
   run.sampler = name;

@@ -13,6 +13,7 @@
 
 #include "rll/core/image.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/render/aov.h"
 #include "rll/render/film.h"
 #include "rll/render/render.h"
 
@@ -73,18 +74,23 @@ class RenderSession;
 // making timed as setup), the frames before `frames - 1` rendered with the same budget so that a
 // learning sampler carries what it learnt, then the last frame rendered with relMSE checkpoints
 // against `reference` (its noise subtracted with `reference_variance`). Cancelled (`cancelled`
-// set, no result) when `cancel` is raised during any frame.
+// set, no result) when `cancel` is raised during any frame. With `aovs`, the last frame's film
+// keeps its camera vertices and `aovs` of the result holds those diagnostics (render/aov.h), as
+// `rll render --aov` measures them: the image is the same to the bit, the time includes the
+// measuring.
 struct MeasuredRun {
   RunResult result;
   Image image;
   std::unique_ptr<LightSampler> sampler;  // as the run left it (what it learnt)
+  std::vector<std::pair<std::string, std::vector<float>>> aovs;  // resolve_aovs' channels
   bool cancelled = false;
 };
 MeasuredRun measure_run(
     RenderSession& session, const std::string& name, int repeat, const RenderSettings& settings,
     int frames, const Image& reference, const Image* reference_variance, const std::string& label,
     bool show_progress, const std::atomic<bool>* cancel,
-    const std::function<void(const RenderProgress&, const Film&)>& after_pass = {});
+    const std::function<void(const RenderProgress&, const Film&)>& after_pass = {},
+    const std::vector<Aov>& aovs = {});
 
 // 1 / (relMSE x seconds); nullopt where undefined (zero error or zero time).
 std::optional<double> efficiency(double relmse, double seconds);

@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "rll/core/error.h"
 #include "rll/eval/encode.h"
 #include "rll/eval/metrics.h"
 #include "rll/eval/plot.h"
+#include "rll/render/aov.h"
 
 namespace rll {
 
@@ -65,7 +67,9 @@ std::string seconds_text(double s) {
 
 // The bar spans the figure's width with its end labels under its ends, on one line each: beside
 // the bar they would need room the column does not have (they wrapped, or ran into the next map).
-std::string colour_bar(float lo, float hi) {
+// The labels' ids are `id`-min and `id`-max.
+std::string colour_bar(float lo, float hi, const std::string& id = "scale",
+                       const std::string& note = "log scale") {
   const int n = 256;
   std::vector<uint8_t> px(size_t(n) * 3);
   for (int i = 0; i < n; ++i) {
@@ -75,10 +79,62 @@ std::string colour_bar(float lo, float hi) {
     px[3 * i + 2] = c.b;
   }
   return fmt::format(
-      "<div class=\"bar\"><img alt=\"colour scale\" src=\"{}\"><div class=\"bar-labels\"><span "
-      "id=\"scale-min\">{}</span><span class=\"bar-note\">log scale</span><span "
-      "id=\"scale-max\">{}</span></div></div>",
-      png_uri(png_bytes(px, n, 1, 3)), short_number(lo), short_number(hi));
+      "<div class=\"bar\"><img alt=\"colour scale\" src=\"{0}\"><div class=\"bar-labels\"><span "
+      "id=\"{3}-min\">{1}</span><span class=\"bar-note\">{4}</span><span "
+      "id=\"{3}-max\">{2}</span></div></div>",
+      png_uri(png_bytes(px, n, 1, 3)), short_number(lo), short_number(hi), id, note);
+}
+
+// How a diagnostic is coloured: on colour_scale from lo to hi, linearly or logarithmically, one
+// scale shared by every sampler's map of it (the cell ids get a colour each instead).
+struct AovScale {
+  float lo = 0, hi = 1;
+  bool log = false;
+};
+
+AovScale aov_scale(const Report& r, const std::string& channel) {
+  if (channel == "aov.visible") return {0, 1, false};  // a share
+  float hi = 0, least = std::numeric_limits<float>::infinity();
+  for (const ReportEntry& e : r.entries)
+    if (e.aovs)
+      for (const auto& [name, values] : *e.aovs)
+        if (name == channel)
+          for (float v : values)
+            if (std::isfinite(v)) {
+              hi = std::max(hi, v);
+              if (v > 0) least = std::min(least, v);
+            }
+  if (!(hi > 0)) hi = 1;
+  if (channel == "aov.entropy") return {0, hi, false};  // bits, from 0 (one cluster)
+  // Probabilities and reward counts span decades: over at most four of them.
+  float lo = std::max(least, hi * 1e-4f);
+  if (!(lo < hi)) lo = hi * 0.1f;
+  return {lo, hi, true};
+}
+
+// The grey of a pixel where a diagnostic measured nothing (NaN; no cell).
+constexpr Rgb8 kNothingMeasured{64, 64, 64};
+
+std::vector<uint8_t> aov_colours(const std::vector<float>& values, bool cells,
+                                 const AovScale& s) {
+  std::vector<uint8_t> rgb(3 * values.size());
+  const double log_lo = std::log(double(s.lo)), log_hi = std::log(double(s.hi));
+  for (size_t i = 0; i < values.size(); ++i) {
+    const float v = values[i];
+    Rgb8 c = kNothingMeasured;
+    if (cells && v >= 0) {
+      const Rgb f = cell_colour(v);
+      c = {uint8_t(f.x * 255 + 0.5f), uint8_t(f.y * 255 + 0.5f), uint8_t(f.z * 255 + 0.5f)};
+    } else if (!cells && std::isfinite(v)) {
+      const double t = s.log ? (v > 0 ? (std::log(double(v)) - log_lo) / (log_hi - log_lo) : 0)
+                             : (double(v) - s.lo) / (double(s.hi) - s.lo);
+      c = colour_scale(float(std::clamp(t, 0.0, 1.0)));
+    }
+    rgb[3 * i] = c.r;
+    rgb[3 * i + 1] = c.g;
+    rgb[3 * i + 2] = c.b;
+  }
+  return rgb;
 }
 
 // The clusters a cell's chart shows one by one; the others are summed in one row.
@@ -325,6 +381,10 @@ constexpr const char* kScript = R"JS(
     var d = JSON.parse(el.textContent);
     charts['image-' + d.entry] = d;
     charts['error-' + d.entry] = d;
+    canvases.forEach(function (c) {  // and its diagnostics: aov-<name>-<entry>
+      var m = /^aov-[a-z]+-(\d+)$/.exec(c.dataset.source);
+      if (m && Number(m[1]) === d.entry) charts[c.dataset.source] = d;
+    });
   });
   var chartBox = document.getElementById('cell-chart');
   var SVG = 'http://www.w3.org/2000/svg';
@@ -631,7 +691,7 @@ std::string report_html(const Report& r) {
     for (size_t i = 0; i < charted.size(); ++i)
       names += (i == 0 ? "" : i + 1 == charted.size() ? " or " : ", ") + escape_markup(charted[i]);
     s += "<h2>What the cells learnt</h2>\n<p class=\"note\">Click a pixel of the " + names +
-         " image (or its error map): the chart shows, for the cell that the pixel's first hit falls "
+         " image (or its error map or diagnostics): the chart shows, for the cell that the pixel's first hit falls "
          "in, the probability of each cluster of the cell's cut as its baked table holds it "
          "(learnt), as the light tree gives it there (the prior: the chance that a descent from "
          "the root reaches the cluster), and as the oracle gives it, when it ran; tree and oracle "
@@ -667,6 +727,56 @@ std::string report_html(const Report& r) {
   if (any_error) {
     s += "<h2>Relative error</h2>\n" + maps + "</div>\n";
   }
+
+  // The diagnostics, one row per kind: its legend in the reference's place, then each sampler's
+  // map of it, a view like the error maps (zoom, pan, flip with the reference).
+  std::string diagnostics;
+  for (const AovInfo& a : aov_list()) {
+    const std::string channel = std::string("aov.") + a.name;
+    std::string row;
+    for (size_t i = 0; i < r.entries.size(); ++i) {
+      const ReportEntry& e = r.entries[i];
+      if (!e.aovs) continue;
+      for (const auto& [name, values] : *e.aovs) {
+        // A map that measured nothing (a sampler without cells has no cell, entropy or rewards)
+        // is left out.
+        const bool measured = std::any_of(values.begin(), values.end(), [&](float v) {
+          return std::isfinite(v) && (a.kind != Aov::Cell || v >= 0);
+        });
+        if (name != channel || !measured) continue;
+        if (values.size() != size_t(w) * h)
+          fail("report: diagnostic {} of {} has {} values for {}x{} pixels", a.name, e.name,
+               values.size(), w, h);
+        const std::string id = fmt::format("aov-{}-{}", a.name, i);
+        row += figure(id, e.name, e.repeat_label, "");
+        data += fmt::format("<img alt=\"\" data-map=\"{}\" src=\"{}\">\n", id,
+                            png_uri(png_bytes(aov_colours(values, a.kind == Aov::Cell,
+                                                          aov_scale(r, channel)),
+                                              w, h, 3)));
+      }
+    }
+    if (row.empty()) continue;
+    std::string legend;
+    if (a.kind == Aov::Cell) {
+      legend = "<p class=\"note\">one colour per cell, neighbours unrelated; grey: no cell</p>";
+    } else {
+      const AovScale sc = aov_scale(r, channel);
+      legend = colour_bar(sc.lo, sc.hi, std::string("aov-") + a.name + "-scale",
+                          sc.log ? "log scale" : "linear") +
+               "<p class=\"note\">grey: nothing measured</p>";
+    }
+    diagnostics += fmt::format(
+        "<div class=\"grid\">\n<figure class=\"legend\" style=\"width:{}px\"><p><b>{}</b>: "
+        "{}</p>{}</figure>\n",
+        display_w, a.name, escape_markup(a.meaning), legend);
+    diagnostics += row + "</div>\n";
+  }
+  if (!diagnostics.empty())
+    s += "<h2>Diagnostics</h2>\n<p class=\"note\">Per pixel at the camera vertex (the first "
+         "surface a path hits), as <code>rll render --aov</code> measures them, in the runs of "
+         "the first repeat: flip a map with the reference to see where its structure lies in the "
+         "picture.</p>\n" +
+         diagnostics;
 
   if (!r.plot_svg.empty())
     s += "<h2>Convergence</h2>\n<div class=\"plot\">" + r.plot_svg + "</div>\n";

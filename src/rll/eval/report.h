@@ -2,9 +2,11 @@
 // CSS, JS and SVG) with the images side by side under an exposure slider, synchronized zoom and
 // pan, a flip of any view with the reference, false-colour relative-error maps, the table, the
 // samplers' parameters and setup times, the convergence plot (inline SVG, its points naming their
-// values on hover) and, for a learning sampler, the cell chart: clicking a pixel of its image
-// shows the learnt probabilities of the clusters of the cell there beside the light tree's and
-// the oracle's.
+// values on hover), the per-pixel diagnostics when compare measured them (`--aov`: the cell id in
+// false colour, the probability of the light chosen, the cell's entropy, the visible-sample ratio,
+// the rewards; each a view like the error maps, flippable with the reference) and, for a learning
+// sampler, the cell chart: clicking a pixel of its image (or its map or diagnostics) shows the
+// learnt probabilities of the clusters of the cell there beside the light tree's and the oracle's.
 //
 // Exposure: each image is embedded losslessly as RGBE (Ward's shared-exponent format) split into
 // two PNGs, one RGB with the mantissas and one grey with the exponents, which the page decodes
@@ -29,6 +31,9 @@ struct ReportEntry {
   const Image* image = nullptr;
   const std::vector<float>* error = nullptr;  // relative_error_map of the image, or null
   std::string repeat_label;  // which repeat the image is, e.g. "repeat 1 of 3, seed 1"; or empty
+  // The image's diagnostics (resolve_aovs in render/aov.h: channel "aov.<name>", one value a
+  // pixel), or null.
+  const std::vector<std::pair<std::string, std::vector<float>>>* aovs = nullptr;
 };
 
 // One sampler's setup, for the report's samplers section.

@@ -275,13 +275,15 @@ RLL_HD inline uint32_t float_bits(float x) {
 
 }  // namespace detail
 
-// Finds (or makes) the cell of the shading point: ctx.cell, kNoCell without a surface or where
-// the table is full. u drives the level of detail's rounding (and Fermat's per-sample jitter).
-RLL_HD inline void rll_prepare(const RllView& v, LightContext& ctx, float u) {
-  ctx.cell = kNoCell;
-  if (length_sq(ctx.n) == 0) return;
+// The cell coordinate of a shading point with a surface (ctx.n not zero): its position, normal
+// and level of detail (u drives the level's rounding), with Fermat's per-sample jitter (from
+// hashes of u) where `per_sample_jitter` and the view has one, and the direction bin of a glossy
+// point. rll_prepare finds its cell by this key; the report's cell chart (eval/cell_chart.cpp)
+// looks the same key up, so that both follow one rule.
+RLL_HD inline CellCoord rll_cell_coord(const RllView& v, const LightContext& ctx, float u,
+                                       bool per_sample_jitter = true) {
   CellCoord coord;
-  if (v.sample_jitter > 0) {
+  if (per_sample_jitter && v.sample_jitter > 0) {
     // This sample's own jitter, from hashes of u (the level's rounding uses u itself): a disk of
     // sample_jitter cell radii (half edges) and a quarter normal bin.
     const uint64_t h = mix64(uint64_t(detail::float_bits(u)) ^ 0x6a09e667f3bcc909ull);
@@ -295,6 +297,15 @@ RLL_HD inline void rll_prepare(const RllView& v, LightContext& ctx, float u) {
   }
   if (v.keyer.settings().direction_bins > 0 && ctx.glossy && length_sq(ctx.wo) > 0)
     coord.dir = v.keyer.direction_bin(ctx.wo);
+  return coord;
+}
+
+// Finds (or makes) the cell of the shading point: ctx.cell, kNoCell without a surface or where
+// the table is full. u drives the level of detail's rounding (and Fermat's per-sample jitter).
+RLL_HD inline void rll_prepare(const RllView& v, LightContext& ctx, float u) {
+  ctx.cell = kNoCell;
+  if (length_sq(ctx.n) == 0) return;
+  const CellCoord coord = rll_cell_coord(v, ctx, u);
   bool created = false;
   const uint32_t cell = cell_find_or_insert(v.table, v.keyer.key(coord), &created);
   if (cell == CellTableView::kNone) return;  // table full: no cell until eviction makes room

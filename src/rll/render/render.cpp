@@ -15,6 +15,10 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
+// How many samples a tile takes between two looks at the pass's stop (an atomic load, and a
+// clock read under a time budget): well under a millisecond of work on any scene we render, so
+// that a stop is seen at once while looking costs nothing measurable.
+constexpr int kSamplesPerStopCheck = 64;
 }  // namespace
 
 bool PassStop::operator()() const {
@@ -60,6 +64,9 @@ RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_p
     const int count = std::min(size, settings.spp - first);
     work(first, count, frame_seed, stop, progress.rays, progress.nonfinite);
     // A stopped pass leaves some pixels with fewer samples; the film's counts keep it unbiased.
+    // The sampler's end of pass still runs on it: the rewards it gathered are as valid as a whole
+    // pass's (the learning weighs rewards by their counts, never by the pass's size), and a state
+    // saved or returned after a Ctrl-C then holds everything the render saw.
     progress.passes += 1;
     progress.spp_done = int(film.min_count());
     progress.samples = progress.rays.camera;
@@ -98,9 +105,18 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
       RayCounters rays;
       uint64_t nonfinite = 0;
       const int x0 = int(tile % tiles_x) * ts, y0 = int(tile / tiles_x) * ts;
-      for (int y = y0; y < std::min(h, y0 + ts); ++y)
-        for (int x = x0; x < std::min(w, x0 + ts); ++x)
+      // `stop` is asked again every kSamplesPerStopCheck samples, so that a cancel (Ctrl-C) or
+      // the end of the time budget ends even a long pass's tile soon; the pixel it ends in keeps
+      // the samples it took (each pixel's first n, counted by the film).
+      bool stopped = false;
+      int unchecked = 0;
+      for (int y = y0; y < std::min(h, y0 + ts) && !stopped; ++y)
+        for (int x = x0; x < std::min(w, x0 + ts) && !stopped; ++x)
           for (int s = first; s < first + count; ++s) {
+            if (++unchecked == kSamplesPerStopCheck) {
+              unchecked = 0;
+              if ((stopped = stop())) break;
+            }
             SampleStream stream(frame_seed, uint64_t(y) * w + x,
                                 settings.first_sample + uint64_t(s), settings.points);
             CameraVertexSample vertex;

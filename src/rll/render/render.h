@@ -67,14 +67,18 @@ class PassStop {
 
 // What one pass of a renderer does: takes samples [first, first + count) of every pixel into the
 // film, each as the seeded stream of (frame_seed, pixel, settings.first_sample + sample) gives
-// them, checking `stop` often enough to end soon after it turns true, and adds up its rays and
-// dropped non-finite samples.
+// them, checking `stop` often enough to end soon after it turns true (within a pass: every 64
+// samples of a tile in the megakernel, every batch of path slots in the wavefront), and adds up
+// its rays and dropped non-finite samples. A stopped pass leaves each pixel its first n samples
+// of the pass, n possibly 0; the film counts them.
 using PassWork = std::function<void(int first, int count, uint64_t frame_seed, const PassStop& stop,
                                     RayCounters& rays, uint64_t& nonfinite)>;
 
 // The pass loop of every renderer (the megakernel's render() below, the wavefront's): pass sizes,
 // the spp and time budgets, cancel, `end_pass` (the sampler's) between passes, `after_pass` and
-// progress.
+// progress. A pass stopped by cancel or the time budget still gets its `end_pass` (its rewards
+// are learnt; the state after an interrupted render holds all it saw) and `after_pass`, then the
+// loop ends.
 RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_pass, Film& film,
                           const RenderSettings& settings, const std::atomic<bool>* cancel,
                           const std::function<void(const RenderProgress&, const Film&)>& after_pass,
