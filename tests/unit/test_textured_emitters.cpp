@@ -388,8 +388,8 @@ TEST(TexturedEmitters, StatedWattsAreEmitted) {
   for (const Case& c : cases) {
     Scene s = read_pbrt(dir, c.text);
     s.finalize();
-    const auto [flux, error] = flux_through_sphere(s, 40000);
+    const auto [flux, error] = flux_through_sphere(s, 400000);
     EXPECT_NEAR(flux, c.watts, 4.5 * error + 1e-4 * c.watts) << c.text << flux << " +- " << error;
-    EXPECT_LT(4.5 * error, 0.02 * c.watts) << c.text;  // the bound sees a 2% error
+    EXPECT_LT(4.5 * error, 0.03 * c.watts) << c.text;  // the bound sees a 3% error
   }
 }
