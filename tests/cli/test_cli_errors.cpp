@@ -127,6 +127,29 @@ TEST(CliErrors, NeeCandidates) {
 // rht's parameters are checked against their ranges, the error naming the key; rht draws several
 // samples per vertex, which the wavefront renderer and resampled NEE do not take: both refuse it
 // by name.
+// The learning samplers share their settings' code; an error names the sampler's own key, never
+// the other's (a bad fermat.alpha once said rll.alpha).
+TEST(CliErrors, LearningParametersNameTheirSampler) {
+  TempDir dir;
+  for (const char* sampler : {"rll", "fermat"}) {
+    const std::string p = sampler;
+    auto args = [&](const std::string& kv) {
+      return std::vector<std::string>{"builtin:cornell-box", "--res", "8x8", "--spp", "1",
+                                      "--sampler", p, "--set", p + "." + kv};
+    };
+    for (const char* kv : {"alpha=5", "alpha=0", "cut_size=1", "cut_size=5000", "initial_cut=0",
+                           "epsilon=0", "T=0.5", "splits=-1", "capacity=0"}) {
+      const std::string key = std::string(kv).substr(0, std::string(kv).find('='));
+      expect_render_error(dir, args(kv), {p + "." + key});
+      std::vector<std::string> again = {"render"};
+      for (const auto& x : args(kv)) again.push_back(x);
+      again.insert(again.end(), {"--quiet", "-o", (dir / "x.png").string()});
+      const std::string other = std::string(p == "rll" ? "fermat." : "rll.") + key;
+      EXPECT_EQ(run_rll(again).output.find(other), std::string::npos) << other;
+    }
+  }
+}
+
 TEST(CliErrors, RhtParameters) {
   TempDir dir;
   const std::vector<std::string> base = {"builtin:cornell-box", "--res", "8x8", "--spp", "1",

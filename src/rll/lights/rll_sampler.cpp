@@ -92,6 +92,20 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
     if (p.has(key("pool_up")) && s.cut.pool_up > 0) bad("pool_up", "needs pooling (pool > 0)");
     s.cut.pool_up = 0;
   }
+  // The cut store's ranges, checked here so that the error names this sampler's own key (a bad
+  // fermat.alpha says fermat.alpha); CutStore checks them again for callers of its own.
+  if (s.cut.cut_size < 2 || s.cut.cut_size > kMaxCutSize)
+    fail("--set {}: must be in [2, {}] (got {})", key("cut_size"), kMaxCutSize, s.cut.cut_size);
+  if (s.cut.initial_size < 1 || s.cut.initial_size > s.cut.cut_size)
+    fail("--set {}: must be in [1, {} = {}] (got {})", key("initial_cut"), key("cut_size"),
+         s.cut.cut_size, s.cut.initial_size);
+  if (!(s.cut.alpha > 0 && s.cut.alpha <= 1))
+    fail("--set {}: must be in (0, 1] (got {})", key("alpha"), s.cut.alpha);
+  if (!(s.cut.epsilon > 0 && s.cut.epsilon <= 1))
+    fail("--set {}: must be in (0, 1] (got {}): it keeps the estimator unbiased", key("epsilon"),
+         s.cut.epsilon);
+  if (!(s.cut.threshold >= 1)) fail("--set {}: must be at least 1 (got {})", key("T"), s.cut.threshold);
+  if (s.cut.splits < 0) fail("--set {}: must not be negative (got {})", key("splits"), s.cut.splits);
   if (!(s.cut.prior_samples > 0)) bad("prior_samples", "must be positive");
   if (!(s.grid.footprint_scale > 0)) bad("footprint_scale", "must be positive");
   if (!(s.grid.max_cell > 0 && s.grid.max_cell <= 1)) bad("max_cell", "must be in (0, 1]");
