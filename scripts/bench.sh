@@ -6,10 +6,11 @@
 # and the samplers' per-call costs. The `tree` of rll's first version (commit $V1_COMMIT, its
 # renderer: light sampling only, independent points, a Morton LBVH mixing sky and lamps) is
 # built once under build-v1/ and run beside the current samplers, on the same reference.
-# Rewrites bench/RESULTS.md; every report stays under out/bench/. Takes about 80 minutes on 2
+# Rewrites bench/RESULTS.md; every report stays under out/bench/. Takes about two hours on 2
 # cores; BENCH_QUICK=1 checks the pipeline in a few minutes (its figures mean nothing);
 # BENCH_V1=0 skips the first version; BENCH_RES, BENCH_SECONDS, BENCH_REF_DIRECT, BENCH_REF_PATH and
-# BENCH_REF_SAMPLER (default rll) override the resolution, the budget and the references.
+# BENCH_REF_SAMPLER (default rll) override the resolution, the budget and the references;
+# BENCH_SAMPLERS the equal-time comparisons' samplers.
 set -euo pipefail
 build=${1:-build}
 rll="$build/rll"
@@ -17,16 +18,18 @@ out=out/bench
 mkdir -p "$out"
 if [ "${BENCH_QUICK:-0}" = 1 ]; then
   res=96x72; seconds=2; repeats=1; ref_direct=64; ref_path=32; spp_direct=8; spp_path=4; frames=2
+  long_seconds=4
 else
   res=320x240; seconds=10; repeats=3; ref_direct=2048; ref_path=1024; spp_direct=64; spp_path=32; frames=3
+  long_seconds=120
 fi
 # BENCH_PARTS picks what runs (default: all of them); a part left out keeps its section of
 # RESULTS.md from the previous run, marked as not re-measured.
-parts=${BENCH_PARTS:-"equal-time equal-spp ablation seed-to-seed rays samplers"}
+parts=${BENCH_PARTS:-"equal-time ris long new-scenes equal-spp ablation seed-to-seed rays samplers"}
 want() { [[ " $parts " == *" $1 "* ]]; }
 ref_direct=${BENCH_REF_DIRECT:-$ref_direct}; ref_path=${BENCH_REF_PATH:-$ref_path}
 res=${BENCH_RES:-$res}; seconds=${BENCH_SECONDS:-$seconds}; ref_sampler=${BENCH_REF_SAMPLER:-rll}
-samplers=power,tree,fermat,ltc,rht,rll,oracle
+samplers=${BENCH_SAMPLERS:-power,tree,fermat,ltc,rht,rll,oracle}
 V1_COMMIT=a3cbdd4
 v1="build-v1/rll"
 if [ "${BENCH_V1:-1}" = 1 ] && [ ! -x "$v1" ]; then
@@ -41,7 +44,7 @@ fi
 # noise adds the same variance to every sampler's error and favours none; rll is used because,
 # at the same cost, its reference is the least noisy on the occluded scenes, which keeps the
 # ratios from being compressed towards 1 by reference noise.
-common=(--res "$res" --repeats "$repeats" --reference-sampler "$ref_sampler" --quiet)
+common=(--res "$res" --reference-sampler "$ref_sampler" --quiet)
 # BENCH_RESUME=1 keeps a comparison whose summary.json a run of this script already wrote (its
 # reference noise measured, every sampler asked for present): an interrupted suite goes on where
 # it stopped.
@@ -62,7 +65,7 @@ run() {  # name, then compare arguments
   local name=$1; shift
   if done_already "$name" "$@"; then echo "bench: $name (kept from the last run)"; return 0; fi
   echo "bench: $name"
-  "$rll" compare "$@" "${common[@]}" --out "$out/$name" > "$out/$name.txt" 2>&1 || { cat "$out/$name.txt"; exit 1; }
+  "$rll" compare "$@" "${common[@]}" --repeats "${RUN_REPEATS:-$repeats}" --out "$out/$name" > "$out/$name.txt" 2>&1 || { cat "$out/$name.txt"; exit 1; }
 }
 run_v1() {  # name of a finished comparison, then compare arguments: v1's tree on its reference
   local name=$1; shift
@@ -80,9 +83,27 @@ for scene in cornell-boxes-room arch-interior many-lights-open cornell-boxes-dyn
   run "$scene-path" builtin:$scene --integrator path --samplers $samplers --time $seconds --frames $f --reference-spp $ref_path
   run_v1 "$scene-path" builtin:$scene --integrator path --time $seconds --frames $f
   fi
+  # Resampled next-event estimation (docs/nee.md): tree and rll with and without four candidates
+  # (sampler variants carrying nee.candidates) beside rht, in one interleaved compare on the same
+  # cached reference. BENCH_RIS_SCENES limits it to some scenes (default: all four).
+  if want ris && [[ " ${BENCH_RIS_SCENES:-$scene} " == *" $scene "* ]]; then
+  ris=tree,tree:nee.candidates=4,rll,rll:nee.candidates=4,rht
+  run "$scene-direct-ris" builtin:$scene --integrator direct --samplers $ris --time $seconds --frames $f --reference-spp $ref_direct
+  run "$scene-path-ris" builtin:$scene --integrator path --samplers $ris --time $seconds --frames $f --reference-spp $ref_path
+  fi
   want equal-spp || continue
   run "$scene-direct-spp" builtin:$scene --integrator direct --samplers oracle,rll,tree,power --spp $spp_direct --frames $f --reference-spp $ref_direct
   run "$scene-path-spp" builtin:$scene --integrator path --samplers oracle,rll,tree,power --spp $spp_path --frames $f --reference-spp $ref_path
+done
+# Long renders: the study's winner (rht) against tree and rll over $long_seconds s per sampler, one
+# run each, path, on the two scenes where visibility matters most (the same cached references).
+want long && for scene in cornell-boxes-room arch-interior; do
+  RUN_REPEATS=1 run "long-$scene-path" builtin:$scene --integrator path --samplers tree,rht,rll --time $long_seconds --reference-spp $ref_path
+done
+# The scenes of issue 32: 102,400 spot lights in occluded rooms (spot-hall) and large textured
+# emitters beside small lamps (screen-hall), equal time, path.
+want new-scenes && for scene in spot-hall screen-hall; do
+  run "$scene-path" builtin:$scene --integrator path --samplers power,tree,ltc,rht,rll --time $seconds --reference-spp $ref_path
 done
 # Ablation: from the published RLL (`fermat`, docs/fermat.md) to rll's defaults, each row
 # adding one of rll's changes to the row above; the last row differs from rll's defaults only

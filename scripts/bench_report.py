@@ -13,11 +13,14 @@ out_dir, results, settings = sys.argv[1], sys.argv[2], sys.argv[3]
 # The parts this run measured; files of the others left in out_dir are an earlier run's.
 _parts = re.search(r"parts=(.*)$", settings)
 PARTS = _parts.group(1).split() if _parts else ["equal-time", "equal-spp", "ablation", "seed-to-seed", "rays", "samplers"]
-OWN = ["Headline", "Goals", "Per-sample noise of tree (seed to seed)", "Equal time", "Equal samples per pixel",
-       "Ablation", "Renderer ray rate", "Sampler costs", "How these figures were made"]
+OWN = ["Headline", "Goals", "Per-sample noise of tree (seed to seed)", "Equal time",
+       "Resampled next-event estimation at equal time", "Long renders", "The new scenes at equal time",
+       "Equal samples per pixel", "Ablation", "Renderer ray rate", "Sampler costs", "How these figures were made"]
 
 
-def load(name):
+def load(name, any_time=False):
+    """A comparison's summary.json, None where it did not run with this run's settings (any_time:
+    whatever its time budget, for the long renders)."""
     path = os.path.join(out_dir, name, "summary.json")
     if not os.path.exists(path):
         return None
@@ -31,7 +34,7 @@ def load(name):
     if res and j.get("resolution") != [int(res.group(1)), int(res.group(2))]:
         return None
     secs = re.search(r"seconds=([0-9.]+)", settings)
-    if secs and "time" in j.get("budget", {}) and abs(j["budget"]["time"] - float(secs.group(1))) > 1e-9:
+    if secs and not any_time and "time" in j.get("budget", {}) and abs(j["budget"]["time"] - float(secs.group(1))) > 1e-9:
         return None
     return j
 
@@ -64,6 +67,11 @@ def pixels(summary):
 
 def rate(summary, s):
     return med(s, "spp") * pixels(summary) / med(s, "seconds")
+
+
+def visible(s):
+    v = s.get("visible_sample_ratio")
+    return v["median"] if isinstance(v, dict) else None
 
 
 def trimmed(s):
@@ -128,12 +136,12 @@ except OSError:
 P("# Benchmark results\n")
 P(f"Measured on {date.today().isoformat()}, commit `{commit}`, {os.cpu_count()} cores ({cpu}), a shared "
   f"machine: figures are medians of interleaved repeats, and ratios within one run are the signal. "
-  f"Settings: `{settings}`. Regenerate with `make bench` (about an hour); every report (HTML, images, "
+  f"Settings: `{settings}`. Regenerate with `make bench` (about two hours on 2 cores); every report (HTML, images, "
   f"`summary.json`) is under `out/bench/`.\n")
 
 scenes = ["cornell-boxes-room", "arch-interior", "many-lights-open", "cornell-boxes-dynamic"]
 integrators = ["direct", "path"]
-order = ["power", "tree", "fermat", "ltc", "rll", "oracle"]
+order = ["power", "tree", "fermat", "ltc", "rht", "rll", "oracle"]
 
 # --- Headline and goals ------------------------------------------------------------------------
 P("## Headline\n")
@@ -142,9 +150,10 @@ P("relMSE at equal time (lower is better), median of the repeats, and rll's rati
   "independent points), run on the same reference: what the ratios of the first RESULTS were "
   "measured against. `fermat` is the published RLL (docs/fermat.md), `ltc` Wang et al. 2021 "
   "(docs/ltc.md). Where the reference was rendered as two halves, its noise is subtracted from "
-  "every error (`rll compare`).\n")
-P("| scene | integrator | power | tree (v1) | tree | fermat | ltc | rll | oracle | rll / ltc | rll / tree |")
-P("|---|---|---|---|---|---|---|---|---|---|---|")
+  "every error (`rll compare`). `rht` is the resampled hierarchical tree (docs/rht.md), the winner "
+  "of Kvasnica & Havran's study.\n")
+P("| scene | integrator | power | tree (v1) | tree | fermat | ltc | rht | rll | oracle | rll / rht | rll / ltc | rll / tree |")
+P("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 goal_rows = []
 for scene, integ, s in comparisons():
     b = by_name(s)
@@ -152,8 +161,10 @@ for scene, integ, s in comparisons():
     v1 = v1_tree(scene, integ)
     rl = r["rll"] / r["ltc"] if r["rll"] and r["ltc"] else None
     rt = r["rll"] / r["tree"] if r["rll"] and r["tree"] else None
+    rh = r["rll"] / r["rht"] if r["rll"] and r["rht"] else None
     P(f"| {scene} | {integ} | {fmt(r['power'])} | {fmt(med(v1, 'relmse') if v1 else None)} | {fmt(r['tree'])} | "
-      f"{fmt(r['fermat'])} | {fmt(r['ltc'])} | {fmt(r['rll'])} | {fmt(r['oracle'])} | {fmt(rl)} | {fmt(rt)} |")
+      f"{fmt(r['fermat'])} | {fmt(r['ltc'])} | {fmt(r['rht'])} | {fmt(r['rll'])} | {fmt(r['oracle'])} | {fmt(rh)} | "
+      f"{fmt(rl)} | {fmt(rt)} |")
     goal_rows.append((scene, integ, s, b, r))
 P("")
 
@@ -187,6 +198,48 @@ for scene, integ, s, b, r in goal_rows:
     if "power" in b:
         ratio = rate(s, b["rll"]) / rate(s, b["power"])
         goal(f"{scene}, {integ}: rll samples per second >= 85% of power's", f"{100 * ratio:.0f}%", ratio >= 0.85)
+
+
+def best_rll(scene, integ, b):
+    """rll's best default at this budget, with or without resampled NEE (the -ris comparison ran
+    rll with and without nee.candidates=4 on the same reference): (label, relMSE, trimmed)."""
+    best = ("rll", med(b["rll"], "relmse"), trimmed(b["rll"]))
+    ris = load(f"{scene}-{integ}-ris")
+    if ris and "rll:nee.candidates=4" in by_name(ris) and "rll" in by_name(ris):
+        # The ratio of the variants within their own run, applied to the plain rll above.
+        x = by_name(ris)
+        f = med(x["rll:nee.candidates=4"], "relmse") / med(x["rll"], "relmse")
+        ft = (trimmed(x["rll:nee.candidates=4"]) / trimmed(x["rll"])
+              if trimmed(x["rll"]) and trimmed(x["rll:nee.candidates=4"]) else None)
+        if f < 1:
+            best = ("rll+ris", best[1] * f, best[2] * ft if best[2] and ft else best[2])
+    return best
+
+
+# Issue 34's goals against rht: the best rll default at most this fraction of rht's.
+RHT_GOAL = {"cornell-boxes-room": 0.5, "cornell-boxes-dynamic": 0.5, "arch-interior": 0.5,
+            "many-lights-open": 1.0}
+for scene, integ, s, b, r in goal_rows:
+    if "rll" not in b or "rht" not in b:
+        continue
+    label, rel, tri = best_rll(scene, integ, b)
+    ratios = [rel / r["rht"]]
+    if tri and trimmed(b["rht"]):
+        ratios.append(tri / trimmed(b["rht"]))
+    goal(f"{scene}, {integ}, {s['budget'].get('time', '?'):g} s: best rll ({label}) relMSE and trimmed "
+         f"<= {RHT_GOAL[scene]:.2g}x rht's", " / ".join(f"{x:.2f}x" for x in ratios),
+         max(ratios) <= RHT_GOAL[scene])
+for scene in ("cornell-boxes-room", "arch-interior"):
+    s = load(f"long-{scene}-path", any_time=True)
+    if not s:
+        continue
+    b = by_name(s)
+    if "rll" in b and "rht" in b:
+        rr = [med(b["rll"], "relmse") / med(b["rht"], "relmse")]
+        if trimmed(b["rll"]) and trimmed(b["rht"]):
+            rr.append(trimmed(b["rll"]) / trimmed(b["rht"]))
+        goal(f"{scene}, path, {s['budget']['time']:g} s: rll relMSE and trimmed <= 0.5x rht's",
+             " / ".join(f"{x:.2f}x" for x in rr), max(rr) <= 0.5)
 for scene, integ, s in comparisons("-spp", ("cornell-boxes-room", "arch-interior")):
     r = {x["name"]: med(x, "relmse") for x in s["samplers"]}
     best_other = min(v for n, v in r.items() if n != "oracle")
@@ -241,8 +294,8 @@ for scene, integ, s, b, r in goal_rows:
     P(f"{budget}, {s['repeats']} repeat(s), {s['resolution'][0]}x{s['resolution'][1]}, "
       f"reference {s['reference'].get('spp', '?')} spp ({s['reference'].get('sampler', '?')})"
       + (f", {s.get('frames', 1)} frames (the last measured)" if s.get("frames", 1) > 1 else "") + ".\n")
-    P("| sampler | spp | samples/s | relMSE median [min, max] | trimmed relMSE | / power | / tree | / ltc | / oracle | memory |")
-    P("|---|---|---|---|---|---|---|---|---|---|")
+    P("| sampler | spp | samples/s | relMSE median [min, max] | trimmed relMSE | / power | / tree | / ltc | / rht | / oracle | visible | memory |")
+    P("|---|---|---|---|---|---|---|---|---|---|---|---|")
     v1 = v1_tree(scene, integ)
     rows = [(n, b[n]) for n in order if n in b]
     if v1:
@@ -252,9 +305,81 @@ for scene, integ, s, b, r in goal_rows:
         def ratio(other):
             return fmt(rel["median"] / r[other]) if r.get(other) else "—"
         P(f"| {n} | {med(x, 'spp'):.0f} | {rate(s, x) / 1e6:.2f} M | {fmt(rel['median'])} [{fmt(rel['min'])}, "
-          f"{fmt(rel['max'])}] | {fmt(trimmed(x))} | {ratio('power')} | {ratio('tree')} | {ratio('ltc')} | {ratio('oracle')} | "
-          f"{x['memory']['peak_rss_bytes'] / 2**20:.0f} MiB |")
+          f"{fmt(rel['max'])}] | {fmt(trimmed(x))} | {ratio('power')} | {ratio('tree')} | {ratio('ltc')} | {ratio('rht')} | "
+          f"{ratio('oracle')} | {fmt(visible(x))} | {x['memory']['peak_rss_bytes'] / 2**20:.0f} MiB |")
     P("")
+
+P("## Resampled next-event estimation at equal time\n")
+ris_rows = list(comparisons("-ris"))
+if not ris_rows:
+    keep_previous("Resampled next-event estimation at equal time")
+else:
+    P("`tree+ris` and `rll+ris`: tree and rll with four candidates (`tree:nee.candidates=4`; docs/nee.md: "
+      "four candidates from the sampler, resampled by their unshadowed contribution, one shadow ray) beside "
+      "plain tree, plain rll and rht, in one interleaved compare of its own on the same cached reference and "
+      "budget. relMSE medians; `/ plain` is relMSE and trimmed relMSE over the plain sampler's in the same "
+      "run.\n")
+    P("| scene | integrator | tree | tree+ris | / plain | rll | rll+ris | / plain | rht | best rll / rht |")
+    P("|---|---|---|---|---|---|---|---|---|---|")
+    for scene, integ, s in ris_rows:
+        b = by_name(s)
+        cells = []
+        for n in ("tree", "rll"):
+            x, y = b.get(n), b.get(n + ":nee.candidates=4")
+            if not x or not y:
+                cells += [fmt(med(x, "relmse")) if x else "—", fmt(med(y, "relmse")) if y else "—", "—"]
+                continue
+            t = trimmed(y) / trimmed(x) if trimmed(x) and trimmed(y) else None
+            cells += [fmt(med(x, "relmse")), fmt(med(y, "relmse")),
+                      f"{fmt(med(y, 'relmse') / med(x, 'relmse'))}; {fmt(t)}"]
+        rllv = [med(b[n], "relmse") for n in ("rll", "rll:nee.candidates=4") if n in b]
+        rht = med(b["rht"], "relmse") if "rht" in b else None
+        P(f"| {scene} | {integ} | " + " | ".join(cells) + f" | {fmt(rht)} | "
+          f"{fmt(min(rllv) / rht) if rllv and rht else '—'} |")
+    P("")
+
+P("## Long renders\n")
+long_rows = [(sc, load(f"long-{sc}-path", any_time=True)) for sc in ("cornell-boxes-room", "arch-interior")]
+long_rows = [(sc, s) for sc, s in long_rows if s]
+if not long_rows:
+    keep_previous("Long renders")
+else:
+    P("One run per sampler of the budget below, path, on the equal-time table's cached reference (its "
+      "noise subtracted): whether rht catches up with rll when both have long.\n")
+    P("| scene | seconds | sampler | spp | relMSE | trimmed relMSE | / tree | / rht | visible |")
+    P("|---|---|---|---|---|---|---|---|---|")
+    for scene, s in long_rows:
+        b = by_name(s)
+        for n in ("tree", "rht", "rll"):
+            if n not in b:
+                continue
+            x = b[n]
+            rel = med(x, "relmse")
+            P(f"| {scene} | {s['budget']['time']:g} | {n} | {med(x, 'spp'):.0f} | {fmt(rel)} | {fmt(trimmed(x))} | "
+              f"{fmt(rel / med(b['tree'], 'relmse')) if 'tree' in b else '—'} | "
+              f"{fmt(rel / med(b['rht'], 'relmse')) if 'rht' in b else '—'} | {fmt(visible(x))} |")
+    P("")
+
+P("## The new scenes at equal time\n")
+new_rows = [(sc, ig, load(f"{sc}-{ig}")) for sc in ("spot-hall", "screen-hall") for ig in integrators]
+new_rows = [(sc, ig, s) for sc, ig, s in new_rows if s]
+if not new_rows:
+    keep_previous("The new scenes at equal time")
+else:
+    P("The built-in scenes of issue 32 (docs/scenes.md), equal time as above.\n")
+    for scene, integ, s in new_rows:
+        b = by_name(s)
+        P(f"### {scene}, {integ}\n")
+        P(f"{s['budget']['time']:g} s per run, {s['repeats']} repeat(s), {s['resolution'][0]}x{s['resolution'][1]}, "
+          f"{s.get('lights', '?')} lights, reference {s['reference'].get('spp', '?')} spp ({s['reference'].get('sampler', '?')}).\n")
+        P("| sampler | spp | relMSE median [min, max] | trimmed relMSE | / tree | visible | memory |")
+        P("|---|---|---|---|---|---|---|")
+        for x in s["samplers"]:
+            rel = x["relmse"]
+            P(f"| {x['name']} | {med(x, 'spp'):.0f} | {fmt(rel['median'])} [{fmt(rel['min'])}, {fmt(rel['max'])}] | "
+              f"{fmt(trimmed(x))} | {fmt(rel['median'] / med(b['tree'], 'relmse')) if 'tree' in b else '—'} | "
+              f"{fmt(visible(x))} | {x['memory']['peak_rss_bytes'] / 2**20:.0f} MiB |")
+        P("")
 
 P("## Equal samples per pixel\n")
 spp_rows = list(comparisons("-spp"))
