@@ -366,7 +366,9 @@ new_rows = [(sc, ig, s) for sc, ig, s in new_rows if s]
 if not new_rows:
     keep_previous("The new scenes at equal time")
 else:
-    P("The built-in scenes of issue 32 (docs/scenes.md), equal time as above.\n")
+    P("The built-in scenes of issue 32 (README, \"Built-in scenes\"): `spot-hall`, 102,400 spot lights in 16x16 "
+      "occluded rooms, and `screen-hall`, three large textured emitters (split into 8,333 lights of nearly "
+      "equal power) beside 12 small lamps; equal time as above, path.\n")
     for scene, integ, s in new_rows:
         b = by_name(s)
         P(f"### {scene}, {integ}\n")
@@ -380,6 +382,8 @@ else:
               f"{fmt(trimmed(x))} | {fmt(rel['median'] / med(b['tree'], 'relmse')) if 'tree' in b else '—'} | "
               f"{fmt(visible(x))} | {x['memory']['peak_rss_bytes'] / 2**20:.0f} MiB |")
         P("")
+        if os.path.exists(os.path.join("docs", "images", f"compare-{scene}.png")):
+            P(f"![{scene}: every sampler's first repeat and the reference](../docs/images/compare-{scene}.png)\n")
 
 P("## Equal samples per pixel\n")
 spp_rows = list(comparisons("-spp"))
