@@ -67,8 +67,9 @@ struct CutScratchArena {
   View<float> f;   // kFloats per cluster of room in all
 
   RLL_HD CutScratch slice(uint64_t offset, uint32_t room) const {
-    double* d0 = &d[size_t(offset) * kDoubles];
-    float* f0 = &f[size_t(offset) * kFloats];
+    // Pointer arithmetic, not &d[i]: an empty arena (room 0) has no element to bind to.
+    double* d0 = d.data + size_t(offset) * kDoubles;
+    float* f0 = f.data + size_t(offset) * kFloats;
     return {d0, d0 + room, f0, f0 + room, f0 + 2 * size_t(room)};
   }
 };
