@@ -4,7 +4,8 @@
 #include <gtest/gtest.h>
 
 #include "rll/core/rng.h"
-#include "rll/learn/cuts.h"
+#include "rll/learn/cut_store.h"
+#include "rll/learn/split_collapse.h"
 #include "rll/scene/builtin.h"
 #include "support/test_support.h"
 

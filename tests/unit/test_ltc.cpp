@@ -9,7 +9,7 @@
 #include "rll/core/error.h"
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
-#include "rll/learn/cuts.h"
+#include "rll/learn/cut.h"
 #include "rll/lights/ltc_sampler.h"
 #include "rll/scene/builtin.h"
 #include "support/test_support.h"

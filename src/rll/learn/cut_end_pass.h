@@ -12,7 +12,9 @@
 #include <cstdint>
 
 #include "rll/core/device.h"
-#include "rll/learn/cuts.h"
+#include "rll/learn/cut_store.h"
+#include "rll/learn/moments.h"
+#include "rll/learn/split_collapse.h"
 
 namespace rll {
 

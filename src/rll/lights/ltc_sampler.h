@@ -56,7 +56,8 @@
 #include <memory>
 #include <vector>
 
-#include "rll/learn/cuts.h"
+#include "rll/learn/cut.h"
+#include "rll/learn/moments.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/lights/tree_sampler.h"
 

@@ -10,7 +10,8 @@
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
 #include "rll/core/sampling.h"
-#include "rll/learn/cuts.h"
+#include "rll/learn/cut_store.h"
+#include "rll/learn/split_collapse.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/lights/tree_sampler.h"
 #include "rll/scene/interaction.h"
@@ -157,18 +158,12 @@ void OracleLightSampler::precompute(const Scene& scene) {
       std::vector<float> q(nodes.size());
       for (size_t k = 0; k < nodes.size(); ++k) q[k] = float(estimate(scene, accel, nodes[k], pts, s.rays, rng, traced));
       for (int step = 0; step < s.refine; ++step) {
-        long best = -1;
-        for (size_t k = 0; k < nodes.size(); ++k)
-          if (!tree.node(nodes[k]).is_leaf() && (best < 0 || q[k] > q[best])) best = long(k);
+        // The learnt cuts' choice (split_collapse.h) with score = value = the estimate and T = 1;
+        // the children of a split are estimated, not shared.
+        long best = split_choice(tree.view(), nodes.size(), nodes.data(), q.data());
         if (best < 0) break;
         if (int(nodes.size()) >= M) {
-          long pmin = -1;
-          for (size_t k = 0; k + 1 < nodes.size(); ++k) {
-            if (long(k) == best || long(k + 1) == best) continue;
-            const LightTreeNode& a = tree.node(nodes[k]);
-            if (a.parent == LightTree::kNone || tree.node(a.parent).child != nodes[k] || nodes[k + 1] != nodes[k] + 1) continue;
-            if (pmin < 0 || q[k] + q[k + 1] < q[pmin] + q[pmin + 1]) pmin = long(k);
-          }
+          const long pmin = collapse_choice(tree.view(), nodes.size(), nodes.data(), q.data(), best);
           if (pmin < 0 || !(q[best] > q[pmin] + q[pmin + 1])) break;
           nodes[pmin] = tree.node(nodes[pmin]).parent;
           q[pmin] += q[pmin + 1];

@@ -21,131 +21,6 @@
 
 namespace rll {
 
-RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSettings s) {
-  auto key = [&](const char* k) { return prefix + "." + k; };
-  auto bad = [&](const char* k, const char* what) { fail("--set {}: {}", key(k), what); };
-  // The initial cut follows the cut size unless the base starts smaller.
-  const bool initial_is_whole = s.cut.initial_size == s.cut.cut_size;
-  s.cut.cut_size = int(p.get_int(key("cut_size"), s.cut.cut_size));
-  s.cut.initial_size =
-      int(p.get_int(key("initial_cut"), initial_is_whole ? s.cut.cut_size : s.cut.initial_size));
-  auto choice = [&](const char* k, int current, std::vector<std::string> names) {
-    return int(
-        std::find(names.begin(), names.end(), p.get_choice(key(k), names[size_t(current)], names)) -
-        names.begin());
-  };
-  s.cut.target = LearnTarget(choice("target", int(s.cut.target), {"moment", "mean"}));
-  s.cut.alpha = p.get_float(key("alpha"), s.cut.alpha);
-  s.cut.threshold = p.get_float(key("T"), s.cut.threshold);
-  s.cut.splits = int(p.get_int(key("splits"), s.cut.splits));
-  s.cut.epsilon = p.get_float(key("epsilon"), s.cut.epsilon);
-  s.cut.prior =
-      ClusterWeight(choice("prior", int(s.cut.prior), {"importance", "power", "uniform"}));
-  s.cut.split =
-      ClusterWeight(choice("split_by", int(s.cut.split), {"importance", "power", "uniform"}));
-  s.cut.q_init = p.get_float(key("q_init"), s.cut.q_init);
-  s.within = WithinCluster(choice("within", int(s.within), {"uniform", "power", "tree", "hybrid"}));
-  s.descend_above = uint32_t(p.get_int_in(key("descend_above"), s.descend_above, 1, 1l << 30));
-  s.defensive = Defensive(choice("defensive", int(s.defensive), {"cell", "tree"}));
-  s.cut.prior_in_cdf = s.defensive == Defensive::Cell;
-  s.reward = RewardKind(choice("reward", int(s.reward), {"cluster", "fullpdf", "fermat"}));
-  s.capacity = uint32_t(p.get_int_in(key("capacity"), s.capacity, 1, 1l << 24));
-  s.grid.footprint_scale = p.get_float(key("footprint_scale"), s.grid.footprint_scale);
-  s.grid.max_cell = p.get_float(key("max_cell"), s.grid.max_cell);
-  s.grid.normal_bins = int(p.get_int(key("normal_bins"), s.grid.normal_bins));
-  s.grid.jitter = p.get_float(key("jitter"), s.grid.jitter);
-  s.grid.direction_bins = int(p.get_int_in(key("direction_bins"), s.grid.direction_bins, 0, 16));
-  s.grid.level_rounding = CellGridSettings::LevelRounding(
-      choice("level_rounding", int(s.grid.level_rounding), {"stochastic", "nearest"}));
-  s.cut.rule = LearningRule(choice("learning", int(s.cut.rule), {"shrinkage", "exponential"}));
-  s.cut.prior_samples = p.get_float(key("prior_samples"), s.cut.prior_samples);
-  s.cut.forget = Forgetting(choice("forget", int(s.cut.forget), {"changes", "floor"}));
-  s.cut.change_z = p.get_float(key("change_z"), s.cut.change_z);
-  if (!(s.cut.change_z >= 0 && s.cut.change_z <= 1000))
-    bad("change_z", "must be in [0, 1000] (0: no change test)");
-  s.cut.trust = p.get_float(key("trust"), s.cut.trust);
-  s.cut.pool_levels = int(p.get_int_in(key("pool"), s.cut.pool_levels, 0, 8));
-  s.cut.pool_weight = p.get_float(key("pool_weight"), s.cut.pool_weight);
-  if (!(s.cut.pool_weight >= 0) || !std::isfinite(s.cut.pool_weight))
-    bad("pool_weight", "must be >= 0");
-  s.cut.pool_ratio = choice("pool_guess", s.cut.pool_ratio ? 1 : 0, {"share", "ratio"}) == 1;
-  s.cut.pool_up = int(p.get_int_in(key("pool_up"), s.cut.pool_up, 0, 8));
-  s.cold_uniform = choice("cold", s.cold_uniform ? 1 : 0, {"tree", "uniform"}) == 1;
-  s.sample_jitter = p.get_float(key("sample_jitter"), s.sample_jitter);
-  s.reset_every = uint32_t(p.get_int_in(key("reset_every"), s.reset_every, 0, 1l << 30));
-  s.cut.guided = choice("sampling", s.cut.guided ? 1 : 0, {"table", "guided"}) == 1;
-  if (s.cut.guided) {
-    if (s.defensive != Defensive::Cell)
-      bad("sampling", "guided needs defensive=cell (its factors hold the defensive term)");
-    if (s.reward != RewardKind::Cluster) bad("sampling", "guided needs reward=cluster");
-    if (s.cold_uniform) bad("sampling", "guided needs cold=tree");
-  }
-  if (!(s.cut.trust >= 0)) bad("trust", "must not be negative");
-  // Pooling needs the cut every cell shares: with growing cuts or the guided descent it is off
-  // unless asked for (then an error).
-  if (s.cut.pool_levels > 0 && (s.cut.splits > 0 || s.cut.guided)) {
-    if (p.has(key("pool")))
-      bad("pool", "needs splits=0 and sampling=table (a cut every cell shares)");
-    s.cut.pool_levels = 0;
-  }
-  if (s.cut.pool_levels == 0) {
-    if (p.has(key("pool_up")) && s.cut.pool_up > 0) bad("pool_up", "needs pooling (pool > 0)");
-    s.cut.pool_up = 0;
-  }
-  // The cut store's ranges, checked here so that the error names this sampler's own key (a bad
-  // fermat.alpha says fermat.alpha); CutStore checks them again for callers of its own.
-  if (s.cut.cut_size < 2 || s.cut.cut_size > kMaxCutSize)
-    fail("--set {}: must be in [2, {}] (got {})", key("cut_size"), kMaxCutSize, s.cut.cut_size);
-  if (s.cut.initial_size < 1 || s.cut.initial_size > s.cut.cut_size)
-    fail("--set {}: must be in [1, {} = {}] (got {})", key("initial_cut"), key("cut_size"),
-         s.cut.cut_size, s.cut.initial_size);
-  if (!(s.cut.alpha > 0 && s.cut.alpha <= 1))
-    fail("--set {}: must be in (0, 1] (got {})", key("alpha"), s.cut.alpha);
-  if (!(s.cut.epsilon > 0 && s.cut.epsilon <= 1))
-    fail("--set {}: must be in (0, 1] (got {}): it keeps the estimator unbiased", key("epsilon"),
-         s.cut.epsilon);
-  if (!(s.cut.threshold >= 1)) fail("--set {}: must be at least 1 (got {})", key("T"), s.cut.threshold);
-  if (s.cut.splits < 0) fail("--set {}: must not be negative (got {})", key("splits"), s.cut.splits);
-  if (!(s.cut.prior_samples > 0)) bad("prior_samples", "must be positive");
-  if (!(s.grid.footprint_scale > 0)) bad("footprint_scale", "must be positive");
-  if (!(s.grid.max_cell > 0 && s.grid.max_cell <= 1)) bad("max_cell", "must be in (0, 1]");
-  if (s.grid.normal_bins < 1 || s.grid.normal_bins > 64) bad("normal_bins", "must be in [1, 64]");
-  if (!(s.grid.jitter >= 0 && s.grid.jitter <= 1)) bad("jitter", "must be in [0, 1]");
-  if (!(s.sample_jitter >= 0 && s.sample_jitter <= 4)) bad("sample_jitter", "must be in [0, 4]");
-  if (!((s.cut.q_init >= 0 && std::isfinite(s.cut.q_init)) || s.cut.q_init == -1))
-    bad("q_init", "must be >= 0 (or -1: the visited clusters' estimate)");
-  if (s.cold_uniform && s.defensive == Defensive::Tree) bad("cold", "uniform needs defensive=cell");
-  return s;
-}
-
-RllSettings fermat_settings() {
-  RllSettings s;
-  s.name = "fermat";
-  s.cut.cut_size = s.cut.initial_size = 256;  // initial_cut() splits the node with most lights
-  s.cut.target = LearnTarget::Mean;
-  s.cut.rule = LearningRule::Exponential;
-  s.cut.alpha = 0.05f;
-  s.cut.threshold = 1;
-  s.cut.splits = 1;
-  s.cut.epsilon = 0.75f;  // P(s) = 0.75 / K + 0.25 Q(s) / sum Q from the first reward on
-  s.cut.trust = 0;
-  s.cut.pool_levels = 0;
-  s.cut.pool_up = 0;
-  s.cut.prior = ClusterWeight::Uniform;
-  s.cut.split = ClusterWeight::Uniform;
-  s.cut.q_init = 0.01f;
-  s.within = WithinCluster::Power;  // for uniform among equal-energy virtual lights
-  s.reward = RewardKind::Fermat;
-  s.defensive = Defensive::Cell;
-  s.cold_uniform = true;
-  s.grid.footprint_scale = 32;  // cell radius min(32 R, 0.05 scene size)
-  s.grid.max_cell = 0.05f;
-  s.grid.level_rounding = CellGridSettings::LevelRounding::Stochastic;  // DESIGN 2, as PEERS says
-  s.sample_jitter = 1.5f;
-  s.reset_every = 32;
-  return s;
-}
-
 namespace {
 void check_memory(const RllSettings& s) {
   // The cell table, the cuts and the point sums, allocated up front, and the end of pass's
@@ -172,7 +47,7 @@ RllLightSampler::RllLightSampler(const Scene& scene, const RllSettings& s)
   m_table = std::make_unique<CellTable>(s.capacity);
   // Guided: the rewards are ratios to the tree's importance, of the order of a reflectance.
   m_cuts = std::make_unique<CutStore>(m_tree, s.capacity, s.cut,
-                                      s.cut.guided ? 1.0 : reward_scale(scene));
+                                      s.cut.guided ? 1.0 : reward_scale(scene), s.name);
   m_last_used.assign(s.capacity, 0);
   m_points.assign(size_t(s.capacity) * kPointWords, 0);
   m_origin = scene.bounds.lo;

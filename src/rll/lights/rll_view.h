@@ -13,7 +13,7 @@
 #include "rll/core/hash.h"
 #include "rll/core/sampling.h"
 #include "rll/learn/cell_grid.h"
-#include "rll/learn/cuts.h"
+#include "rll/learn/cut_store.h"
 #include "rll/lights/sampler_view.h"
 #include "rll/lighttree/descent.h"
 

@@ -1,90 +1,20 @@
-#include "rll/learn/cuts.h"
+#include "rll/learn/cut_store.h"
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
 
 #include "rll/core/error.h"
 #include "rll/learn/cut_end_pass.h"
-#include "rll/scene/scene.h"
+#include "rll/learn/cut_params.h"
 
 namespace rll {
 
-std::vector<uint32_t> refine_cut(const LightTree& tree, int size,
-                                 double (*priority)(const LightTree&, uint32_t)) {
-  // Max-heap by priority; ties by node id for determinism.
-  auto cmp = [&](uint32_t a, uint32_t b) {
-    const double pa = priority(tree, a), pb = priority(tree, b);
-    return pa != pb ? pa < pb : a > b;
-  };
-  std::priority_queue<uint32_t, std::vector<uint32_t>, decltype(cmp)> heap(cmp);
-  std::vector<uint32_t> done;
-  heap.push(LightTree::kRoot);
-  while (!heap.empty() && int(heap.size() + done.size()) < size) {
-    uint32_t n = heap.top();
-    heap.pop();
-    if (tree.node(n).is_leaf()) {
-      done.push_back(n);
-      continue;
-    }
-    heap.push(tree.node(n).child);
-    heap.push(tree.node(n).child + 1);
-  }
-  for (; !heap.empty(); heap.pop()) done.push_back(heap.top());
-  std::sort(done.begin(), done.end(),
-            [&](uint32_t a, uint32_t b) { return tree.node(a).begin < tree.node(b).begin; });
-  return done;
-}
-
-std::vector<uint32_t> initial_cut(const LightTree& tree, int cut_size) {
-  return refine_cut(tree, cut_size,
-                    [](const LightTree& t, uint32_t n) { return double(t.node(n).light_count()); });
-}
-
-double reward_scale(const Scene& scene) {
-  double s = 0;
-  for (const auto& l : scene.lights) {
-    double lum = luminance(l.radiance);
-    switch (l.type) {
-      case LightType::Triangle:
-        s = std::max(s, kPi * lum * (l.two_sided ? 2 : 1));
-        break;
-      case LightType::Point:
-      case LightType::Spot:
-      case LightType::Goniometric:
-      case LightType::Projection:
-        s = std::max(s, 4 * kPi * lum / double(scene.radius * scene.radius));
-        break;
-      case LightType::Directional:
-        s = std::max(s, kPi * lum);
-        break;
-    }
-  }
-  return s > 0 ? s : 1.0;
-}
-
-bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes) {
-  uint32_t next = 0;
-  for (uint32_t n : nodes) {
-    if (n >= tree.node_count() || tree.node(n).begin != next) return false;
-    next = tree.node(n).end;
-  }
-  return next == tree.light_count() && !nodes.empty();
-}
-
 // --- CutStore -----------------------------------------------------------------------------------
 
-CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, double reward_scale)
+CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, double reward_scale,
+                   const std::string& prefix)
     : m_tree(tree), m_s(s), m_m(s.cut_size) {
-  if (m_m < 2 || m_m > kMaxCutSize)
-    fail("rll.cut_size must be in [2, {}] (got {})", kMaxCutSize, m_m);
-  if (s.initial_size < 1 || s.initial_size > m_m)
-    fail("rll.initial_cut must be in [1, rll.cut_size = {}] (got {})", m_m, s.initial_size);
-  if (!(s.alpha > 0 && s.alpha <= 1)) fail("rll.alpha must be in (0, 1] (got {})", s.alpha);
-  if (!(s.epsilon > 0 && s.epsilon <= 1))
-    fail("rll.epsilon must be in (0, 1] (got {}): it keeps the estimator unbiased", s.epsilon);
-  if (!(s.threshold >= 1)) fail("rll.T must be at least 1 (got {})", s.threshold);
-  if (s.splits < 0) fail("rll.splits must not be negative (got {})", s.splits);
+  check_cut_settings(s, prefix);
   // The accumulators' unit: the brightest light's largest irradiance (ExactSum spans 2^-40 to
   // 2^36 of it).
   m_scale = std::max(reward_scale, 1e-30);
@@ -102,8 +32,6 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   m_weight.assign(n, 0.0f);
   m_cdf.assign(n, 0.0f);
   if (s.guided) {
-    if (s.splits > 0)
-      fail("rll.splits needs rll.sampling=table (the guided descent keeps its cut)");
     m_gl.assign(n, 1.0f);
     m_gr.assign(n, 1.0f);
   }
@@ -112,8 +40,6 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   m_eps.assign(cells, 1.0f);
   m_anchor.assign(cells, CellAnchor{});
   if (s.pool_levels > 0) {
-    if (s.splits > 0) fail("rll.pool needs rll.splits=0 (every cell keeps the shared cut)");
-    if (s.guided) fail("rll.pool needs rll.sampling=table");
     m_pool.assign(n, 0.0f);
     m_has_pool.assign(cells, 0);
   }

@@ -1,0 +1,115 @@
+// The rewards of a cluster and what the learning makes of them: exact sums of a pass
+// (ExactSum), the pass's moments (RewardMoments), the shrinkage rule that folds them into the
+// learnt mean and second moment with its forgetting (shrinkage_fold, reward_changed,
+// shrinkage_update), and pooling's shrinkage of a cell's values toward a coarse distribution
+// (shrink_toward). Every function here runs on either device (RLL_HD).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "rll/core/device.h"
+#include "rll/learn/cut_settings.h"
+
+namespace rll {
+
+// A sum of non-negative values that is exact and independent of the order of additions, over a
+// wide range: values are fixed point with 2^-40 of the unit per step, up to 2^36 units (larger
+// values saturate), held in two 64-bit words (units of 2^-8 and 2^-40) so that 2^19 saturated
+// values or 2^31 ordinary ones fit in a pass. Resolution and range together span 2^76 (1e23).
+struct ExactSum {
+  static constexpr double kMax = 0x1p36;
+  // Signed 64-bit words in two's complement, added with core/device.h's atomic_add (DESIGN 6).
+  uint64_t hi = 0, lo = 0;
+  RLL_HD void add(double x) {  // x: the value in units of scale, >= 0
+    x = std::min(x, double(kMax));
+    double h = std::floor(x * 0x1p8);
+    atomic_add(&hi, uint64_t(int64_t(h)));
+    atomic_add(&lo, uint64_t(int64_t((x * 0x1p8 - h) * 0x1p32 + 0.5)));
+  }
+  RLL_HD double value() const {
+    return double(int64_t(atomic_load(&hi))) * 0x1p-8 + double(int64_t(atomic_load(&lo))) * 0x1p-40;
+  }
+  RLL_HD void reset() { hi = lo = 0; }  // between passes
+};
+
+// A pass's rewards of a cluster, n of them with absolute sum `sum` and sum of squares `sq`: their
+// mean and second moment (E[r^2] >= E[r]^2 also where squares fell below the sums' resolution).
+struct RewardMoments {
+  double mean, mean2;
+  RLL_HD RewardMoments(double n, double sum, double sq)
+      : mean(sum / n), mean2(std::max(sq / n, mean * mean)) {}
+};
+
+// The shrinkage rule (LearningRule::Shrinkage) for one cluster: values old_q and old_m2, held
+// with the weight of w rewards, and n new rewards of moments r give the weighted means; the
+// weight becomes w + n, at most cap.
+RLL_HD inline void shrinkage_fold(float& q, float& m2, float& weight, double w, double old_q,
+                                  double old_m2, double n, const RewardMoments& r, double cap) {
+  q = float((w * old_q + n * r.mean) / (w + n));
+  m2 = float((w * old_m2 + n * r.mean2) / (w + n));
+  weight = float(std::min(w + n, cap));
+}
+
+// The change test of forget=changes: true if n new rewards of moments r differ in mean from
+// old_q (held with the weight of w rewards, second moment old_m2) by more than z standard errors
+// of the difference. The variance is the larger of the old rewards' and the new ones', so that a
+// rare bright reward among zeros (a cluster seen through a gap) does not count as a change, and
+// a lamp switching off (new rewards all zero) or on (old ones all zero) does; a relative slack
+// of 1e-4 absorbs the rounding of rewards that never vary.
+RLL_HD inline bool reward_changed(double old_q, double old_m2, double w, double n,
+                                  const RewardMoments& r, double z) {
+  const double var = std::max(std::max(old_m2 - old_q * old_q, r.mean2 - r.mean * r.mean), 0.0);
+  const double se = std::sqrt(var * (1 / n + 1 / std::max(w, 1.0)));
+  return std::abs(r.mean - old_q) > z * se + 1e-4 * (std::abs(old_q) + std::abs(r.mean));
+}
+
+// One cluster's fold under the shrinkage rule as CutSettings say: the weight w of the past (the
+// cluster's own n if `visited`, else the prior's weight) capped at 1/alpha under forget=floor, or
+// where forget=changes finds a change; true if it found one.
+RLL_HD inline bool shrinkage_update(const CutSettings& s, float& q, float& m2, float& weight,
+                                    double w, bool visited, double old_q, double old_m2, double n,
+                                    const RewardMoments& r) {
+  const double floor_cap = 1.0 / s.alpha;
+  if (s.forget == Forgetting::Floor) {
+    shrinkage_fold(q, m2, weight, visited ? std::min(w, floor_cap) : w, old_q, old_m2, n, r,
+                   floor_cap);
+    return false;
+  }
+  const bool changed = visited && s.change_z > 0 && w > floor_cap &&
+                       reward_changed(old_q, old_m2, w, n, r, s.change_z);
+  shrinkage_fold(q, m2, weight, changed ? floor_cap : w, old_q, old_m2, n, r, 1e30);
+  return changed;
+}
+
+// Pooling: shrinks K values, each held with the weight of n[k] rewards (visited[k] false: none,
+// and the value is ignored), toward a distribution `shares` scaled to what the visited values say
+// the total is (their sum over their shares, the shares' sum taken as at least a quarter, so that
+// one bright, rarely chosen cluster does not inflate every unvisited one): each becomes
+// (n v + c guess) / (n + c), an unvisited one the guess (also for c = 0). Unchanged where no
+// visited value is positive.
+template <class Visited>
+RLL_HD void shrink_toward(size_t K, Visited visited, const float* n, const float* shares, double c,
+                          float* values) {
+  double v_sum = 0, s_sum = 0;
+  for (size_t k = 0; k < K; ++k)
+    if (visited(k)) {
+      v_sum += values[k];
+      s_sum += shares[k];
+    }
+  if (!(v_sum > 0)) return;
+  const double total = v_sum / std::max(s_sum, 0.25);
+  for (size_t k = 0; k < K; ++k) {
+    const double guess = total * shares[k], w = visited(k) ? double(n[k]) : 0.0;
+    values[k] = w + c > 0 ? float((w * values[k] + c * guess) / (w + c)) : float(guess);
+  }
+}
+
+struct Scene;
+// The unit of the learning samplers' exact reward sums: the brightest light's largest irradiance,
+// so that every scene gets the same relative range of ExactSum (2^-40 to 2^36 of it).
+double reward_scale(const Scene& scene);
+
+}  // namespace rll
