@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <queue>
+#include <thread>
 
 #include "rll/core/error.h"
 #include "rll/core/hash.h"
@@ -171,9 +172,14 @@ LtcLightSampler::LtcLightSampler(const Scene& scene, const LtcSettings& s)
   m_reward_scale = reward_scale(scene);
   m_keys = m_clusters.size() * s.bins * s.bins;
   m_slot = std::make_unique<std::atomic<uint32_t>[]>(m_keys);
-  for (uint32_t k = 0; k < m_keys; ++k) m_slot[k].store(0, std::memory_order_relaxed);
+  m_request = std::make_unique<std::atomic<uint32_t>[]>(m_keys);
+  for (uint32_t k = 0; k < m_keys; ++k) {
+    m_slot[k].store(0, std::memory_order_relaxed);
+    m_request[k].store(0, std::memory_order_relaxed);
+  }
   const uint32_t cap = s.capacity;
   m_key.assign(cap, kNoCell);
+  m_born.assign(cap, 0);
   m_size.assign(cap, 0);
   m_visits.assign(cap, 0.0);
   m_no_change.assign(cap, 0.0);
@@ -202,8 +208,8 @@ LtcLightSampler::LtcLightSampler(const Scene& scene, const LtcSettings& s)
 
 size_t LtcLightSampler::bytes() const {
   const size_t per_node = 3 * sizeof(uint32_t) + 7 * sizeof(float) + 3 * sizeof(ExactSum) + sizeof(uint32_t);
-  const size_t per_entry = 2 * sizeof(uint32_t) + 3 * sizeof(double) + sizeof(float) + 1 + sizeof(uint32_t);
-  return m_clusters.bytes() + size_t(m_keys) * sizeof(uint32_t) +
+  const size_t per_entry = 2 * sizeof(uint32_t) + 4 * sizeof(double) + sizeof(float) + 1 + sizeof(uint32_t);
+  return m_clusters.bytes() + size_t(m_keys) * 2 * sizeof(uint32_t) +
          size_t(m_s.capacity) * (per_entry + size_t(m_m) * per_node);
 }
 
@@ -223,37 +229,51 @@ uint32_t LtcLightSampler::entry_key(const LightContext& ctx) const {
   return m_clusters.find(ctx.p) * m_s.bins * m_s.bins + direction_bin(ctx.wo);
 }
 
+namespace {
+constexpr uint32_t kClaimed = 0xffffffffu, kFull = 0xfffffffeu;  // m_slot's states besides entry + 1
+}  // namespace
+
 void LtcLightSampler::prepare(LightContext& ctx, float u) const {
   (void)u;
   ctx.cell = kNoCell;
   if (length_sq(ctx.n) == 0) return;
   const uint32_t key = entry_key(ctx);
+  auto& self = const_cast<LtcLightSampler&>(*this);
   uint32_t v = m_slot[key].load(std::memory_order_acquire);
   if (v == 0) {
-    // Create the entry. Indices come from the free list; one that loses the race to publish
-    // goes back to it at the end of the pass. The accumulators every entry records into are
-    // already there, so a new entry needs nothing else until end_pass.
-    auto& self = const_cast<LtcLightSampler&>(*this);
-    if (m_next_free.load(std::memory_order_relaxed) >= m_free.size()) {
-      self.m_failed.fetch_add(1, std::memory_order_relaxed);
-      return;  // table full: the plain tree for this point
-    }
-    const uint32_t i = self.m_next_free.fetch_add(1, std::memory_order_relaxed);
-    if (i >= m_free.size()) {
-      self.m_failed.fetch_add(1, std::memory_order_relaxed);
-      return;
-    }
-    const uint32_t e = m_free[i];
-    self.m_key[e] = key;
+    // Create the entry: claim the key's slot, then take the next free entry, so that each new
+    // key of a pass takes exactly one while they last. The accumulators every entry records
+    // into are already there, so a new entry needs nothing else until end_pass.
     uint32_t expected = 0;
-    if (self.m_slot[key].compare_exchange_strong(expected, e + 1, std::memory_order_acq_rel,
+    if (self.m_slot[key].compare_exchange_strong(expected, kClaimed, std::memory_order_acq_rel,
                                                  std::memory_order_acquire)) {
-      v = e + 1;
+      const uint32_t i = m_next_free.load(std::memory_order_relaxed) < m_free.size()
+                             ? self.m_next_free.fetch_add(1, std::memory_order_relaxed)
+                             : uint32_t(m_free.size());
+      if (i < m_free.size()) {
+        const uint32_t e = m_free[i];
+        self.m_key[e] = key;
+        self.m_born[e] = m_pass;
+        v = e + 1;
+      } else {
+        self.m_failed.fetch_add(1, std::memory_order_relaxed);
+        v = kFull;
+      }
+      self.m_slot[key].store(v, std::memory_order_release);
     } else {
-      self.m_key[e] = kNoCell;
       v = expected;
     }
   }
+  while (v == kClaimed) {  // another thread is between claiming the slot and filling it
+    std::this_thread::yield();
+    v = m_slot[key].load(std::memory_order_acquire);
+  }
+  // New keys count their visits: if they outnumber the free entries, the most visited get them.
+  if (v == kFull) {
+    self.m_request[key].fetch_add(1, std::memory_order_relaxed);
+    return;  // table full: the plain tree for this point
+  }
+  if (m_born[v - 1] == m_pass) self.m_request[key].fetch_add(1, std::memory_order_relaxed);
   ctx.cell = v - 1;
 }
 
@@ -544,8 +564,57 @@ void LtcLightSampler::bake(uint32_t e) {
   m_cdf[base + K - 1] = 1.0f;
 }
 
+void LtcLightSampler::admit_by_visits() {
+  // Drop the entries this pass created: which new keys got one depended on thread timing.
+  const uint32_t K0 = uint32_t(m_initial.size());  // a new entry records into the global cut's nodes
+  uint32_t used = 0;
+  for (uint32_t e = 0; e < m_s.capacity; ++e) {
+    if (m_key[e] == kNoCell) continue;
+    if (m_born[e] != m_pass) {
+      ++used;
+      continue;
+    }
+    for (size_t i = size_t(e) * m_m, end = i + K0; i < end; ++i) {
+      m_sum[i].reset();
+      m_sum2[i].reset();
+      m_sum2_0[i].reset();
+      m_count[i].store(0, std::memory_order_relaxed);
+    }
+    m_slot[m_key[e]].store(0, std::memory_order_relaxed);
+    m_key[e] = kNoCell;
+  }
+  // Every key this pass visited without an entry from an earlier pass, by visits (ties: a hash
+  // of the key), gets a free entry while they last; its first pass with rewards is the next.
+  std::vector<std::pair<uint32_t, uint32_t>> want;  // (visits, key)
+  for (uint32_t k = 0; k < m_keys; ++k) {
+    const uint32_t n = m_request[k].load(std::memory_order_relaxed);
+    if (n == 0) continue;
+    want.push_back({n, k});
+    m_failed_total += n;  // these visits learnt nothing
+    m_request[k].store(0, std::memory_order_relaxed);
+    if (m_slot[k].load(std::memory_order_relaxed) == kFull) m_slot[k].store(0, std::memory_order_relaxed);
+  }
+  const size_t room = std::min<size_t>(m_s.capacity - used, want.size());
+  const auto first = [](const std::pair<uint32_t, uint32_t>& a, const std::pair<uint32_t, uint32_t>& b) {
+    return a.first != b.first ? a.first > b.first : mix64(a.second) < mix64(b.second);
+  };
+  std::nth_element(want.begin(), want.begin() + room, want.end(), first);
+  uint32_t e = 0;
+  for (size_t j = 0; j < room; ++j) {
+    while (m_key[e] != kNoCell) ++e;
+    m_key[e] = want[j].second;
+    m_born[e] = m_pass;  // an entry of earlier passes from the next pass on
+    m_slot[want[j].second].store(e + 1, std::memory_order_relaxed);
+  }
+}
+
 void LtcLightSampler::end_pass() {
-  m_failed_total += m_failed.load(std::memory_order_relaxed);
+  if (m_failed.load(std::memory_order_relaxed) > 0) {
+    admit_by_visits();
+  } else {
+    for (uint32_t e = 0; e < m_s.capacity; ++e)
+      if (m_key[e] != kNoCell && m_born[e] == m_pass) m_request[m_key[e]].store(0, std::memory_order_relaxed);
+  }
   std::vector<uint32_t> entries;
   for (uint32_t e = 0; e < m_s.capacity; ++e)
     if (m_key[e] != kNoCell) entries.push_back(e);
@@ -557,7 +626,6 @@ void LtcLightSampler::end_pass() {
     splits += sp;
   });
   m_splits_per_pass.push_back(splits.load());
-  // Indices that lost a race to publish go back to the free list.
   m_free.clear();
   for (uint32_t e = 0; e < m_s.capacity; ++e)
     if (m_key[e] == kNoCell) m_free.push_back(e);
@@ -600,7 +668,7 @@ nlohmann::json LtcLightSampler::describe() const {
           {"spatial_clusters", m_clusters.size()},
           {"entries_used", used},
           {"entries_with_cut", with_cut},
-          {"failed_inserts", m_failed_total + m_failed.load(std::memory_order_relaxed)},
+          {"failed_inserts", m_failed_total},
           {"mean_cut_size", with_cut ? cut_sum / double(with_cut) : 0.0},
           {"splits", total_splits},
           {"splits_per_pass", m_splits_per_pass},

@@ -46,8 +46,13 @@
 //   as its own opening visits: w = b prior^2 + (1 - b) mean(r^2), b = prod_{t<=n} (1 - a_t).
 // - P(node) = (1 - eps) sqrt(w) / sum sqrt(w) + eps d(node), d half the prior share and half
 //   uniform over nodes with power, so that every light that can contribute keeps pmf > 0.
-// - A full entry table (ltc.capacity) sends new entries' points to the plain tree descent; which
-//   entries got in may then depend on thread timing (the only case where renders may differ).
+// - A full entry table (ltc.capacity) sends new entries' points to the plain tree descent. Which
+//   keys get the last free entries must not depend on thread timing, so a pass whose new keys
+//   outnumber the free entries keeps none of the entries it created (nor their records): at its
+//   end the free entries go to the new keys the pass visited most (ties: a hash of the key),
+//   which start learning in the next pass. A key claims its slot before it takes a free entry,
+//   so every new key of a pass gets one while they last (no entry is spent on a lost race), and
+//   whether a pass overflowed depends only on how many new keys it visited.
 // Direction bins: world-frame spherical coordinates of wo, theta = acos(wo.z) in 8 bins of pi/8
 // and phi = atan2(wo.y, wo.x) in 8 bins of pi/4 (as the original, which bins pbrt's world wo).
 #pragma once
@@ -150,16 +155,24 @@ class LtcLightSampler final : public LightSampler {
   std::vector<uint32_t> m_initial, m_initial_ends, m_initial_mid;
   double m_reward_scale = 1;
 
-  // key -> entry + 1 (0: none), keys = cluster * bins^2 + bin.
+  // key -> entry + 1 (0: none; kClaimed: being created; kFull: no free entry this pass), keys =
+  // cluster * bins^2 + bin.
   std::unique_ptr<std::atomic<uint32_t>[]> m_slot;
+  // key -> prepares this pass while the key had no entry from an earlier pass (the priority of
+  // new keys when the table overflows; modulo 2^32, which is still the same for any thread count).
+  std::unique_ptr<std::atomic<uint32_t>[]> m_request;
   uint32_t m_keys = 0;
   // Entry allocation: free entries handed out from m_next_free up; rebuilt at end_pass.
   std::vector<uint32_t> m_free;
   std::atomic<uint32_t> m_next_free{0};
-  std::atomic<uint64_t> m_failed{0};
+  std::atomic<uint64_t> m_failed{0};  // keys of this pass that found no free entry
+  // Drops the entries created in this pass and gives the free entries to the new keys visited
+  // most (end_pass of a pass whose new keys outnumbered the free entries).
+  void admit_by_visits();
 
   // Per entry.
   std::vector<uint32_t> m_key;       // kNoCell: free
+  std::vector<uint64_t> m_born;      // the pass it was created in
   std::vector<uint32_t> m_size;      // cut size; 0 until the end of its first pass with rewards
   std::vector<double> m_visits;      // t: NEE samples the entry learnt from
   std::vector<double> m_no_change;   // visits since the last split
