@@ -175,3 +175,40 @@ TEST(CliErrors, RhtParameters) {
                              (dir / "ok.png").string()});
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
+
+// `rll samplers --params NAME` lists the keys its table reads (the same ranges the errors above
+// come from); a sampler with none says so; an unknown name is an error listing the valid ones.
+TEST(CliErrors, SamplersListTheirParameters) {
+  struct Want {
+    const char* name;
+    std::vector<std::string> lines;
+  };
+  for (const Want& w : std::vector<Want>{
+           {"rll", {"rll.alpha=0.02  (in (0, 1])", "rll.capacity=32768  (in [1, 16777216])",
+                    "rll.forget=changes  (one of changes, floor)"}},
+           {"fermat", {"fermat.cut_size=256  (in [2, 4096])", "fermat.reset_every=32"}},
+           {"rht", {"rht.gamma=0.05  (in (0, 1000])", "rht.samples=4  (in [1, 8])"}},
+           {"oracle", {"oracle.discovery_spp=16  (in [1, 1024])", "rll.cut_size=128"}},
+           {"ltc", {"ltc.epsilon=0.1  (in (0, 1])", "ltc.bins=8  (in [1, 32])"}},
+           {"tree", {"tree has no parameters of its own"}}}) {
+    const CommandResult r = run_rll({"samplers", "--params", w.name});
+    EXPECT_EQ(r.exit_code, 0) << w.name << ": " << r.output;
+    for (const auto& line : w.lines) EXPECT_NE(r.output.find(line), std::string::npos) << line;
+  }
+  const CommandResult bad = run_rll({"samplers", "--params", "nosuch"});
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("unknown light sampler 'nosuch'"), std::string::npos) << bad.output;
+  // The oracle's ranges hold: a discovery that could not fit is refused before it allocates.
+  TempDir dir;
+  for (const char* kv : {"oracle.discovery_spp=0", "oracle.discovery_spp=5000", "oracle.bounces=17",
+                         "oracle.points=0", "oracle.rays=0", "oracle.refine=-1"}) {
+    const std::string key = std::string(kv).substr(0, std::string(kv).find('='));
+    expect_render_error(dir, {"builtin:cornell-box", "--res", "8x8", "--spp", "1", "--sampler",
+                              "oracle", "--set", kv},
+                        {key});
+  }
+  expect_render_error(dir, {"builtin:cornell-box", "--res", "4096x4096", "--spp", "1", "--sampler",
+                            "oracle", "--set", "oracle.discovery_spp=1024", "--set",
+                            "oracle.bounces=16"},
+                      {"oracle's discovery", "oracle.discovery_spp=1024", "more than"});
+}

@@ -16,6 +16,23 @@ const std::vector<std::string>& light_sampler_names() {
   return names;
 }
 
+std::vector<std::string> light_sampler_parameters(const std::string& name) {
+  if (name == "rll") return describe_rll_params(RllSettings{}, "rll");
+  if (name == "fermat") return describe_rll_params(fermat_settings(), "fermat");
+  if (name == "rht") return describe_params(rht_params(), "rht", RhtSettings{});
+  if (name == "oracle") {
+    std::vector<std::string> out = describe_params(oracle_params(), "oracle", OracleSettings{});
+    for (auto& line : describe_rll_params(RllSettings{}, "rll")) out.push_back(line);
+    return out;
+  }
+  if (name == "ltc") return describe_params(ltc_params(), "ltc", LtcSettings{});
+  for (const auto& n : light_sampler_names())
+    if (n == name) return {};
+  std::string list;
+  for (const auto& n : light_sampler_names()) list += (list.empty() ? "" : ", ") + n;
+  fail("unknown light sampler '{}' (valid: {})", name, list);
+}
+
 std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const Scene& scene,
                                                  const Params& params, const Accel* accel) {
   if (name == "uniform") return std::make_unique<UniformLightSampler>(scene);

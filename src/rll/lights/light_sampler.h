@@ -77,6 +77,10 @@ class LightSampler {
 
 // The sampler names `make_light_sampler` knows, in the order they are listed to users.
 const std::vector<std::string>& light_sampler_names();
+// A sampler's parameters (`--set NAME.KEY=VALUE`), one a line: each key with its default and its
+// range or choices, from the tables that read and check them (the oracle's own, then rll's, which
+// it samples with); none for uniform, power and tree. Throws rll::Error for an unknown name.
+std::vector<std::string> light_sampler_parameters(const std::string& name);
 
 // Builds a sampler by name with its parameters from `params` (keys "<name>.<param>");
 // throws rll::Error listing valid names on an unknown name. The oracle traces rays before

@@ -16,17 +16,28 @@
 
 namespace rll {
 
+const std::vector<ParamSpec<LtcSettings>>& ltc_params() {
+  using S = LtcSettings;
+  using R = ParamRange;
+  static const std::vector<ParamSpec<S>> table = {
+      int_param("clusters", R::closed(1, 1 << 20), field<S, &S::clusters>()),
+      int_param("bins", R::closed(1, 32), field<S, &S::bins>()),
+      int_param("capacity", R::closed(1, 1 << 24), field<S, &S::capacity>()),
+      int_param("max_cut", R::closed(1, 1024), field<S, &S::max_cut>()),
+      int_param("initial_cut", R::closed(1, 1024), field<S, &S::initial_cut>()),
+      float_param("epsilon", R::open_closed(0, 1), field<S, &S::epsilon>(),
+                  "it keeps every light that can contribute sampleable"),
+      int_param("no_change", R::closed(1, 1 << 30), field<S, &S::no_change>()),
+  };
+  return table;
+}
+
 LtcSettings ltc_settings_from(const Params& p) {
   LtcSettings s;
-  s.clusters = uint32_t(p.get_int_in("ltc.clusters", s.clusters, 1, 1l << 20));
-  s.bins = uint32_t(p.get_int_in("ltc.bins", s.bins, 1, 32));
-  s.capacity = uint32_t(p.get_int_in("ltc.capacity", s.capacity, 1, 1l << 24));
-  s.max_cut = int(p.get_int_in("ltc.max_cut", s.max_cut, 1, 1024));
-  s.initial_cut = int(p.get_int_in("ltc.initial_cut", s.initial_cut, 1, s.max_cut));
-  s.epsilon = p.get_float("ltc.epsilon", s.epsilon);
-  if (!(s.epsilon > 0 && s.epsilon <= 1))
-    fail("--set ltc.epsilon={}: must be in (0, 1] (it keeps every light that can contribute sampleable)", s.epsilon);
-  s.no_change = uint32_t(p.get_int_in("ltc.no_change", s.no_change, 1, 1l << 30));
+  read_params(ltc_params(), p, "ltc", s);
+  if (s.initial_cut > s.max_cut)
+    fail("--set ltc.initial_cut: must be in [1, ltc.max_cut = {}] (got {})", s.max_cut,
+         s.initial_cut);
   return s;
 }
 

@@ -61,6 +61,7 @@
 #include <memory>
 #include <vector>
 
+#include "rll/core/param_table.h"
 #include "rll/learn/cut.h"
 #include "rll/learn/moments.h"
 #include "rll/lights/light_sampler.h"
@@ -78,8 +79,10 @@ struct LtcSettings {
   uint32_t no_change = 128;   // visits without a split after which an entry stops splitting
 };
 
-// Reads ltc.* parameters (see docs/ltc.md).
+// Reads ltc.* parameters (see docs/ltc.md), each checked against its range (errors name the key),
+// by the table of ltc's parameters (core/param_table.h).
 LtcSettings ltc_settings_from(const Params& params);
+const std::vector<ParamSpec<LtcSettings>>& ltc_params();
 
 // The spatial clusters: a kd-tree over points sampled by area on the scene's surfaces (sky
 // excluded), built by splitting the leaf with the largest box at the median of its points along

@@ -1,11 +1,14 @@
 #include "rll/lights/oracle_sampler.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 #include <mutex>
 
 #include "rll/accel/accel.h"
 #include "rll/core/error.h"
+#include "rll/core/memory_budget.h"
 #include "rll/core/parallel.h"
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
@@ -18,15 +21,22 @@
 
 namespace rll {
 
+const std::vector<ParamSpec<OracleSettings>>& oracle_params() {
+  using S = OracleSettings;
+  using R = ParamRange;
+  static const std::vector<ParamSpec<S>> table = {
+      int_param("discovery_spp", R::closed(1, 1024), field<S, &S::discovery_spp>()),
+      int_param("bounces", R::closed(0, 16), field<S, &S::bounces>()),
+      int_param("points", R::closed(1, 4096), field<S, &S::points_per_cell>()),
+      int_param("rays", R::closed(1, 4096), field<S, &S::rays>()),
+      int_param("refine", R::closed(0, 4096), field<S, &S::refine>()),
+  };
+  return table;
+}
+
 OracleSettings oracle_settings_from(const Params& p) {
   OracleSettings s;
-  s.discovery_spp = int(p.get_int("oracle.discovery_spp", s.discovery_spp));
-  s.bounces = int(p.get_int("oracle.bounces", s.bounces));
-  s.points_per_cell = int(p.get_int("oracle.points", s.points_per_cell));
-  s.rays = int(p.get_int("oracle.rays", s.rays));
-  s.refine = int(p.get_int("oracle.refine", s.refine));
-  if (s.discovery_spp < 1 || s.bounces < 0 || s.points_per_cell < 1 || s.rays < 1 || s.refine < 0)
-    fail("--set oracle.*: discovery_spp, points and rays must be >= 1, bounces and refine >= 0");
+  read_params(oracle_params(), p, "oracle", s);
   return s;
 }
 
@@ -93,6 +103,11 @@ void OracleLightSampler::precompute(const Scene& scene) {
 
   // 1. Discovery: camera paths (diffuse bounces) find the cells and points where NEE happens.
   const int w = scene.width, h = scene.height;
+  // Every vertex of every discovery path may keep a point (closed rooms come near that).
+  check_memory_budget(double(w) * h * s.discovery_spp * (s.bounces + 1) * sizeof(CellPoint),
+                      fmt::format("the oracle's discovery ({}x{} pixels x oracle.discovery_spp={} "
+                                  "x (oracle.bounces={} + 1) points)",
+                                  w, h, s.discovery_spp, s.bounces));
   std::mutex merge;
   std::vector<CellPoint> found;
   parallel_for(size_t(h), 1, [&](size_t y0, size_t y1) {

@@ -7,6 +7,7 @@
 
 #include <memory>
 
+#include "rll/core/param_table.h"
 #include "rll/lights/rll_sampler.h"
 
 namespace rll {
@@ -24,7 +25,10 @@ struct OracleSettings {
   uint64_t seed = 77;
 };
 
+// oracle.* from --set, each checked against its range (errors name the key), by the table of the
+// oracle's parameters (core/param_table.h).
 OracleSettings oracle_settings_from(const Params& params);
+const std::vector<ParamSpec<OracleSettings>>& oracle_params();
 
 class OracleLightSampler final : public LightSampler {
  public:

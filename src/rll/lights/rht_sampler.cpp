@@ -7,13 +7,20 @@
 
 namespace rll {
 
+const std::vector<ParamSpec<RhtSettings>>& rht_params() {
+  using S = RhtSettings;
+  static const std::vector<ParamSpec<S>> table = {
+      float_param("gamma", ParamRange::open_closed(0, 1000), field<S, &S::gamma>(),
+                  "the split probability's width"),
+      int_param("reservoirs", ParamRange::closed(1, kRhtMaxReservoirs), field<S, &S::reservoirs>()),
+      int_param("samples", ParamRange::closed(1, kRhtMaxSamples), field<S, &S::samples>()),
+  };
+  return table;
+}
+
 RhtSettings rht_settings_from(const Params& p) {
   RhtSettings s;
-  s.gamma = p.get_float("rht.gamma", s.gamma);
-  if (!(s.gamma > 0 && s.gamma <= 1000))
-    fail("--set rht.gamma={}: must be in (0, 1000] (the split probability's width)", s.gamma);
-  s.reservoirs = int(p.get_int_in("rht.reservoirs", s.reservoirs, 1, kRhtMaxReservoirs));
-  s.samples = int(p.get_int_in("rht.samples", s.samples, 1, kRhtMaxSamples));
+  read_params(rht_params(), p, "rht", s);
   return s;
 }
 

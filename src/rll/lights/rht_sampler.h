@@ -6,6 +6,9 @@
 // yields the light, the density the BSDF strategy's MIS weight needs. It learns nothing.
 #pragma once
 
+#include <vector>
+
+#include "rll/core/param_table.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/lights/rht_view.h"
 
@@ -18,8 +21,10 @@ struct RhtSettings {
   int reservoirs = 8;   // rht.reservoirs: first-stage reservoirs
   int samples = 4;      // rht.samples: second-stage reservoirs, shadow rays per vertex
 };
-// rht.* from --set, each checked against its range (errors name the key).
+// rht.* from --set, each checked against its range (errors name the key), by the table of
+// rht's parameters (core/param_table.h).
 RhtSettings rht_settings_from(const Params& params);
+const std::vector<ParamSpec<RhtSettings>>& rht_params();
 
 class RhtLightSampler final : public LightSampler {
  public:
