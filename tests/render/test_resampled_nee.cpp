@@ -72,7 +72,7 @@ TEST(ResampledNee, ArchPath) {
 
 // rll with the learnt target (nee.target=learnt: the unshadowed target times the cell's learnt
 // visibility factor of the candidate's cluster, docs/nee.md) against rll with one sample, as
-// above: 5% asserted (rll at 256 spp sees 2-3% here as with the unshadowed target).
+// above: 5% asserted (measured: the bound sees 2.0-3.5% of the image).
 TEST(ResampledNee, LearntTargetRoom) {
   for (IntegratorType type : {IntegratorType::Direct, IntegratorType::Path})
     expect_resampling_agrees("cornell-boxes-room", 32, 24, type, 256, "rll", 0.05, true);
