@@ -122,6 +122,11 @@ TEST(CliErrors, NeeCandidates) {
                         {"builtin:cornell-box", "--res", "8x8", "--spp", "1", "--set",
                          std::string("nee.candidates=") + m},
                         {"nee.candidates"});
+  // Its target: one of the listed values, the error naming the key and the values.
+  expect_render_error(dir,
+                      {"builtin:cornell-box", "--res", "8x8", "--spp", "1", "--set",
+                       "nee.target=shadowed"},
+                      {"nee.target", "unshadowed", "learnt"});
 }
 
 // rht's parameters are checked against their ranges, the error naming the key; rht draws several

@@ -71,6 +71,8 @@ TEST(GpuEndPass, CutEndPassMatchesTheCpu) {
       for (uint32_t k = 0; k < cpu.size(c); ++k) {
         EXPECT_TRUE(close(cpu.q(c)[k], gpu.q(c)[k])) << "cell " << c << " cluster " << k;
         EXPECT_TRUE(close(cpu.cdf(c)[k], gpu.cdf(c)[k])) << "cell " << c << " cluster " << k;
+        EXPECT_TRUE(close(cpu.target_factor(c)[k], gpu.target_factor(c)[k]))
+            << "cell " << c << " cluster " << k;
         if (guided && k + 1 < cpu.size(c)) {
           EXPECT_TRUE(close(cpu.guide_left(c)[k], gpu.guide_left(c)[k])) << "cell " << c;
         }

@@ -103,6 +103,8 @@ inline uint32_t expect_same_learning(const RllLightSampler& a, const RllLightSam
       EXPECT_TRUE(near(ca.q(c)[k], cb.q(c)[k], tolerance)) << "cell " << c << " cluster " << k;
       EXPECT_TRUE(near(ca.m2(c)[k], cb.m2(c)[k], tolerance)) << "cell " << c << " cluster " << k;
       EXPECT_TRUE(near(ca.cdf(c)[k], cb.cdf(c)[k], tolerance)) << "cell " << c << " cluster " << k;
+      EXPECT_TRUE(near(ca.target_factor(c)[k], cb.target_factor(c)[k], tolerance))
+          << "cell " << c << " cluster " << k;
     }
     EXPECT_TRUE(near(ca.defensive_weight(c), cb.defensive_weight(c), tolerance)) << "cell " << c;
     const CellAnchor &x = ca.anchor(c), &y = cb.anchor(c);

@@ -3,6 +3,7 @@
 // the nodes, and the CDF rises to exactly one.
 #include <gtest/gtest.h>
 
+#include "rll/core/binary_io.h"
 #include "rll/core/rng.h"
 #include "rll/learn/cut_store.h"
 #include "rll/learn/split_collapse.h"
@@ -227,6 +228,60 @@ TEST(CutStore, HalfHiddenClusterGetsMoreUnderMomentAndHiddenFallsToTheFloor) {
   const float p_hidden = cdf_moment[2] - cdf_moment[1];
   EXPECT_GT(p_hidden, 0.0f);
   EXPECT_LT(p_hidden, 0.2f);
+}
+
+// Resampled NEE's learnt target (nee.target=learnt): each cluster's target factor is the baked
+// table's probability over the prior's share, t(k) = P(k) / prior(k) (the prior lives in the
+// CDF), at least the defensive weight, 1 in a cell that has learnt nothing; load_cell recomputes
+// the same factors from what the file holds.
+TEST(CutStore, TargetFactorIsTheTableOverThePrior) {
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
+  const LightTree& tree = *s.light_tree;
+  CutSettings cs;
+  cs.cut_size = 24;
+  cs.initial_size = 16;
+  cs.splits = 4;
+  const uint32_t cells = 8;
+  CutStore store(tree, cells, cs, 1.0);
+  Pcg32 rng(99);
+  for (uint32_t c = 0; c < cells; ++c)
+    store.set_anchor(c, {Vec3(rng.next_float() * 20 - 10, 0, rng.next_float() * 20 - 10),
+                         Vec3(0, 1, 0), -4});
+  for (int pass = 0; pass < 6; ++pass) {
+    for (uint32_t c = 0; c + 1 < cells; ++c) {  // the last cell never gets a reward
+      const uint32_t K = store.active(c) ? store.size(c) : store.initial_size();
+      for (int i = 0; i < 60; ++i) {
+        const uint32_t k = rng.next_bounded(K);
+        store.record(c, k, k % 3 == 0 ? 5 * rng.next_float() : 0.0f);
+      }
+    }
+    for (uint32_t c = 0; c < cells; ++c) store.end_pass(c);
+  }
+  std::vector<double> prior;
+  for (uint32_t c = 0; c < cells; ++c) {
+    SCOPED_TRACE(c);
+    ASSERT_TRUE(store.active(c));
+    const uint32_t K = store.size(c);
+    const float* t = store.target_factor(c);
+    EXPECT_EQ(store.learnt(c), c + 1 < cells);
+    store.cell_prior(c, prior);
+    for (uint32_t k = 0; k < K; ++k) {
+      const double p = store.cdf(c)[k] - (k > 0 ? store.cdf(c)[k - 1] : 0.0f);
+      if (!store.learnt(c)) {
+        EXPECT_EQ(t[k], 1.0f) << "cluster " << k;
+        continue;
+      }
+      EXPECT_GE(t[k], store.defensive_weight(c) * (1 - 1e-5f)) << "cluster " << k;
+      EXPECT_NEAR(t[k] * prior[k], p, 2e-6 + 1e-4 * p) << "cluster " << k;
+    }
+    BinaryWriter w;
+    store.save_cell(c, w);
+    CutStore loaded(tree, cells, cs, 1.0);
+    BinaryReader r(w.bytes(), "cell");
+    loaded.load_cell(c, r);
+    for (uint32_t k = 0; k < K; ++k)
+      EXPECT_FLOAT_EQ(loaded.target_factor(c)[k], t[k]) << "cluster " << k;
+  }
 }
 
 // Pooling: a cell's clusters it has not visited take their values from its coarse cell's

@@ -45,6 +45,7 @@ class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
     e.cdf = once(e.cdf);
     e.gl = once(e.gl);
     e.gr = once(e.gr);
+    e.vis = once(e.vis);
     e.learnt = once(e.learnt);
     e.seen = once(e.seen);
     e.eps = once(e.eps);
@@ -75,6 +76,7 @@ class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
     c.cdf = e.cdf;
     c.gl = e.gl;
     c.gr = e.gr;
+    c.vis = e.vis;
     c.eps = e.eps;
     c.initial = e.initial;
     c.initial_ends = e.initial_ends;

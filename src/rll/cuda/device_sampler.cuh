@@ -48,6 +48,7 @@ class DeviceSampler {
         c.cdf = m_memory.mirror(c.cdf);
         c.gl = m_memory.mirror(c.gl);
         c.gr = m_memory.mirror(c.gr);
+        c.vis = m_memory.mirror(c.vis);
         c.eps = m_memory.mirror(c.eps);
         c.initial = m_memory.mirror(c.initial);
         c.initial_ends = m_memory.mirror(c.initial_ends);

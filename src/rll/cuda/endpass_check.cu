@@ -33,6 +33,7 @@ CutStoreEndView mirror_end_view(cuda::DeviceMirror& d, const CutStoreEndView& v)
   e.cdf = d.mirror(v.cdf);
   e.gl = d.mirror(v.gl);
   e.gr = d.mirror(v.gr);
+  e.vis = d.mirror(v.vis);
   e.learnt = d.mirror(v.learnt);
   e.seen = d.mirror(v.seen);
   e.eps = d.mirror(v.eps);

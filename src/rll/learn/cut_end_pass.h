@@ -30,6 +30,7 @@ struct CutStoreEndView {
   View<uint32_t> node, end;
   View<float> q, m2, n, weight, cdf;
   View<float> gl, gr;  // guided descent only (empty otherwise)
+  View<float> vis;     // per cluster: CutStore::target_factor
   View<uint8_t> learnt;
   View<float> seen, eps;
   View<CellAnchor> anchor;
@@ -48,7 +49,7 @@ struct CutStoreEndView {
 // arrays they use; a function never hands an array it uses to one it calls.
 struct CutScratch {
   double* pri;   // the prior of the cell's clusters
-  double* g;     // guided factors (cut_bake_guide)
+  double* g;     // guided factors (cut_bake_guide), target factors (cut_bake_target)
   float* val;    // effective values; pooling's shares
   float* score;  // split scores; pooling's coarser shares (pool_up)
   float* w;      // prior weights of the initial cut (cut_cell_prior)
@@ -257,10 +258,36 @@ RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint3
   }
 }
 
+// Resampled NEE's learnt target (nee.target=learnt): bakes the cell's target factors
+// (CutStore::target_factor) from its values and prior, e its defensive weight (1 before it has
+// learnt: every factor 1). Without the guided descent the ratios are rho(k) = V(k) / prior(k),
+// whose prior-weighted mean is sum V / sum prior; a cluster without prior (it has no power, so
+// it contributes nothing) gets 1. Scratch: g.
+RLL_HD inline void cut_bake_target(const CutStoreEndView& v, uint32_t cell, uint32_t K,
+                                   const double* pri, const float* val, double eps,
+                                   const CutScratch& scratch) {
+  double* t = scratch.g;
+  if (v.s.guided) {
+    guide_factors(K, pri, val, eps, t);  // (the values are the ratios already)
+  } else {
+    double v_sum = 0, p_sum = 0;
+    for (size_t k = 0; k < K; ++k) {
+      v_sum += val[k];
+      p_sum += pri[k];
+    }
+    const double mean = p_sum > 0 ? v_sum / p_sum : 0.0;
+    for (size_t k = 0; k < K; ++k)
+      t[k] = mean > 0 && pri[k] > 0 ? (1 - eps) * (double(val[k]) / pri[k]) / mean + eps : 1.0;
+  }
+  const size_t b = v.base(cell);
+  for (size_t k = 0; k < K; ++k) v.vis[b + k] = float(t[k]);
+}
+
 // Bakes the cell's table from the first K clusters of its slice: P(s) = (1 - e) V(s) / sum V +
 // e prior(s), e the cell's defensive weight (folded in here when the prior lives in the CDF);
 // without any learnt value, the prior alone. Sets the cell's size, range ends, learnt flag and
-// defensive weight, and with the guided descent its factors. Scratch: pri, val, g.
+// defensive weight, its target factors, and with the guided descent its factors. Scratch: pri,
+// val, g.
 RLL_HD inline void cut_bake(const CutStoreEndView& v, uint32_t cell, uint32_t K,
                             const CutScratch& scratch) {
   double* pri = scratch.pri;
@@ -284,7 +311,9 @@ RLL_HD inline void cut_bake(const CutStoreEndView& v, uint32_t cell, uint32_t K,
   }
   for (size_t k = 0; k < K; ++k) v.cdf[b + k] = float(std::min(1.0, double(v.cdf[b + k]) / acc));
   v.cdf[b + K - 1] = 1.0f;
-  if (v.s.guided) cut_bake_guide(v, cell, K, pri, val, v_sum > 0 ? v.eps[cell] : 1.0, scratch);
+  const double target_eps = v_sum > 0 ? v.eps[cell] : 1.0;
+  if (v.s.guided) cut_bake_guide(v, cell, K, pri, val, target_eps, scratch);
+  cut_bake_target(v, cell, K, pri, val, target_eps, scratch);
 }
 
 // Light powers or positions changed: the cell's prior weights anew, and its table. Scratch: as

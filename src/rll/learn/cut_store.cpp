@@ -31,6 +31,7 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   m_n.assign(n, 0.0f);
   m_weight.assign(n, 0.0f);
   m_cdf.assign(n, 0.0f);
+  m_vis.assign(n, 1.0f);
   if (s.guided) {
     m_gl.assign(n, 1.0f);
     m_gr.assign(n, 1.0f);
@@ -59,6 +60,7 @@ CutStoreView CutStore::view() {
   v.cdf = view_of(m_cdf);
   v.gl = view_of(m_gl);
   v.gr = view_of(m_gr);
+  v.vis = view_of(m_vis);
   v.eps = view_of(m_eps);
   v.initial = view_of(m_initial);
   v.initial_ends = view_of(m_initial_ends);
@@ -71,7 +73,9 @@ CutStoreView CutStore::view() {
 }
 
 size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, int pool_tiers) {
-  const size_t per_cluster_floats = guided ? 7 : pool_tiers > 0 ? 6 + 3 * size_t(pool_tiers) : 5;
+  // q, m2, n, weight, cdf and the target factor; guided: its two factors; pooling: its shares
+  // and each tier's coarse Q, M2 and weight.
+  const size_t per_cluster_floats = guided ? 8 : pool_tiers > 0 ? 7 + 3 * size_t(pool_tiers) : 6;
   const size_t per_cell =
       size_t(cut_size) * (2 * sizeof(uint32_t) + per_cluster_floats * sizeof(float) +
                           2 * sizeof(ExactSum) + sizeof(uint32_t)) +
@@ -102,6 +106,7 @@ CutStoreEndView CutStore::end_view() {
   v.cdf = view_of(m_cdf);
   v.gl = view_of(m_gl);
   v.gr = view_of(m_gr);
+  v.vis = view_of(m_vis);
   v.learnt = view_of(m_learnt);
   v.seen = view_of(m_seen);
   v.eps = view_of(m_eps);
@@ -236,14 +241,16 @@ void CutStore::load_cell(uint32_t cell, BinaryReader& r) {
       m_learnt[cell] > 1 || !std::isfinite(a.p.x + a.p.y + a.p.z + a.n.x + a.n.y + a.n.z))
     damaged("a cell value is out of range");
   m_size[cell] = K;
-  if (m_s.guided && K > 0) {
+  if (K > 0) {  // the factors baked with the table, which the file does not hold
     const CutStoreEndView v = end_view();
     std::vector<double> pri(K);
     std::vector<float> val(K);
     HostCutScratch scratch(K);
     cut_cell_prior(v, cell, pri.data(), scratch);
     cut_values(v, cell, K, pri.data(), val.data());
-    cut_bake_guide(v, cell, K, pri.data(), val.data(), m_learnt[cell] ? m_eps[cell] : 1.0, scratch);
+    const double eps = m_learnt[cell] ? m_eps[cell] : 1.0;
+    if (m_s.guided) cut_bake_guide(v, cell, K, pri.data(), val.data(), eps, scratch);
+    cut_bake_target(v, cell, K, pri.data(), val.data(), eps, scratch);
   }
 }
 

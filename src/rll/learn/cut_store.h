@@ -31,6 +31,7 @@ struct CutStoreView {
   View<const uint32_t> node, end;
   View<const float> cdf;
   View<const float> gl, gr;  // guided descent only (empty otherwise): CutStore::guide_left/right
+  View<const float> vis;     // per cluster: CutStore::target_factor (nee.target=learnt)
   View<const float> eps;     // per cell: the defensive weight during this pass
   View<const uint32_t> initial, initial_ends;
   View<CellAnchor> anchor;
@@ -98,6 +99,12 @@ class CutStore {
   // has learnt: the light tree itself).
   const float* guide_left(uint32_t cell) const { return &m_gl[size_t(cell) * m_m]; }
   const float* guide_right(uint32_t cell) const { return &m_gr[size_t(cell) * m_m]; }
+  // Resampled NEE's learnt target (nee.target=learnt, docs/nee.md): per cluster of the cut, the
+  // factor t(k) = (1 - e) rho(k) / mean rho + e, rho(k) = V(k) / prior(k) the learnt value over
+  // the visibility-blind prior share (guided: the learnt ratio itself, t = g), the mean weighted
+  // by the prior, e the cell's defensive weight: so t >= e > 0, and t = 1 everywhere before the
+  // cell has learnt. Baked with the table; recomputed, not saved, by load_cell.
+  const float* target_factor(uint32_t cell) const { return &m_vis[size_t(cell) * m_m]; }
   // False while the cell has learnt nothing (every value zero): its CDF is then the prior's.
   bool learnt(uint32_t cell) const { return m_learnt[cell] != 0; }
   // The weight of the defensive term for this cell during this pass (1 before it learnt).
@@ -176,6 +183,7 @@ class CutStore {
   std::vector<uint32_t> m_node, m_end;
   std::vector<float> m_q, m_m2, m_n, m_weight, m_cdf;
   std::vector<float> m_gl, m_gr;  // guided descent only (empty otherwise)
+  std::vector<float> m_vis;       // per cluster: target_factor
   std::vector<uint8_t> m_learnt;  // per cell: sum of values > 0
   std::vector<float> m_seen;      // per cell: rewards received so far
   std::vector<float> m_eps;       // per cell: defensive weight, frozen during a pass

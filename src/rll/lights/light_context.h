@@ -29,6 +29,11 @@ struct SampledLight {
   float cluster_pmf = 0;  // probability of that cluster
   float cluster_importance =
       0;  // rll's guided descent: the tree's importance of the cluster at the point
+  // A factor of resampled NEE's target for this light (nee.target=learnt, docs/nee.md): rll's
+  // learnt visibility factor of the light's cluster in the cell (CutStore::target_factor); 1
+  // for a sampler that learns none. A function of the light and the shading point's cell only
+  // (never of the draw), and > 0 wherever the light can be drawn.
+  float target = 1;
 };
 
 // What the integrator reports of one next-event sample to a learning sampler. Each learner makes

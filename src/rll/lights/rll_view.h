@@ -227,6 +227,7 @@ RLL_HD inline SampledLight rll_sample_guided(const RllView& v, const LightContex
   w.cluster = k0;
   w.cluster_pmf = pmf;
   w.cluster_importance = importance;
+  w.target = v.cuts.vis[base + k0];
   w.pmf = pmf * w.pmf;
   return w.pmf > 0 ? w : SampledLight{};
 }
@@ -323,7 +324,7 @@ RLL_HD inline void rll_prepare(const RllView& v, LightContext& ctx, float u) {
 }
 
 // A light for a prepared shading point (ctx.cell) and its probability, with the cluster it came
-// from for rll_record.
+// from for rll_record and, in a cell with a cut, the cluster's target factor (1 without one).
 RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx, double u) {
   using namespace detail;
   const RllCut c = rll_cut(v, ctx.cell);
@@ -402,6 +403,7 @@ RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx,
   s.light = l;
   s.cluster = k;
   s.pmf = rll_mixture_pmf(v, ctx, c, k, l, within, descent, &s.cluster_pmf);
+  s.target = v.cuts.vis[size_t(ctx.cell) * v.cuts.m + k];
   return s.pmf > 0 ? s : SampledLight{};
 }
 

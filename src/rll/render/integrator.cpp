@@ -45,6 +45,8 @@ IntegratorSettings make_integrator_settings(const std::string& name, int max_dep
     if (s.rr_depth < 1) fail("--set path.rr_depth must be at least 1");
   }
   s.nee_candidates = int(params.get_int_in("nee.candidates", 1, 1, kMaxNeeCandidates));
+  s.nee_learnt_target =
+      params.get_choice("nee.target", "unshadowed", {"unshadowed", "learnt"}) == "learnt";
   return s;
 }
 
@@ -59,6 +61,7 @@ PathConstants make_path_constants(const Scene& scene, const SceneView& view,
   c.max_depth = settings.type == IntegratorType::Direct ? 1 : settings.max_depth;
   c.rr_depth = settings.rr_depth;
   c.nee_candidates = settings.nee_candidates;
+  c.nee_learnt_target = settings.nee_learnt_target;
   return c;
 }
 

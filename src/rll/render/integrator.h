@@ -23,10 +23,12 @@ struct IntegratorSettings {
   LightStrategy strategy = LightStrategy::Mis;
   int rr_depth = 3;        // Russian roulette from this bounce on
   int nee_candidates = 1;  // resampled next-event estimation's M (docs/nee.md)
+  // nee.target=learnt: its target carries the sampler's learnt factor (SampledLight::target)
+  bool nee_learnt_target = false;
 };
 
 // Parses --integrator and the integrator's `--set` keys (path.strategy, path.rr_depth,
-// nee.candidates).
+// nee.candidates, nee.target).
 IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
                                             const Params& params);
 const char* integrator_name(IntegratorType t);
