@@ -84,10 +84,11 @@ for scene in cornell-boxes-room arch-interior many-lights-open cornell-boxes-dyn
   run_v1 "$scene-path" builtin:$scene --integrator path --time $seconds --frames $f
   fi
   # Resampled next-event estimation (docs/nee.md): tree and rll with and without four candidates
-  # (sampler variants carrying nee.candidates) beside rht, in one interleaved compare on the same
-  # cached reference. BENCH_RIS_SCENES limits it to some scenes (default: all four).
+  # (sampler variants carrying nee.candidates), rll also with the learnt target at four and two
+  # candidates, beside rht, in one interleaved compare on the same cached reference.
+  # BENCH_RIS_SCENES limits it to some scenes (default: all four).
   if want ris && [[ " ${BENCH_RIS_SCENES:-$scene} " == *" $scene "* ]]; then
-  ris=tree,tree:nee.candidates=4,rll,rll:nee.candidates=4,rht
+  ris=tree,tree:nee.candidates=4,rll,rll:nee.candidates=4,rll:nee.candidates=4:nee.target=learnt,rll:nee.candidates=2:nee.target=learnt,rht
   run "$scene-direct-ris" builtin:$scene --integrator direct --samplers $ris --time $seconds --frames $f --reference-spp $ref_direct
   run "$scene-path-ris" builtin:$scene --integrator path --samplers $ris --time $seconds --frames $f --reference-spp $ref_path
   fi

@@ -200,19 +200,30 @@ for scene, integ, s, b, r in goal_rows:
         goal(f"{scene}, {integ}: rll samples per second >= 85% of power's", f"{100 * ratio:.0f}%", ratio >= 0.85)
 
 
+# rll's resampling variants in the -ris comparison (scripts/bench.sh), with their labels.
+RLL_RIS = {"rll:nee.candidates=4": "rll+ris",
+           "rll:nee.candidates=4:nee.target=learnt": "rll+ris(learnt)",
+           "rll:nee.candidates=2:nee.target=learnt": "rll+ris2(learnt)"}
+
+
 def best_rll(scene, integ, b):
     """rll's best default at this budget, with or without resampled NEE (the -ris comparison ran
-    rll with and without nee.candidates=4 on the same reference): (label, relMSE, trimmed)."""
+    rll with and without its resampling variants on the same reference): (label, relMSE, trimmed)."""
     best = ("rll", med(b["rll"], "relmse"), trimmed(b["rll"]))
     ris = load(f"{scene}-{integ}-ris")
-    if ris and "rll:nee.candidates=4" in by_name(ris) and "rll" in by_name(ris):
-        # The ratio of the variants within their own run, applied to the plain rll above.
-        x = by_name(ris)
-        f = med(x["rll:nee.candidates=4"], "relmse") / med(x["rll"], "relmse")
-        ft = (trimmed(x["rll:nee.candidates=4"]) / trimmed(x["rll"])
-              if trimmed(x["rll"]) and trimmed(x["rll:nee.candidates=4"]) else None)
-        if f < 1:
-            best = ("rll+ris", best[1] * f, best[2] * ft if best[2] and ft else best[2])
+    if not ris or "rll" not in by_name(ris):
+        return best
+    x = by_name(ris)
+    plain = ("rll", med(b["rll"], "relmse"), trimmed(b["rll"]))
+    for name, label in RLL_RIS.items():
+        if name not in x:
+            continue
+        # The ratio of the variant to plain rll within their own run, applied to the rll above.
+        f = med(x[name], "relmse") / med(x["rll"], "relmse")
+        ft = (trimmed(x[name]) / trimmed(x["rll"]) if trimmed(x["rll"]) and trimmed(x[name])
+              else None)
+        if plain[1] * f < best[1]:
+            best = (label, plain[1] * f, plain[2] * ft if plain[2] and ft else plain[2])
     return best
 
 
@@ -315,24 +326,27 @@ if not ris_rows:
     keep_previous("Resampled next-event estimation at equal time")
 else:
     P("`tree+ris` and `rll+ris`: tree and rll with four candidates (`tree:nee.candidates=4`; docs/nee.md: "
-      "four candidates from the sampler, resampled by their unshadowed contribution, one shadow ray) beside "
-      "plain tree, plain rll and rht, in one interleaved compare of its own on the same cached reference and "
-      "budget. relMSE medians; `/ plain` is relMSE and trimmed relMSE over the plain sampler's in the same "
-      "run.\n")
-    P("| scene | integrator | tree | tree+ris | / plain | rll | rll+ris | / plain | rht | best rll / rht |")
-    P("|---|---|---|---|---|---|---|---|---|---|")
+      "four candidates from the sampler, resampled by their unshadowed contribution, one shadow ray); "
+      "`rll+ris(learnt)` and `rll+ris2(learnt)`: rll with four and two candidates and the learnt target "
+      "(`nee.target=learnt`: the unshadowed contribution times the cell's learnt factor of the candidate's "
+      "cluster); beside plain tree, plain rll and rht, in one interleaved compare of its own on the same "
+      "cached reference and budget. relMSE medians; `/ plain` is relMSE and trimmed relMSE over the plain "
+      "sampler's in the same run.\n")
+    names = [("tree", "tree+ris", "tree:nee.candidates=4")] + [("rll", label, n) for n, label in RLL_RIS.items()]
+    P("| scene | integrator | tree | rll | " + " | ".join(f"{label} | / plain" for _, label, _ in names)
+      + " | rht | best rll / rht |")
+    P("|---|---|---|---|" + "---|---|" * len(names) + "---|---|")
     for scene, integ, s in ris_rows:
         b = by_name(s)
-        cells = []
-        for n in ("tree", "rll"):
-            x, y = b.get(n), b.get(n + ":nee.candidates=4")
+        cells = [fmt(med(b[n], "relmse")) if n in b else "—" for n in ("tree", "rll")]
+        for plain, _, n in names:
+            x, y = b.get(plain), b.get(n)
             if not x or not y:
-                cells += [fmt(med(x, "relmse")) if x else "—", fmt(med(y, "relmse")) if y else "—", "—"]
+                cells += [fmt(med(y, "relmse")) if y else "—", "—"]
                 continue
             t = trimmed(y) / trimmed(x) if trimmed(x) and trimmed(y) else None
-            cells += [fmt(med(x, "relmse")), fmt(med(y, "relmse")),
-                      f"{fmt(med(y, 'relmse') / med(x, 'relmse'))}; {fmt(t)}"]
-        rllv = [med(b[n], "relmse") for n in ("rll", "rll:nee.candidates=4") if n in b]
+            cells += [fmt(med(y, "relmse")), f"{fmt(med(y, 'relmse') / med(x, 'relmse'))}; {fmt(t)}"]
+        rllv = [med(b[n], "relmse") for n in ["rll"] + list(RLL_RIS) if n in b]
         rht = med(b["rht"], "relmse") if "rht" in b else None
         P(f"| {scene} | {integ} | " + " | ".join(cells) + f" | {fmt(rht)} | "
           f"{fmt(min(rllv) / rht) if rllv and rht else '—'} |")
