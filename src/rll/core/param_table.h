@@ -35,7 +35,7 @@ struct ParamRange {
     return r;
   }
   bool contains(double v) const;
-  // "in (0, 1]", "at least 1", "positive", "in [0, inf) or -1": what an error says.
+  // "in (0, 1]", "at least 1", "positive", "at least 0 (or -1)": what an error says.
   std::string text() const;
 };
 

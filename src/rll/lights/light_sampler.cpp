@@ -16,6 +16,14 @@ const std::vector<std::string>& light_sampler_names() {
   return names;
 }
 
+namespace {
+[[noreturn]] void unknown_sampler(const std::string& name) {
+  std::string list;
+  for (const auto& n : light_sampler_names()) list += (list.empty() ? "" : ", ") + n;
+  fail("unknown light sampler '{}' (valid: {})", name, list);
+}
+}  // namespace
+
 std::vector<std::string> light_sampler_parameters(const std::string& name) {
   if (name == "rll") return describe_rll_params(RllSettings{}, "rll");
   if (name == "fermat") return describe_rll_params(fermat_settings(), "fermat");
@@ -28,9 +36,7 @@ std::vector<std::string> light_sampler_parameters(const std::string& name) {
   if (name == "ltc") return describe_params(ltc_params(), "ltc", LtcSettings{});
   for (const auto& n : light_sampler_names())
     if (n == name) return {};
-  std::string list;
-  for (const auto& n : light_sampler_names()) list += (list.empty() ? "" : ", ") + n;
-  fail("unknown light sampler '{}' (valid: {})", name, list);
+  unknown_sampler(name);
 }
 
 std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const Scene& scene,
@@ -49,9 +55,7 @@ std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const 
     // The oracle samples with RLL's settings (rll.*), so that only the learning differs.
     return std::make_unique<OracleLightSampler>(scene, *accel, rll_settings_from(params), oracle_settings_from(params));
   }
-  std::string list;
-  for (const auto& n : light_sampler_names()) list += (list.empty() ? "" : ", ") + n;
-  fail("unknown light sampler '{}' (valid: {})", name, list);
+  unknown_sampler(name);
 }
 
 }  // namespace rll
