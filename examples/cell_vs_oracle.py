@@ -2,7 +2,7 @@
 """Renders a scene with rll and saves what it learnt, loads that state again, and plots what one
 cell learnt (the pmf of every light at the cell) against the oracle's knowledge of the same cell.
 
-    PYTHONPATH=build/python python3 examples/cell_vs_oracle.py builtin:cornell-boxes-room \
+    PYTHONPATH=build/python /usr/bin/python3 examples/cell_vs_oracle.py builtin:cornell-boxes-room \
         --spp 64 --out cell-example.png
 """
 import argparse

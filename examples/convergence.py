@@ -2,7 +2,7 @@
 """Renders a scene with several light samplers under one budget, measures each against a
 reference as `rll compare` does, and plots their error against render time (log-log).
 
-    PYTHONPATH=build/python python3 examples/convergence.py builtin:cornell-boxes-room \
+    PYTHONPATH=build/python /usr/bin/python3 examples/convergence.py builtin:cornell-boxes-room \
         --samplers power,tree,rll --spp 64 --out convergence-example.png
 """
 import argparse

@@ -17,6 +17,7 @@ namespace rll::python {
 namespace {
 
 constexpr long long kMaxSpp = (1 << 30) - 1;  // as `rll compare --spp`
+constexpr int kMaxThreads = 4096;             // as render()'s
 
 SessionSettings measured_settings(const PyScene& scene, const std::string& integrator,
                                   int max_depth, const py::dict& params) {
@@ -26,9 +27,10 @@ SessionSettings measured_settings(const PyScene& scene, const std::string& integ
   return s;
 }
 
-ReferenceCache cache_at(const py::object& cache_dir) {
-  return ReferenceCache(cache_dir.is_none() ? default_cache_dir()
-                                            : std::filesystem::path(fspath(cache_dir)));
+ReferenceCache cache_at(const Call& c, const Arg<std::optional<PathLike>>& cache_dir) {
+  return ReferenceCache(cache_dir.obj.is_none()
+                            ? default_cache_dir()
+                            : std::filesystem::path(c.path(cache_dir.obj, "cache_dir")));
 }
 
 // The reference as compare's summary.json describes it, its image and variance (0x0: unknown).
@@ -37,13 +39,16 @@ struct Reference {
   nlohmann::json json;
 };
 
+// Renders (or finds in the cache) the reference with the GIL released, Ctrl-C cancelling it as
+// a render (run_watched): then KeyboardInterrupt, and nothing is stored.
 Reference obtain(const RenderSession& session, const ReferenceCache& cache,
                  const ReferenceRequest& request) {
   ObtainedReference got;
-  {
-    py::gil_scoped_release release;
-    got = obtain_reference(session, cache, request, false);
-  }
+  PassWatcher watch;
+  run_watched(watch,
+              [&] { got = obtain_reference(session, cache, request, false, &watch.cancel); });
+  watch.rethrow_or_interrupt();
+  if (!got.complete) fail("the reference render was cancelled");  // (only Ctrl-C cancels it)
   Reference r;
   r.image = std::move(got.image);
   r.variance = std::move(got.variance);
@@ -51,12 +56,32 @@ Reference obtain(const RenderSession& session, const ReferenceCache& cache,
   return r;
 }
 
-py::dict py_reference(PyScene& scene, long long spp, const std::string& sampler, uint64_t seed,
-                      const std::string& integrator, int max_depth, const py::dict& params,
-                      const py::object& cache_dir, bool force, int threads) {
+py::dict py_reference(const Arg<PyScene>& scene_arg, const Arg<long long>& spp_arg,
+                      const Arg<std::string>& sampler_arg, const Arg<uint64_t>& seed_arg,
+                      const Arg<std::string>& integrator_arg, const Arg<int>& max_depth_arg,
+                      const Arg<py::dict>& params_arg,
+                      const Arg<std::optional<PathLike>>& cache_dir_arg, const Arg<bool>& force_arg,
+                      const Arg<int>& threads_arg) {
+  const Call c{"reference"};
+  const std::shared_ptr<PyScene> scene_ptr = c.scene(scene_arg, "scene");
+  PyScene& scene = *scene_ptr;
+  const long long spp = c.get(spp_arg, "spp");
+  const std::string sampler = c.get(sampler_arg, "sampler");
+  const uint64_t seed = c.get(seed_arg, "seed");
+  const std::string integrator = c.get(integrator_arg, "integrator");
+  const int max_depth = c.get(max_depth_arg, "max_depth");
+  const py::dict params = c.get(params_arg, "params");
+  const ReferenceCache cache = cache_at(c, cache_dir_arg);
+  const bool force = c.get(force_arg, "force");
+  const int threads = c.get(threads_arg, "threads");
   if (spp < 2 || spp > kMaxSpp) fail("spp: {} is not in [2, {}]", spp, kMaxSpp);
   const SessionSettings settings = measured_settings(scene, integrator, max_depth, params);
-  std::lock_guard<std::mutex> lock(scene.mutex);
+  // The lock is taken without the GIL: a render holding it takes the GIL to look for Ctrl-C.
+  std::unique_lock<std::mutex> lock(scene.mutex, std::defer_lock);
+  {
+    py::gil_scoped_release release;
+    lock.lock();
+  }
   const auto session = session_for(scene, settings);
   named_sampler(*session, sampler);  // its name and parameters checked before rendering
   ReferenceRequest request;
@@ -64,8 +89,10 @@ py::dict py_reference(PyScene& scene, long long spp, const std::string& sampler,
   request.spp = int(spp);
   request.seed = seed;
   request.force = force;
+  if (threads < 0 || threads > kMaxThreads)
+    fail("threads: {} is not in [0, {}] (0: all cores)", threads, kMaxThreads);
   ThreadLimit limit(threads);
-  const Reference ref = obtain(*session, cache_at(cache_dir), request);
+  const Reference ref = obtain(*session, cache, request);
   py::dict d = to_python(ref.json);
   d["image"] = image_to_array(ref.image);
   d["variance"] =
@@ -73,12 +100,30 @@ py::dict py_reference(PyScene& scene, long long spp, const std::string& sampler,
   return d;
 }
 
-py::dict py_compare(PyScene& scene, const std::vector<std::string>& samplers,
-                    std::optional<long long> spp, std::optional<double> time, int repeats,
-                    uint64_t seed, const py::object& reference, long long reference_spp,
-                    const std::string& reference_sampler, const std::string& integrator,
-                    int max_depth, const py::dict& params, const py::object& cache_dir, int threads,
-                    const py::object& progress) {
+py::dict py_compare(
+    const Arg<PyScene>& scene_arg, const Arg<std::vector<std::string>>& samplers_arg,
+    const Arg<std::optional<long long>>& spp_arg, const Arg<std::optional<double>>& time_arg,
+    const Arg<int>& repeats_arg, const Arg<uint64_t>& seed_arg, const Arg<ReferenceLike>& reference,
+    const Arg<long long>& reference_spp_arg, const Arg<std::string>& reference_sampler_arg,
+    const Arg<std::string>& integrator_arg, const Arg<int>& max_depth_arg,
+    const Arg<py::dict>& params_arg, const Arg<std::optional<PathLike>>& cache_dir_arg,
+    const Arg<int>& threads_arg, const Arg<Callback>& progress_arg) {
+  const Call c{"compare"};
+  const std::shared_ptr<PyScene> scene_ptr = c.scene(scene_arg, "scene");
+  PyScene& scene = *scene_ptr;
+  const std::vector<std::string> samplers = c.get(samplers_arg, "samplers");
+  const std::optional<long long> spp = c.get(spp_arg, "spp");
+  const std::optional<double> time = c.get(time_arg, "time");
+  const int repeats = c.get(repeats_arg, "repeats");
+  const uint64_t seed = c.get(seed_arg, "seed");
+  const long long reference_spp = c.get(reference_spp_arg, "reference_spp");
+  const std::string reference_sampler = c.get(reference_sampler_arg, "reference_sampler");
+  const std::string integrator = c.get(integrator_arg, "integrator");
+  const int max_depth = c.get(max_depth_arg, "max_depth");
+  const py::dict params = c.get(params_arg, "params");
+  const ReferenceCache cache = cache_at(c, cache_dir_arg);
+  const int threads = c.get(threads_arg, "threads");
+  const py::object progress = c.callback(progress_arg, "progress");
   if (samplers.empty()) fail("samplers: give at least one sampler");
   for (size_t i = 0; i < samplers.size(); ++i)
     for (size_t j = 0; j < i; ++j)
@@ -88,8 +133,10 @@ py::dict py_compare(PyScene& scene, const std::vector<std::string>& samplers,
   if (spp && (*spp < 1 || *spp > kMaxSpp)) fail("spp: {} is not in [1, {}]", *spp, kMaxSpp);
   if (time && !(*time > 0 && *time <= 1e7)) fail("time: {} seconds is not in (0, 1e7]", *time);
   if (repeats < 1 || repeats > 1000) fail("repeats: {} is not in [1, 1000]", repeats);
-  if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-    fail("progress: expected a callable or None");
+  if (reference_spp < 1 || reference_spp > kMaxSpp)  // as `rll compare --reference-spp`
+    fail("reference_spp: {} is not in [1, {}]", reference_spp, kMaxSpp);
+  if (threads < 0 || threads > kMaxThreads)
+    fail("threads: {} is not in [0, {}] (0: all cores)", threads, kMaxThreads);
   const SessionSettings settings = measured_settings(scene, integrator, max_depth, params);
   std::unique_lock<std::mutex> lock(scene.mutex, std::defer_lock);
   {
@@ -102,21 +149,22 @@ py::dict py_compare(PyScene& scene, const std::vector<std::string>& samplers,
   ThreadLimit limit(threads);
 
   Reference ref;
-  if (reference.is_none()) {
+  if (reference.obj.is_none()) {
     ReferenceRequest request;
     request.sampler = reference_sampler;
     request.spp = int(reference_spp);
     // A reference never shares its seeds (and noise) with a run.
     request.seed_allowed = [&](uint64_t s) { return !reference_shares_a_seed(s, seed, repeats); };
-    ref = obtain(*session, cache_at(cache_dir), request);
+    ref = obtain(*session, cache, request);
   } else {
-    if (py::isinstance<py::array>(reference)) {
-      ref.image = image_from_array(reference, "reference");
-      ref.json = {{"source", "array"}};
-    } else {
-      const std::string path = fspath(reference);
+    const py::object& r = reference.obj;
+    if (PyUnicode_Check(r.ptr()) || PyBytes_Check(r.ptr()) || py::hasattr(r, "__fspath__")) {
+      const std::string path = c.path(r, "reference");
       ref.image = read_measured_image(path, MeasuredRole::reference);
       ref.json = {{"source", "file"}, {"path", path}};
+    } else {
+      ref.image = c.image(r, "reference");
+      ref.json = {{"source", "array"}};
     }
     check_measured_pixels(ref.image, "reference", MeasuredRole::reference);
     if (ref.image.width() != sc.width || ref.image.height() != sc.height)
@@ -151,14 +199,11 @@ py::dict py_compare(PyScene& scene, const std::vector<std::string>& samplers,
     }
     order.append(this_repeat);
   }
-  if (watch.interrupted) {
-    PyErr_SetNone(PyExc_KeyboardInterrupt);
-    throw py::error_already_set();
-  }
+  watch.rethrow_or_interrupt();
   const std::vector<SamplerSummary> summaries = summarize(samplers, runs);
 
   py::dict d;
-  d["scene"] = scene.settings.scene;
+  d["scene"] = path_to_python(scene.settings.scene);
   d["resolution"] = py::make_tuple(sc.width, sc.height);
   d["lights"] = sc.lights.size();
   d["integrator"] = integrator;

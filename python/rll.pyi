@@ -5,11 +5,13 @@ from typing import Any, Callable, Literal, Optional, Sequence, Tuple, Union, ove
 import numpy as np
 import numpy.typing as npt
 
-_Path = Union[str, os.PathLike[str]]
+_Path = Union[str, bytes, os.PathLike[str], os.PathLike[bytes]]
 _Res = Union[None, str, Tuple[int, int]]
 _ImageLike = npt.ArrayLike
 
 class Error(RuntimeError): ...
+class ArgumentTypeError(Error, TypeError): ...
+class ArgumentValueError(Error, ValueError): ...
 
 class Scene:
     @property

@@ -3,11 +3,14 @@
 // session and evaluation layers), not the command line.
 #include <pybind11/stl.h>
 
+#include <dlfcn.h>
+
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -15,9 +18,11 @@
 #include <thread>
 #include <vector>
 
+#include "interpreter.h"
 #include "module.h"
 #include "rll/core/error.h"
 #include "rll/core/image.h"
+#include "rll/core/memory_budget.h"
 #include "rll/core/parallel.h"
 #include "rll/eval/metrics.h"
 #include "rll/lights/light_sampler.h"
@@ -35,8 +40,171 @@ namespace rll::python {
 
 static_assert(sizeof(Rgb) == 3 * sizeof(float), "images are handed to numpy as float triples");
 
-std::string fspath(const py::handle& path) {
-  return py::str(py::module_::import("os").attr("fspath")(path)).cast<std::string>();
+std::string type_name_of(const py::handle& obj) {
+  if (obj.is_none()) return "None";
+  const py::handle type = py::type::handle_of(obj);
+  const std::string module = py::str(type.attr("__module__")),
+                    name = py::str(type.attr("__qualname__"));
+  return module == "builtins" ? name : module + "." + name;
+}
+
+std::string short_repr(const py::handle& obj, size_t max_chars) {
+  std::string r;
+  try {
+    r = py::repr(obj).cast<std::string>();
+  } catch (const py::error_already_set&) {
+    return "<" + type_name_of(obj) + ">";
+  }
+  if (r.size() > max_chars) r = r.substr(0, max_chars) + "...";
+  return r;
+}
+
+py::str path_to_python(const std::string& path) {
+  return py::module_::import("os").attr("fsdecode")(py::bytes(path));
+}
+
+void Call::type_error(const char* arg, const std::string& expected, const py::handle& got) const {
+  throw ArgumentTypeError(
+      fmt::format("{}(): argument '{}' must be {}, not {}", fn, arg, expected, type_name_of(got)));
+}
+
+void Call::item_type_error(const char* arg, const std::string& expected,
+                           const py::handle& item) const {
+  throw ArgumentTypeError(fmt::format("{}(): argument '{}' must be {}, not one holding {}", fn, arg,
+                                      expected, type_name_of(item)));
+}
+
+void Call::value_error(const char* arg, const std::string& what) const {
+  throw ArgumentValueError(fmt::format("{}(): argument '{}': {}", fn, arg, what));
+}
+
+std::shared_ptr<PyScene> Call::scene(const Arg<PyScene>& a, const char* arg) const {
+  if (!py::isinstance<PyScene>(a.obj)) type_error(arg, "an rll.Scene (rll.load(...))", a.obj);
+  return a.obj.cast<std::shared_ptr<PyScene>>();
+}
+
+std::string Call::path(const py::handle& obj, const char* arg) const {
+  const bool path_like =
+      PyUnicode_Check(obj.ptr()) || PyBytes_Check(obj.ptr()) || py::hasattr(obj, "__fspath__");
+  if (!path_like) type_error(arg, "a path (str, bytes or os.PathLike)", obj);
+  py::object encoded;
+  try {
+    encoded = py::module_::import("os").attr("fsencode")(obj);
+  } catch (const py::error_already_set& e) {  // a __fspath__ that returns neither str nor bytes
+    if (!e.matches(PyExc_TypeError)) throw;
+    type_error(arg, "a path (str, bytes or os.PathLike)", obj);
+  }
+  std::string p = encoded.cast<std::string>();
+  if (const size_t nul = p.find('\0'); nul != std::string::npos)
+    value_error(arg, fmt::format("{} holds a NUL byte (at byte {}), which no file name can hold "
+                                 "(the system would read the name only up to it)",
+                                 short_repr(obj), nul));
+  return p;
+}
+
+py::object Call::callback(const Arg<Callback>& a, const char* arg) const {
+  if (!a.obj.is_none() && !PyCallable_Check(a.obj.ptr()))
+    type_error(arg, "a callable or None", a.obj);
+  return a.obj;
+}
+
+std::string Call::resolution(const Arg<Resolution>& a, const char* arg) const {
+  const py::object& res = a.obj;
+  const char* expected = "None, 'WIDTHxHEIGHT' or (width, height)";
+  if (res.is_none()) return "";
+  if (py::isinstance<py::str>(res)) return res.cast<std::string>();
+  if (!py::isinstance<py::sequence>(res) || py::isinstance<py::bytes>(res))
+    type_error(arg, expected, res);
+  if (py::len(res) != 2)
+    value_error(arg, fmt::format("expected {}, got {}", expected, short_repr(res)));
+  std::string wh;
+  for (const auto& side : res) {
+    if (!PyIndex_Check(side.ptr())) item_type_error(arg, "(width, height), two ints", side);
+    wh += (wh.empty() ? "" : "x") +
+          py::str(py::int_(py::reinterpret_borrow<py::object>(side))).cast<std::string>();
+  }
+  return wh;  // parsed, and its range checked, as --res is
+}
+
+std::string Call::name_list(const Arg<NameList>& a, const char* arg) const {
+  const py::object& names = a.obj;
+  if (names.is_none()) return "";
+  if (py::isinstance<py::str>(names)) return names.cast<std::string>();
+  if (!py::isinstance<py::sequence>(names) || py::isinstance<py::bytes>(names))
+    type_error(arg, "None, 'a,b' or a sequence of str", names);
+  std::string list;
+  for (const auto& name : names) {
+    if (!py::isinstance<py::str>(name)) item_type_error(arg, "a sequence of str", name);
+    list += (list.empty() ? "" : ",") + name.cast<std::string>();
+  }
+  return list;
+}
+
+std::optional<std::array<float, 3>> Call::point(const Arg<Point3>& a, const char* arg) const {
+  const py::object& p = a.obj;
+  if (p.is_none()) return std::nullopt;
+  // The length first: a sequence of a billion numbers is not converted to find it too long.
+  if (!py::isinstance<py::sequence>(p) || py::isinstance<py::str>(p) ||
+      py::isinstance<py::bytes>(p))
+    type_error(arg, "three numbers or None", p);
+  if (py::len(p) != 3) value_error(arg, fmt::format("expected 3 coordinates, got {}", py::len(p)));
+  std::array<float, 3> v{};
+  for (size_t i = 0; i < 3; ++i) {
+    const py::object x = p[py::int_(i)];
+    if (!PyIndex_Check(x.ptr()) && !py::hasattr(x, "__float__"))
+      item_type_error(arg, "three numbers", x);
+    v[i] = float(x.cast<double>());
+  }
+  return v;
+}
+
+void Call::check_image_size(const char* arg, py::ssize_t height, py::ssize_t width,
+                            size_t bytes_per_pixel) const {
+  if (height > kMaxImageSide || width > kMaxImageSide ||
+      size_t(height) * size_t(width) > kMaxImagePixels)
+    value_error(arg, fmt::format("{}x{} is larger than rll's image limit ({} pixels a side, {} "
+                                 "pixels in all)",
+                                 width, height, kMaxImageSide, kMaxImagePixels));
+  check_memory_budget(double(height) * double(width) * double(bytes_per_pixel),
+                      fmt::format("{}(): argument '{}' ({}x{})", fn, arg, width, height));
+}
+
+py::array Call::real_array(const py::handle& obj, const char* arg, int ndim,
+                           const char* shape_text) const {
+  if (obj.is_none()) type_error(arg, fmt::format("an {} array", shape_text), obj);
+  // No copy of an ndarray (a broadcast or strided view stays one); other objects are made into
+  // an array, no larger than what they hold already.
+  py::array a;
+  try {
+    a = py::array::ensure(obj);
+  } catch (const py::error_already_set&) {
+  }
+  if (!a) type_error(arg, fmt::format("an {} array of numbers", shape_text), obj);
+  const char kind = a.dtype().kind();
+  if (kind != 'b' && kind != 'i' && kind != 'u' && kind != 'f')
+    fail("{}: expected an {} array of numbers, got dtype {}", arg, shape_text,
+         py::str(a.dtype()).cast<std::string>());
+  if (a.ndim() != ndim)
+    fail("{}: expected an {} array, got shape {}", arg, shape_text,
+         py::str(a.attr("shape")).cast<std::string>());
+  return a;
+}
+
+Image Call::image(const py::handle& obj, const char* arg) const {
+  const py::array a = real_array(obj, arg, 3, "HxWx3");
+  if (a.shape(2) != 3 || a.shape(0) < 1 || a.shape(1) < 1)
+    fail("{}: expected an HxWx3 array, got shape {}", arg,
+         py::str(a.attr("shape")).cast<std::string>());
+  check_image_size(arg, a.shape(0), a.shape(1), sizeof(Rgb));
+  Image image(int(a.shape(1)), int(a.shape(0)));
+  // numpy copies (and casts, as forcecast did) straight into the image: one copy, not two.
+  const auto h = py::ssize_t(image.height()), w = py::ssize_t(image.width());
+  const auto f = py::ssize_t(sizeof(float));
+  const py::capsule no_owner(image.pixels().data(), [](void*) {});
+  py::array_t<float> into({h, w, py::ssize_t(3)}, {w * 3 * f, 3 * f, f},
+                          reinterpret_cast<float*>(image.pixels().data()), no_owner);
+  py::module_::import("numpy").attr("copyto")(into, a, py::arg("casting") = "unsafe");
+  return image;
 }
 
 py::array image_to_array(Image image) {
@@ -46,22 +214,6 @@ py::array image_to_array(Image image) {
   const auto f = py::ssize_t(sizeof(float));
   return py::array_t<float>({h, w, py::ssize_t(3)}, {w * 3 * f, 3 * f, f},
                             reinterpret_cast<const float*>(owned->pixels().data()), free_image);
-}
-
-Image image_from_array(const py::handle& obj, const char* name) {
-  auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(obj);
-  if (!a) fail("{}: expected an HxWx3 array of numbers", name);
-  if (a.ndim() != 3 || a.shape(2) != 3 || a.shape(0) < 1 || a.shape(1) < 1)
-    fail("{}: expected an HxWx3 array, got shape {}", name,
-         py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()))))
-             .cast<std::string>());
-  if (a.shape(0) > kMaxImageSide || a.shape(1) > kMaxImageSide ||
-      size_t(a.shape(0)) * size_t(a.shape(1)) > kMaxImagePixels)
-    fail("{}: {}x{} is larger than rll's image limit", name, a.shape(1), a.shape(0));
-  Image image(int(a.shape(1)), int(a.shape(0)));
-  std::memcpy(static_cast<void*>(image.pixels().data()), a.data(),
-              image.pixel_count() * sizeof(Rgb));
-  return image;
 }
 
 }  // namespace rll::python
@@ -74,18 +226,6 @@ constexpr long long kMaxSpp = (1 << 30) - 1;
 constexpr int kMaxPassSpp = 1024;  // as `rll render --pass-spp`
 constexpr int kMaxThreads = 4096;
 constexpr double kMaxSeconds = 1e7;
-
-// "WIDTHxHEIGHT" from None (empty: the scene's own), a string or a (width, height) pair.
-std::string resolution_arg(const py::object& res) {
-  if (res.is_none()) return "";
-  if (py::isinstance<py::str>(res)) return res.cast<std::string>();
-  if (py::isinstance<py::sequence>(res) && py::len(res) == 2) {
-    auto wh = res.cast<std::vector<long long>>();
-    return std::to_string(wh[0]) + "x" + std::to_string(wh[1]);
-  }
-  fail("res: expected None, 'WIDTHxHEIGHT' or (width, height), got {}",
-       py::repr(res).cast<std::string>());
-}
 
 // A parameter value as `--set key=value` takes it (Python's True is "true").
 std::string param_value(const py::handle& v) {
@@ -120,6 +260,7 @@ std::shared_ptr<RenderSession> session_for(PyScene& scene, const SessionSettings
 
 std::shared_ptr<LightSampler> named_sampler(const RenderSession& session, const std::string& spec) {
   try {
+    py::gil_scoped_release release;  // a sampler may precompute (the oracle, ltc's tables)
     std::shared_ptr<LightSampler> sampler = session.make_sampler(spec);
     session.check_params_used();
     return sampler;
@@ -134,10 +275,11 @@ std::shared_ptr<LightSampler> named_sampler(const RenderSession& session, const 
 
 namespace {
 
-std::shared_ptr<PyScene> py_load(const py::object& path, const py::object& res) {
+std::shared_ptr<PyScene> py_load(const Arg<PathLike>& path, const Arg<Resolution>& res) {
+  const Call c{"load"};
   auto s = std::make_shared<PyScene>();
-  s->settings.scene = fspath(path);
-  s->settings.resolution = resolution_arg(res);
+  s->settings.scene = c.path(path, "path");
+  s->settings.resolution = c.resolution(res, "res");
   s->session = make_session(s->settings);
   return s;
 }
@@ -168,7 +310,27 @@ py::dict progress_dict(const RenderProgress& p) {
 }
 
 py::object to_python(const nlohmann::json& j) {
-  return py::module_::import("json").attr("loads")(j.dump());
+  // Bytes that are not UTF-8 (a path's) as U+FFFD rather than nlohmann's exception.
+  return py::module_::import("json").attr("loads")(
+      j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+}
+
+py::object parse_json(const std::string& text, const std::string& where,
+                      const std::string& what_to_do) {
+  const py::module_ json = py::module_::import("json");
+  try {
+    return json.attr("loads")(py::bytes(text));
+  } catch (py::error_already_set& e) {
+    // json.JSONDecodeError (a ValueError) with the line and column; UnicodeDecodeError for
+    // bytes that are not text.
+    if (!e.matches(PyExc_ValueError)) throw;
+    const py::object err = e.value();
+    if (py::hasattr(err, "lineno"))
+      fail("{} is not valid JSON (line {}, column {}: {}); {}", where,
+           err.attr("lineno").cast<long long>(), err.attr("colno").cast<long long>(),
+           py::str(err.attr("msg")).cast<std::string>(), what_to_do);
+    fail("{} is not valid JSON ({}); {}", where, py::str(err).cast<std::string>(), what_to_do);
+  }
 }
 
 void PassWatcher::operator()(const RenderProgress& p) {
@@ -228,26 +390,47 @@ void PassWatcher::rethrow() const {
   if (callback_error) std::rethrow_exception(callback_error);
 }
 
+void PassWatcher::rethrow_or_interrupt() const {
+  rethrow();
+  if (interrupted) {
+    PyErr_SetNone(PyExc_KeyboardInterrupt);
+    throw py::error_already_set();
+  }
+}
+
 }  // namespace rll::python
 
 namespace {
 
-PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::string& integrator,
-                   int max_depth, long long spp, std::optional<double> time, const py::object& res,
-                   uint64_t seed, const py::dict& params, int threads, const py::object& progress,
-                   const py::object& aov, bool wavefront, const std::string& device,
-                   int pass_spp, long long max_pass_spp) {
+PyRender py_render(const Arg<PyScene>& scene_arg, const Arg<std::string>& sampler_arg,
+                   const Arg<std::string>& integrator_arg, const Arg<int>& max_depth_arg,
+                   const Arg<long long>& spp_arg, const Arg<std::optional<double>>& time_arg,
+                   const Arg<Resolution>& res_arg, const Arg<uint64_t>& seed_arg,
+                   const Arg<py::dict>& params_arg, const Arg<int>& threads_arg,
+                   const Arg<Callback>& progress_arg, const Arg<NameList>& aov_arg,
+                   const Arg<bool>& wavefront_arg, const Arg<std::string>& device_arg,
+                   const Arg<long long>& pass_spp_arg, const Arg<long long>& max_pass_spp_arg) {
+  const Call c{"render"};
+  const std::shared_ptr<PyScene> scene_ptr = c.scene(scene_arg, "scene");
+  PyScene& scene = *scene_ptr;
+  const std::string sampler_spec = c.get(sampler_arg, "sampler");
+  const std::string integrator = c.get(integrator_arg, "integrator");
+  const int max_depth = c.get(max_depth_arg, "max_depth");
+  const long long spp = c.get(spp_arg, "spp");
+  const std::optional<double> time = c.get(time_arg, "time");
+  const std::string resolution = c.resolution(res_arg, "res");
+  const uint64_t seed = c.get(seed_arg, "seed");
+  const py::dict params = c.get(params_arg, "params");
+  const int threads = c.get(threads_arg, "threads");
+  const py::object progress = c.callback(progress_arg, "progress");
+  const std::string aov_list = c.name_list(aov_arg, "aov");
+  const bool wavefront = c.get(wavefront_arg, "wavefront");
+  const std::string device = c.get(device_arg, "device");
+  const long long pass_spp = c.get(pass_spp_arg, "pass_spp");
+  const long long max_pass_spp = c.get(max_pass_spp_arg, "max_pass_spp");
+
   std::vector<Aov> aovs;
-  if (!aov.is_none()) {
-    std::string list;
-    if (py::isinstance<py::str>(aov)) {
-      list = aov.cast<std::string>();
-    } else {
-      for (const auto& name : aov.cast<std::vector<std::string>>())
-        list += (list.empty() ? "" : ",") + name;
-    }
-    aovs = parse_aovs(list, "aov");
-  }
+  if (!aov_arg.obj.is_none()) aovs = parse_aovs(aov_list, "aov");
   if (!aovs.empty() && (wavefront || device != "cpu"))
     fail("aov: the diagnostics are measured by the megakernel; leave out wavefront and device");
   if (spp < 1 || spp > kMaxSpp) fail("spp: {} is not in [1, {}]", spp, kMaxSpp);
@@ -260,14 +443,11 @@ PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::s
     fail("max_pass_spp: {} is not in [1, {}]", max_pass_spp, kMaxSpp);
   if (threads < 0 || threads > kMaxThreads)
     fail("threads: {} is not in [0, {}] (0: all cores)", threads, kMaxThreads);
-  if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-    fail("progress: expected a callable or None");
   SessionSettings settings = settings_with(scene, params);
   settings.integrator = integrator;
   settings.max_depth = max_depth;
   settings.wavefront = wavefront;
   settings.device = device;
-  const std::string resolution = resolution_arg(res);
   if (!resolution.empty()) settings.resolution = resolution;
 
   // The lock is taken without the GIL: a render holding it takes the GIL between passes.
@@ -310,7 +490,7 @@ PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::s
   r.seconds = p.seconds;
   r.interrupted = watch.interrupted || p.cancelled;
   const Scene& sc = session->scene();
-  r.stats["scene"] = settings.scene;
+  r.stats["scene"] = path_to_python(settings.scene);
   r.stats["resolution"] = py::make_tuple(sc.width, sc.height);
   r.stats["integrator"] = integrator;
   r.stats["max_depth"] = session->integrator().max_depth;
@@ -337,37 +517,201 @@ PyRender py_render(PyScene& scene, const std::string& sampler_spec, const std::s
   return r;
 }
 
-py::dict py_error(const py::handle& image, const py::handle& reference,
-                  const py::handle& reference_variance) {
-  const Image img = image_from_array(image, "img"), ref = image_from_array(reference, "ref");
+py::dict py_error(const Arg<ArrayLike>& image, const Arg<ArrayLike>& reference,
+                  const Arg<std::optional<ArrayLike>>& reference_variance) {
+  const Call c{"error"};
+  const Image img = c.image(image.obj, "img"), ref = c.image(reference.obj, "ref");
   check_measured_pixels(img, "img", MeasuredRole::image);
   check_measured_pixels(ref, "ref", MeasuredRole::reference);
   if (img.width() != ref.width() || img.height() != ref.height())
     fail("error: img is {}x{} and ref is {}x{}", img.width(), img.height(), ref.width(),
          ref.height());
   Image var;
-  const bool has_var = !reference_variance.is_none();
+  const bool has_var = !reference_variance.obj.is_none();
   if (has_var) {
-    var = image_from_array(reference_variance, "reference_variance");
+    var = c.image(reference_variance.obj, "reference_variance");
     check_measured_pixels(var, "reference_variance", MeasuredRole::reference_variance);
     if (var.width() != ref.width() || var.height() != ref.height())
       fail("error: reference_variance is {}x{}, ref {}x{}", var.width(), var.height(), ref.width(),
            ref.height());
   }
-  const ErrorMetrics m = error_metrics(img, ref, has_var ? &var : nullptr);
+  ErrorMetrics m;
+  {
+    py::gil_scoped_release release;
+    m = error_metrics(img, ref, has_var ? &var : nullptr);
+  }
   py::dict d;
   for (const char* name : kMetricNames) d[name] = metric_by_name(m, name);
   d["reference_noise_subtracted"] = has_var;
   return d;
 }
 
+// Text of a file (an EXR header's attribute, a channel's name) as str: bytes that are not UTF-8
+// as U+FFFD rather than a UnicodeDecodeError.
+py::str text_to_python(const std::string& text) {
+  PyObject* s = PyUnicode_DecodeUTF8(text.data(), py::ssize_t(text.size()), "replace");
+  if (!s) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(s);
+}
+
+py::object py_read_exr(const Arg<PathLike>& path_arg, const Arg<bool>& metadata_arg) {
+  const Call c{"read_exr"};
+  const std::string p = c.path(path_arg, "path");
+  const bool metadata = c.get(metadata_arg, "metadata");
+  ExrFile f;
+  {
+    py::gil_scoped_release release;
+    f = read_exr_file(p);
+  }
+  const int w = f.image.width(), h = f.image.height();
+  py::array image = image_to_array(std::move(f.image));
+  if (!metadata) return image;
+  py::dict info, attributes;
+  for (const auto& [k, v] : f.attributes) attributes[text_to_python(k)] = text_to_python(v);
+  info["attributes"] = attributes;
+  info["count"] =
+      f.counts.empty() ? py::object(py::none()) : py::object(numpy_of(std::move(f.counts), {h, w}));
+  py::dict channels;
+  for (auto& [name, values] : f.channels)
+    channels[text_to_python(name)] = numpy_of(std::move(values), {h, w});
+  info["channels"] = channels;
+  const std::string* share = f.attribute(kShareAttribute);
+  info["share"] = share ? parse_json(*share, fmt::format("{}: the {} header", p, kShareAttribute),
+                                     "the file was damaged or written by another program; "
+                                     "read_exr(path) without metadata reads its image")
+                        : py::none();
+  return py::make_tuple(image, info);
+}
+
+void py_write_exr(const Arg<PathLike>& path_arg, const Arg<ArrayLike>& image_arg,
+                  const Arg<std::optional<ArrayLike>>& count_arg,
+                  const Arg<py::dict>& attributes_arg, const Arg<JsonObject>& share_arg) {
+  const Call c{"write_exr"};
+  // The path first: a bad one is refused before an image is converted.
+  const std::string p = c.path(path_arg, "path");
+  const py::dict attributes = c.get(attributes_arg, "attributes");
+  ExrFile f;
+  f.image = c.image(image_arg.obj, "image");
+  if (!count_arg.obj.is_none()) {
+    const py::array a = c.real_array(count_arg.obj, "count", 2, "HxW");
+    if (a.shape(0) != f.image.height() || a.shape(1) != f.image.width())
+      fail("count: expected an HxW array of sample counts ({}x{}), as the image, got shape {}",
+           f.image.height(), f.image.width(), py::str(a.attr("shape")).cast<std::string>());
+    // Counts are whole numbers of samples in the channel's uint32: a negative, fractional or
+    // larger value would be written as another number (forcecast wraps -1 to 4294967295).
+    const py::module_ np = py::module_::import("numpy");
+    const bool whole = a.dtype().kind() != 'f' ||
+                       np.attr("all")(np.attr("equal")(a, np.attr("floor")(a))).cast<bool>();
+    const double lo = np.attr("min")(a).cast<double>(), hi = np.attr("max")(a).cast<double>();
+    if (!whole || !(lo >= 0) || !(hi <= 4294967295.0))
+      fail(
+          "count: the sample counts must be whole numbers in [0, 4294967295] (the count "
+          "channel's uint32), found values in [{}, {}]{}",
+          lo, hi, whole ? "" : " and fractions");
+    auto counts = py::array_t<uint32_t, py::array::c_style | py::array::forcecast>::ensure(a);
+    if (!counts) throw py::error_already_set();
+    f.counts.assign(counts.data(), counts.data() + counts.size());
+  }
+  for (const auto& [k, v] : attributes) {
+    if (!py::isinstance<py::str>(k)) c.item_type_error("attributes", "a dict of str -> str", k);
+    const std::string key = py::str(k).cast<std::string>();
+    if (!py::isinstance<py::str>(v)) fail("attributes: the value of '{}' is not a str", key);
+    f.attributes.emplace_back(key, v.cast<std::string>());
+  }
+  if (!share_arg.obj.is_none()) {
+    const py::object& share = share_arg.obj;
+    if (!py::isinstance<py::dict>(share)) c.type_error("share", "a dict or None", share);
+    if (f.attribute(kShareAttribute)) fail("share: also given in attributes");
+    std::string text;
+    try {
+      // JSON proper (no NaN or Infinity, which rll merge's parser refuses).
+      text = py::module_::import("json")
+                 .attr("dumps")(share, py::arg("allow_nan") = false)
+                 .cast<std::string>();
+    } catch (py::error_already_set& e) {
+      if (!e.matches(PyExc_TypeError) && !e.matches(PyExc_ValueError)) throw;
+      fail("share: cannot be stored as JSON ({}); give a dict of str, numbers, lists and dicts",
+           py::str(e.value()).cast<std::string>());
+    }
+    f.attributes.emplace_back(kShareAttribute, text);
+  }
+  py::gil_scoped_release release;
+  write_exr(p, f);
+}
+
+py::array py_cell_colours(const Arg<ArrayLike>& cells_arg) {
+  const Call c{"cell_colours"};
+  const py::array a = c.real_array(cells_arg.obj, "cells", 2, "HxW (Render.aov['cell'])");
+  c.check_image_size("cells", a.shape(0), a.shape(1), sizeof(Rgb) + sizeof(float));
+  const auto ids = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
+  if (!ids) throw py::error_already_set();
+  Image image(int(a.shape(1)), int(a.shape(0)));
+  for (size_t i = 0; i < image.pixel_count(); ++i) image[i] = cell_colour(ids.data()[i]);
+  return image_to_array(std::move(image));
+}
+
+// The folder this module was loaded from (for PYTHONPATH in messages; __file__ is set only
+// after the module's init).
+std::string module_folder() {
+  Dl_info info{};
+  if (!dladdr(reinterpret_cast<const void*>(&module_folder), &info) || !info.dli_fname)
+    return "<the folder of rll's module>";
+  return std::filesystem::path(info.dli_fname).parent_path().string();
+}
+
+// Refuses (ImportError) an interpreter of another Python installation than the one the module
+// was built for (interpreter.h): pyenv's python3 first on PATH, say, of the same version loads
+// the module but lacks Debian's numpy ("No module named numpy" at the first array) or has
+// another one; and an interpreter of that installation that cannot import numpy (a venv
+// without the system's packages). Either error says which interpreter to use.
+void check_interpreter() {
+  const py::module_ sys = py::module_::import("sys"), os = py::module_::import("os");
+  const auto real = [&](const py::object& p) {
+    return os.attr("path").attr("realpath")(p).cast<std::string>();
+  };
+  const std::string running = py::str(sys.attr("executable")).cast<std::string>();
+  const std::string version = py::str(sys.attr("version")).cast<std::string>();
+  const std::string this_one =
+      fmt::format("{} (Python {})", running.empty() ? "this Python" : running,
+                  version.substr(0, version.find(' ')));
+  // (An empty prefix: the build could not ask the interpreter; nothing to compare with.)
+  if (*kBuiltForBasePrefix && real(sys.attr("base_prefix")) != real(py::str(kBuiltForBasePrefix)))
+    throw std::runtime_error(fmt::format(
+        "rll was built for {} (Python {}, installed in {}), but this is {}, installed in {}, "
+        "whose numpy and ABI are not the ones rll was built with: run PYTHONPATH={} {}, or "
+        "build rll for this interpreter (cmake -DPython3_EXECUTABLE={})",
+        kBuiltForExecutable, kBuiltForVersion, kBuiltForBasePrefix, this_one,
+        py::str(sys.attr("base_prefix")).cast<std::string>(), module_folder(), kBuiltForExecutable,
+        running));
+  try {
+    py::module_::import("numpy");
+  } catch (py::error_already_set& e) {
+    if (!e.matches(PyExc_ImportError)) throw;
+    throw std::runtime_error(fmt::format(
+        "rll needs numpy, which {} cannot import ({}): install numpy for it (a venv made with "
+        "--system-site-packages sees Debian's python3-numpy), or run PYTHONPATH={} {}, which "
+        "rll was built for",
+        this_one, py::str(e.value()).cast<std::string>(), module_folder(), kBuiltForExecutable));
+  }
+}
+
 }  // namespace
 
 PYBIND11_MODULE(rll, m) {
+  check_interpreter();
   m.doc() =
       "rll, a path tracer with learnt light sampling: load scenes, render them with any light "
       "sampler into numpy arrays, measure images against references, read and write EXR files.";
-  py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+  const py::object error = py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+  // Registered after rll.Error: pybind11 tries the last registered translator first.
+  const py::tuple type_bases = py::make_tuple(error, py::handle(PyExc_TypeError));
+  const py::tuple value_bases = py::make_tuple(error, py::handle(PyExc_ValueError));
+  py::register_exception<ArgumentTypeError>(m, "ArgumentTypeError", type_bases).doc() =
+      "An argument of the wrong type (None where an object is needed): a TypeError and "
+      "an rll.Error.";
+  py::register_exception<ArgumentValueError>(m, "ArgumentValueError", value_bases).doc() =
+      "An argument that Python's own functions would refuse with a ValueError (a path "
+      "holding a NUL byte, an int out of range): a ValueError and an rll.Error.";
   bind_state(m);
 
   m.def(
@@ -383,7 +727,7 @@ PYBIND11_MODULE(rll, m) {
   py::class_<PyScene, std::shared_ptr<PyScene>>(
       m, "Scene", "A loaded scene with its light tree and ray-tracing structure (rll.load).")
       .def_property_readonly(
-          "source", [](const PyScene& s) { return s.settings.scene; },
+          "source", [](const PyScene& s) { return path_to_python(s.settings.scene); },
           "The file or builtin:NAME it was loaded from.")
       .def_property_readonly(
           "lights", [](const PyScene& s) { return s.scene().lights.size(); },
@@ -404,9 +748,9 @@ PYBIND11_MODULE(rll, m) {
           [](const PyScene& s) { return py::make_tuple(s.scene().width, s.scene().height); },
           "(width, height) of the film.")
       .def("__repr__", [](const PyScene& s) {
-        return "<rll.Scene '" + s.settings.scene + "': " + std::to_string(s.scene().lights.size()) +
-               " lights, " + std::to_string(s.scene().mesh.triangle_count()) + " triangles, " +
-               std::to_string(s.scene().width) + "x" + std::to_string(s.scene().height) + ">";
+        return py::str("<rll.Scene '{}': {} lights, {} triangles, {}x{}>")
+            .format(path_to_python(s.settings.scene), s.scene().lights.size(),
+                    s.scene().mesh.triangle_count(), s.scene().width, s.scene().height);
       });
 
   py::class_<PyRender>(m, "Render", "The result of rll.render.")
@@ -451,7 +795,8 @@ PYBIND11_MODULE(rll, m) {
         "core. `progress(dict)` is called after every pass (passes, spp, spp_target, seconds,\n"
         "samples). The GIL is released while rendering; Ctrl-C stops the render within\n"
         "milliseconds, inside a pass too, and returns what it has (Render.interrupted is then\n"
-        "True; Render.counts has each pixel's samples, Render.spp the fewest). `aov`: per-pixel diagnostics at the\n"
+        "True; Render.counts has each pixel's samples, Render.spp the fewest). `aov`: per-pixel "
+        "diagnostics at the\n"
         "camera vertex, names as `rll render --aov` takes them (a list or 'a,b'; aov_names()),\n"
         "returned in Render.aov; the image is the same with or without. `wavefront` and\n"
         "`device` ('cpu' or 'cuda') as `--wavefront` and `--device`; `pass_spp` and\n"
@@ -462,69 +807,16 @@ PYBIND11_MODULE(rll, m) {
         "Errors of an HxWx3 image against a reference as `rll error` measures them: a dict of\n"
         "relmse, trimmed_relmse, mrse and mse; with `reference_variance` (per pixel and\n"
         "channel) the reference's own noise is subtracted.");
+  m.def("read_exr", &py_read_exr, py::arg("path"), py::arg("metadata") = false,
+        "Reads the R, G, B channels of an OpenEXR file as a float32 HxWx3 array. With\n"
+        "`metadata`, returns (image, info): info['count'] the samples behind each pixel (uint32\n"
+        "HxW, the `count` channel `rll render` writes; None where the file has none),\n"
+        "info['attributes'] the header's string attributes, info['channels'] its other float\n"
+        "channels (name -> HxW; `rll render --aov` writes aov.NAME), info['share'] the `rll.share` "
+        "header\n"
+        "(the settings and share a render was made with, parsed from JSON; None if absent).");
   m.def(
-      "read_exr",
-      [](const py::object& path, bool metadata) -> py::object {
-        const std::string p = fspath(path);
-        ExrFile f;
-        {
-          py::gil_scoped_release release;
-          f = read_exr_file(p);
-        }
-        const int w = f.image.width(), h = f.image.height();
-        py::array image = image_to_array(std::move(f.image));
-        if (!metadata) return image;
-        py::dict info, attributes;
-        for (const auto& [k, v] : f.attributes) attributes[py::str(k)] = v;
-        info["attributes"] = attributes;
-        info["count"] = f.counts.empty() ? py::object(py::none())
-                                         : py::object(numpy_of(std::move(f.counts), {h, w}));
-        py::dict channels;
-        for (auto& [name, values] : f.channels)
-          channels[py::str(name)] = numpy_of(std::move(values), {h, w});
-        info["channels"] = channels;
-        const std::string* share = f.attribute(kShareAttribute);
-        info["share"] = share ? py::module_::import("json").attr("loads")(*share) : py::none();
-        return py::make_tuple(image, info);
-      },
-      py::arg("path"), py::arg("metadata") = false,
-      "Reads the R, G, B channels of an OpenEXR file as a float32 HxWx3 array. With\n"
-      "`metadata`, returns (image, info): info['count'] the samples behind each pixel (uint32\n"
-      "HxW, the `count` channel `rll render` writes; None where the file has none),\n"
-      "info['attributes'] the header's string attributes, info['channels'] its other float\n"
-      "channels (name -> HxW; `rll render --aov` writes aov.NAME), info['share'] the `rll.share` "
-      "header\n"
-      "(the settings and share a render was made with, parsed from JSON; None if absent).");
-  m.def(
-      "write_exr",
-      [](const py::object& path, const py::handle& image, const py::object& count,
-         const py::dict& attributes, const py::object& share) {
-        ExrFile f;
-        f.image = image_from_array(image, "image");
-        if (!count.is_none()) {
-          auto c = py::array_t<uint32_t, py::array::c_style | py::array::forcecast>::ensure(count);
-          if (!c || c.ndim() != 2 || c.shape(0) != f.image.height() ||
-              c.shape(1) != f.image.width())
-            fail("count: expected an HxW array of sample counts ({}x{}), as the image",
-                 f.image.height(), f.image.width());
-          f.counts.assign(c.data(), c.data() + c.size());
-        }
-        for (const auto& [k, v] : attributes) {
-          const std::string key = py::str(k).cast<std::string>();
-          if (!py::isinstance<py::str>(v)) fail("attributes: the value of '{}' is not a str", key);
-          f.attributes.emplace_back(key, v.cast<std::string>());
-        }
-        if (!share.is_none()) {
-          if (f.attribute(kShareAttribute)) fail("share: also given in attributes");
-          f.attributes.emplace_back(
-              kShareAttribute,
-              py::module_::import("json").attr("dumps")(share).cast<std::string>());
-        }
-        const std::string p = fspath(path);
-        py::gil_scoped_release release;
-        write_exr(p, f);
-      },
-      py::arg("path"), py::arg("image"), py::arg("count") = py::none(),
+      "write_exr", &py_write_exr, py::arg("path"), py::arg("image"), py::arg("count") = py::none(),
       py::arg("attributes") = py::dict(), py::arg("share") = py::none(),
       "Writes an HxWx3 array as a 32-bit float RGB OpenEXR file (atomically); with `count`\n"
       "(HxW sample counts, e.g. Render.counts) the `count` channel, `attributes` (str -> str) as\n"
@@ -538,18 +830,8 @@ PYBIND11_MODULE(rll, m) {
         return d;
       },
       "The per-pixel diagnostics render(aov=...) and `rll render --aov` know, name -> meaning.");
-  m.def(
-      "cell_colours",
-      [](const py::handle& cells) {
-        auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(cells);
-        if (!a || a.ndim() != 2)
-          fail("cells: expected an HxW array of cell ids (Render.aov['cell'])");
-        Image image(int(a.shape(1)), int(a.shape(0)));
-        for (size_t i = 0; i < image.pixel_count(); ++i) image[i] = cell_colour(a.data()[i]);
-        return image_to_array(std::move(image));
-      },
-      py::arg("cells"),
-      "A false colour per cell id of an HxW cell image (Render.aov['cell']): HxWx3 float32,\n"
-      "neighbouring ids in unrelated colours, black where there is no cell (-1).");
+  m.def("cell_colours", &py_cell_colours, py::arg("cells"),
+        "A false colour per cell id of an HxW cell image (Render.aov['cell']): HxWx3 float32,\n"
+        "neighbouring ids in unrelated colours, black where there is no cell (-1).");
   bind_measure(m);
 }

@@ -42,21 +42,14 @@ struct PyState {
     return {s.initial_size(), s.initial_ends(), s.initial_nodes(), nullptr};
   }
   // The shading point the sampler is asked about: the cell's anchor (or the given point).
-  LightContext context(uint32_t cell, const py::object& point, const py::object& normal) const {
+  LightContext context(uint32_t cell, const std::optional<std::array<float, 3>>& point,
+                       const std::optional<std::array<float, 3>>& normal) const {
     const CellAnchor& a = cuts().anchor(cell);
     LightContext ctx;
     ctx.p = a.p;
     ctx.n = a.n;
-    if (!point.is_none()) {
-      const auto p = point.cast<std::vector<float>>();
-      if (p.size() != 3) fail("point: expected 3 coordinates, got {}", p.size());
-      ctx.p = Vec3(p[0], p[1], p[2]);
-    }
-    if (!normal.is_none()) {
-      const auto n = normal.cast<std::vector<float>>();
-      if (n.size() != 3) fail("normal: expected 3 coordinates, got {}", n.size());
-      ctx.n = normalize(Vec3(n[0], n[1], n[2]));
-    }
+    if (point) ctx.p = Vec3((*point)[0], (*point)[1], (*point)[2]);
+    if (normal) ctx.n = normalize(Vec3((*normal)[0], (*normal)[1], (*normal)[2]));
     ctx.ns = ctx.n;
     ctx.cell = cell;
     return ctx;
@@ -100,7 +93,8 @@ py::dict cells_dict(const PyState& s) {
   return d;
 }
 
-py::dict cut_dict(const PyState& s, long long cell) {
+py::dict cut_dict(const PyState& s, const Arg<long long>& cell_arg) {
+  const long long cell = Call{"State.cut"}.get(cell_arg, "cell");
   s.check_cell(cell);
   const uint32_t c = uint32_t(cell);
   const detail::RllCut cut = s.cut(c);
@@ -168,18 +162,26 @@ py::dict tree_dict(const LightTree& tree) {
   return d;
 }
 
-py::object pmf(const PyState& s, long long cell, const py::object& light, const py::object& point,
-               const py::object& normal) {
+py::object pmf(const PyState& s, const Arg<long long>& cell_arg,
+               const Arg<std::optional<long long>>& light_arg, const Arg<Point3>& point_arg,
+               const Arg<Point3>& normal_arg) {
+  const Call c{"State.pmf"};
+  const long long cell = c.get(cell_arg, "cell");
+  const std::optional<long long> light = c.get(light_arg, "light");
+  const auto point = c.point(point_arg, "point"), normal = c.point(normal_arg, "normal");
   s.check_cell(cell);
   const LightContext ctx = s.context(uint32_t(cell), point, normal);
   const LightSampler& sampler = *s.handle.sampler;
   const uint32_t lights = uint32_t(s.tree().light_count());
-  if (light.is_none()) {
+  if (!light) {
     std::vector<float> all(lights);
-    for (uint32_t l = 0; l < lights; ++l) all[l] = sampler.pmf(ctx, l);
+    {
+      py::gil_scoped_release release;
+      for (uint32_t l = 0; l < lights; ++l) all[l] = sampler.pmf(ctx, l);
+    }
     return numpy_of(std::move(all));
   }
-  const long long l = light.cast<long long>();
+  const long long l = *light;
   if (l < 0 || l >= (long long)lights) fail("light: {} is not in [0, {})", l, lights);
   return py::float_(sampler.pmf(ctx, uint32_t(l)));
 }
@@ -249,9 +251,10 @@ void bind_state(py::module_& m) {
            "to its cut()['probability'].")
       .def(
           "save",
-          [](const PyState& s, const py::object& path) {
-            save_sampler_state(fspath(path), *s.handle.sampler,
-                               s.handle.session->scene().fingerprint());
+          [](const PyState& s, const Arg<PathLike>& path) {
+            const std::string p = Call{"State.save"}.path(path, "path");
+            py::gil_scoped_release release;
+            save_sampler_state(p, *s.handle.sampler, s.handle.session->scene().fingerprint());
           },
           py::arg("path"),
           "Saves the state as `rll render --rll-state FILE` does (loaded by a render of the same "
@@ -264,16 +267,27 @@ void bind_state(py::module_& m) {
 
   m.def(
       "load_state",
-      [](const py::object& path, const std::shared_ptr<PyScene>& scene, const std::string& sampler,
-         const py::dict& params) {
-        const std::string p = fspath(path);
-        const SessionSettings settings = settings_with(*scene, params);
-        std::lock_guard<std::mutex> lock(scene->mutex);
+      [](const Arg<PathLike>& path, const Arg<PyScene>& scene_arg,
+         const Arg<std::string>& sampler_arg, const Arg<py::dict>& params_arg) {
+        const Call c{"load_state"};
+        const std::string p = c.path(path, "path");
+        const std::shared_ptr<PyScene> scene = c.scene(scene_arg, "scene");
+        const std::string sampler = c.get(sampler_arg, "sampler");
+        const SessionSettings settings = settings_with(*scene, c.get(params_arg, "params"));
+        // The lock is taken without the GIL, as render() takes it.
+        std::unique_lock<std::mutex> lock(scene->mutex, std::defer_lock);
+        {
+          py::gil_scoped_release release;
+          lock.lock();
+        }
         SamplerHandle h;
         h.session = session_for(*scene, settings);
         h.sampler = named_sampler(*h.session, sampler);
         check_sampler_has_state(*h.sampler, "sampler");
-        load_sampler_state(p, *h.sampler, h.session->scene().fingerprint());
+        {
+          py::gil_scoped_release release;
+          load_sampler_state(p, *h.sampler, h.session->scene().fingerprint());
+        }
         return state_object(h);
       },
       py::arg("path"), py::arg("scene"), py::arg("sampler") = "rll", py::arg("params") = py::dict(),

@@ -671,3 +671,445 @@ def test_install_puts_the_program_and_the_module_under_the_prefix(tmp_path):
                        capture_output=True, text=True, env=env)
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith(str(site)) and int(r.stdout.split()[1]) == len(rll.samplers())
+
+
+# --- Hardening (issue 42): None and wrong types, Ctrl-C, memory, paths, messages, interpreter ---
+
+STUB = os.path.join(os.path.dirname(rll.__file__), "rll.pyi")
+
+
+def stub_parameters():
+    """Every function and State method of the stub, with each parameter and whether it takes
+    None (a None default, or an overload that takes None)."""
+    import ast
+    tree = ast.parse(open(STUB).read())
+    found = {}
+
+    def add(name, fn):
+        params = found.setdefault(name, {})
+        args = fn.args.args + fn.args.kwonlyargs
+        defaults = [None] * (len(fn.args.args) - len(fn.args.defaults)) + fn.args.defaults + \
+            fn.args.kw_defaults
+        for a, d in zip(args, defaults):
+            if a.arg == "self":
+                continue
+            takes_none = isinstance(d, ast.Constant) and d.value is None
+            params[a.arg] = params.get(a.arg, False) or takes_none
+
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            add(node.name, node)
+        elif isinstance(node, ast.ClassDef) and node.name == "State":
+            for f in node.body:
+                if isinstance(f, ast.FunctionDef) and not any(
+                        isinstance(d, ast.Name) and d.id == "property" for d in f.decorator_list):
+                    add("State." + f.name, f)
+    return found
+
+
+STUB_PARAMS = stub_parameters()
+NONE_CASES = [(fn, arg) for fn, params in STUB_PARAMS.items() for arg, takes_none in
+              params.items() if not takes_none]
+
+# A call of each function that succeeds, quickly; the cases replace one argument by None. Run in
+# a subprocess, so that a crash of the interpreter is seen (and the case it died at).
+NONE_SCRIPT = r"""
+import json, os, sys, traceback
+import numpy as np
+import rll
+tmp = sys.argv[1]
+cases = json.loads(sys.argv[2])
+box = rll.load("builtin:cornell-box", res=(8, 6))
+img = np.ones((6, 8, 3), np.float32)
+st = rll.render(box, sampler="rll", spp=2).state
+exr = os.path.join(tmp, "a.exr")
+rll.write_exr(exr, img)
+st.save(os.path.join(tmp, "s.state"))
+cell = int(st.cells["id"][0])
+valid = {
+    "scenes": (rll.scenes, {}), "samplers": (rll.samplers, {}), "aov_names": (rll.aov_names, {}),
+    "load": (rll.load, dict(path="builtin:cornell-box", res=(8, 6))),
+    "render": (rll.render, dict(scene=box, sampler="power", integrator="path", max_depth=2,
+                                spp=1, seed=1, params={}, threads=1, wavefront=False,
+                                device="cpu", pass_spp=1, max_pass_spp=1)),
+    "load_state": (rll.load_state, dict(path=os.path.join(tmp, "s.state"), scene=box,
+                                        sampler="rll", params={})),
+    "error": (rll.error, dict(img=img, ref=img)),
+    "read_exr": (rll.read_exr, dict(path=exr, metadata=False)),
+    "write_exr": (rll.write_exr, dict(path=os.path.join(tmp, "b.exr"), image=img,
+                                      attributes={})),
+    "cell_colours": (rll.cell_colours, dict(cells=np.zeros((2, 2)))),
+    "reference": (rll.reference, dict(scene=box, spp=2, sampler="power", seed=5,
+                                      integrator="path", max_depth=2, params={},
+                                      cache_dir=os.path.join(tmp, "cache"), force=False,
+                                      threads=1)),
+    "compare": (rll.compare, dict(scene=box, samplers=["power"], spp=1, repeats=1, seed=1,
+                                  reference=img, reference_spp=2, reference_sampler="power",
+                                  integrator="path", max_depth=2, params={}, threads=1)),
+    "State.cut": (st.cut, dict(cell=cell)),
+    "State.pmf": (st.pmf, dict(cell=cell, light=0)),
+    "State.save": (st.save, dict(path=os.path.join(tmp, "t.state"))),
+}
+checked = set()
+for fn, arg in cases:
+    out = {"case": [fn, arg]}
+    if fn not in valid:
+        out["error"] = "the test has no valid call of " + fn
+    else:
+        f, kwargs = valid[fn]
+        if fn not in checked:
+            f(**kwargs)  # the valid call works: the None case tests None, not another fault
+            checked.add(fn)
+        try:
+            f(**dict(kwargs, **{arg: None}))
+            out["error"] = "None was taken"
+        except Exception as e:
+            out["types"] = [t.__name__ for t in type(e).__mro__]
+            out["is_rll_error"] = isinstance(e, rll.Error)
+            out["message"] = str(e)
+    print(json.dumps(out), flush=True)
+"""
+
+
+@pytest.fixture(scope="module")
+def none_results(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("none")
+    r = subprocess.run([sys.executable, "-c", NONE_SCRIPT, str(tmp), json.dumps(NONE_CASES)],
+                       capture_output=True, text=True, timeout=120)
+    results = {}
+    for line in r.stdout.splitlines():
+        d = json.loads(line)
+        results[tuple(d["case"])] = d
+    return results, r
+
+
+def test_the_none_cases_cover_every_binding():
+    public = {n for n in dir(rll) if not n.startswith("_") and callable(getattr(rll, n)) and
+              not isinstance(getattr(rll, n), type)}
+    assert public <= set(STUB_PARAMS), "functions missing from rll.pyi"
+    for name in ("load_state", "render", "reference", "compare", "write_exr", "State.pmf"):
+        assert any(fn == name for fn, _ in NONE_CASES), name
+    assert ("load_state", "scene") in NONE_CASES and ("compare", "samplers") in NONE_CASES
+    # Arguments that take None are not among the cases.
+    assert ("render", "time") not in NONE_CASES and ("State.pmf", "light") not in NONE_CASES
+
+
+@pytest.mark.parametrize("fn,arg", NONE_CASES, ids=[f"{f}-{a}" for f, a in NONE_CASES])
+def test_none_is_refused_by_name(none_results, fn, arg):
+    # rll.load_state(path, None) ended the interpreter with SIGSEGV (None made a null pointer).
+    results, run = none_results
+    if (fn, arg) not in results:
+        pytest.fail(f"the interpreter died (exit {run.returncode}) at or before {fn}({arg}=None):"
+                    f"\n{run.stderr[-2000:]}")
+    d = results[(fn, arg)]
+    assert "error" not in d, d["error"]
+    assert "TypeError" in d["types"] and d["is_rll_error"], d
+    assert d["message"].startswith(f"{fn}(): argument '{arg}' must be "), d["message"]
+    assert d["message"].endswith("not None"), d["message"]
+
+
+def test_none_subprocess_ran_every_case(none_results):
+    results, run = none_results
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert len(results) == len(NONE_CASES)
+
+
+@pytest.mark.parametrize("call,names", [
+    (lambda box: rll.render(box, spp=1, res=(1.5, 2)),
+     "render(): argument 'res' must be (width, height), two ints, not one holding float"),
+    (lambda box: rll.render(box, spp=1, aov=[1]),
+     "render(): argument 'aov' must be a sequence of str, not one holding int"),
+    (lambda box: rll.render(box, spp="4"), "render(): argument 'spp' must be an int, not str"),
+    (lambda box: rll.render("builtin:cornell-box"),
+     "render(): argument 'scene' must be an rll.Scene (rll.load(...)), not str"),
+    (lambda box: rll.render(box, seed=-1), "render(): argument 'seed': -1 is not in [0, "),
+    (lambda box: rll.render(box, max_depth=2**40), "render(): argument 'max_depth': "),
+    (lambda box: rll.compare(box, "power", spp=1), "compare(): argument 'samplers' must be a list "
+                                                   "of str, not str"),
+    (lambda box: rll.compare(box, ["power"], spp=1, reference=[[1]]),
+     "reference: expected an HxWx3 array"),
+    (lambda box: rll.load_state("x.state", box, params=[("a", 1)]),
+     "load_state(): argument 'params' must be a dict, not list"),
+    (lambda box: rll.write_exr("x.exr", np.ones((2, 2, 3)), share={1, 2}),
+     "write_exr(): argument 'share' must be a dict or None, not set"),
+    (lambda box: rll.write_exr("x.exr", np.ones((2, 2, 3)), share={"a": {1, 2}}),
+     "share: cannot be stored as JSON (Object of type set is not JSON serializable)"),
+    (lambda box: rll.write_exr("x.exr", np.ones((2, 2, 3)), share={"a": float("nan")}),
+     "share: cannot be stored as JSON"),
+    (lambda box: rll.write_exr("x.exr", np.ones((2, 2, 3)), count=np.full((2, 2), -1)),
+     "count: the sample counts must be whole numbers in [0, 4294967295]"),
+    (lambda box: rll.write_exr("x.exr", np.ones((2, 2, 3)), attributes={1: "a"}),
+     "write_exr(): argument 'attributes' must be a dict of str -> str, not one holding int"),
+    (lambda box: rll.write_exr(3, np.ones((2, 2, 3))),
+     "write_exr(): argument 'path' must be a path (str, bytes or os.PathLike), not int"),
+    (lambda box: rll.error(np.full((2, 2, 3), "a"), np.ones((2, 2, 3))),
+     "img: expected an HxWx3 array of numbers, got dtype <U1"),
+], ids=["res-float", "aov-int", "spp-str", "scene-str", "seed-negative", "depth-huge",
+        "samplers-str", "reference-list", "params-list", "share-set", "share-nested-set",
+        "share-nan", "count-negative", "attribute-key", "path-int", "img-str-dtype"])
+def test_wrong_arguments_are_named(box, tmp_path, monkeypatch, call, names):
+    # pybind11's "Unable to cast Python instance ..." and "incompatible function arguments" named
+    # neither the argument nor what it takes; json.dumps's TypeError named no argument.
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(rll.Error) as e:
+        call(box)
+    msg = str(e.value)
+    assert names in msg, msg
+    assert "Unable to cast" not in msg and "incompatible function arguments" not in msg
+    assert not (tmp_path / "x.exr").exists()
+
+
+def test_state_pmf_checks_a_point_before_converting_it(learnt):
+    st = learnt.state
+    cell = int(st.cells["id"][0])
+    t0 = time.monotonic()
+    with pytest.raises(rll.Error) as e:  # was converted to a list of 10^8 floats first
+        st.pmf(cell, 0, point=np.broadcast_to(np.float32(0), (10**8,)))
+    assert time.monotonic() - t0 < 1
+    assert str(e.value) == "State.pmf(): argument 'point': expected 3 coordinates, got 100000000"
+    with pytest.raises(TypeError) as e:
+        st.pmf(cell, 0, normal="abc")
+    assert str(e.value) == "State.pmf(): argument 'normal' must be three numbers or None, not str"
+    with pytest.raises(TypeError) as e:
+        st.pmf(cell, 0, normal=(0, "1", 0))
+    assert "argument 'normal' must be three numbers, not one holding str" in str(e.value)
+    with pytest.raises(TypeError, match=r"State.pmf\(\): argument 'light' must be an int, not str"):
+        st.pmf(cell, "0")
+    assert st.pmf(cell, 0, point=np.zeros(3), normal=[0, 1.0, np.float32(0)]) >= 0
+
+
+def test_a_damaged_share_header_names_the_file_line_and_column(tmp_path):
+    # The rll.share header was parsed by json.loads, whose bare JSONDecodeError reached the user.
+    p = tmp_path / "damaged.exr"
+    rll.write_exr(p, np.ones((2, 2, 3), np.float32), attributes={"rll.share": '{"a":\n  1,,}'})
+    with pytest.raises(rll.Error) as e:
+        rll.read_exr(p, metadata=True)
+    msg = str(e.value)
+    assert str(p) in msg and "rll.share header is not valid JSON (line 2, column 5" in msg, msg
+    assert "without metadata" in msg
+    assert rll.read_exr(p).shape == (2, 2, 3)  # the image is still read
+
+
+def run_python(code, *args, timeout=60, env=None):
+    return subprocess.run([sys.executable, "-c", code, *map(str, args)], capture_output=True,
+                          text=True, timeout=timeout, env=env)
+
+
+INTERRUPTED_SCRIPT = r"""
+import sys, time
+import rll
+scene = rll.load("builtin:cornell-box", res=(64, 48))
+cache = sys.argv[1]
+try:
+    print("ready", flush=True)
+    if sys.argv[2] == "reference":
+        rll.reference(scene, spp=1 << 20, cache_dir=cache, force=True)
+    else:
+        rll.compare(scene, ["power"], spp=1, reference_spp=1 << 20, cache_dir=cache)
+    print("ran to its end", flush=True)
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", flush=True)
+"""
+
+
+@pytest.mark.parametrize("what", ["reference", "compare"])
+def test_ctrl_c_interrupts_a_reference(tmp_path, what):
+    # rll.reference rendered 2^20 spp with Ctrl-C ignored; compare's reference render too.
+    cache = tmp_path / "cache"
+    p = subprocess.Popen([sys.executable, "-c", INTERRUPTED_SCRIPT, str(cache), what],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().strip() == "ready"
+        time.sleep(0.7)
+        sent = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=10)
+    finally:
+        p.kill()
+    assert time.monotonic() - sent < 5, "Ctrl-C was not seen promptly"
+    assert p.returncode == 0 and out.strip() == "KeyboardInterrupt", (out, err)
+    # Nothing half-rendered was stored as a reference.
+    assert not cache.exists() or not list(cache.glob("*.exr"))
+
+
+MEMORY_SCRIPT = r"""
+import os, sys
+import numpy as np
+import rll
+out = sys.argv[1]
+huge = np.broadcast_to(np.float32(1), (20000, 20000, 3))   # 4.8 GB as an array, 4 bytes here
+budget = np.broadcast_to(np.float32(1), (16000, 16000, 3))  # in the image limit, over the budget
+small = np.ones((2, 2, 3), np.float32)
+calls = [
+    ("write_exr", lambda: rll.write_exr(out, huge)),
+    ("error", lambda: rll.error(huge, huge)),
+    ("error-ref", lambda: rll.error(small, huge)),
+    ("error-budget", lambda: rll.error(budget, budget)),
+    ("count", lambda: rll.write_exr(out, small,
+                                    count=np.broadcast_to(np.uint64(1), (20000, 20000)))),
+    ("cell_colours", lambda: rll.cell_colours(np.broadcast_to(np.float32(0), (100000, 100000)))),
+]
+for name, call in calls:
+    try:
+        call()
+        print(name, "accepted", flush=True)
+    except Exception as e:
+        print(name, type(e).__name__, str(e).replace("\n", " "), flush=True)
+# The peak resident memory of this process since its exec (getrusage's ru_maxrss would count
+# the parent's at the fork).
+peak = [l.split()[1] for l in open("/proc/self/status") if l.startswith("VmHWM:")]
+print("peak_kib", peak[0] if peak else 0, flush=True)
+"""
+
+
+def test_huge_broadcast_arrays_are_refused_before_they_are_copied(tmp_path):
+    # write_exr / error on a 20000x20000 broadcast array took 4.7 GB before their size check.
+    # The child may use 3 GiB of address space (so that the old behaviour fails with a
+    # MemoryError rather than taking the machine's memory), hence a budget of 2.4 GiB.
+    limit = 3 << 30
+    code = (f"import resource; resource.setrlimit(resource.RLIMIT_AS, ({limit}, {limit}))\n"
+            + MEMORY_SCRIPT)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    r = run_python(code, tmp_path / "x.exr", env=env)
+    assert r.returncode == 0, r.stderr
+    lines = dict(line.split(" ", 1) for line in r.stdout.splitlines())
+    for name in ("write_exr", "error", "error-ref"):
+        assert lines[name].startswith("ArgumentValueError "), (name, lines[name])
+        assert "20000x20000 is larger than rll's image limit" in lines[name], lines[name]
+    assert "error(): argument 'img' (16000x16000) needs 2.9 GiB, more than the 2.4 GiB" in \
+        lines["error-budget"], lines["error-budget"]
+    assert lines["count"].startswith("Error count: expected an HxW array of sample counts (2x2)")
+    assert "100000x100000 is larger than rll's image limit" in lines["cell_colours"]
+    assert 0 < int(lines["peak_kib"]) < 400 * 1024, "a refused array was copied first"
+    assert not (tmp_path / "x.exr").exists()
+
+
+def test_paths_as_bytes_and_pathlike(tmp_path, monkeypatch):
+    # A bytes path was written as str(bytes): rll.write_exr(b"x.exr", ...) made "b'x.exr'".
+    monkeypatch.chdir(tmp_path)
+    img = np.ones((2, 3, 3), np.float32)
+    rll.write_exr(b"x.exr", img)
+    assert os.listdir(".") == ["x.exr"]
+    assert np.array_equal(rll.read_exr(b"x.exr"), img)
+    # A name that is not UTF-8 is the bytes given, as str (os.fsdecode) or bytes.
+    name = b"\xff\xfe.exr"
+    rll.write_exr(name, img * 2)
+    assert name in os.listdir(b".")
+    assert np.array_equal(rll.read_exr(os.fsdecode(name)), img * 2)
+
+    class BytesPath:
+        def __fspath__(self):
+            return b"y.exr"
+
+    rll.write_exr(BytesPath(), img)
+    assert sorted(os.listdir(".")) == sorted(["x.exr", "y.exr", os.fsdecode(name)])
+    scene = rll.load(b"builtin:cornell-box", res=(8, 6))
+    assert scene.source == "builtin:cornell-box" and isinstance(scene.source, str)
+
+
+NUL_CALLS = [
+    ("write_exr", "path", lambda p, box, img, st: rll.write_exr(p, img)),
+    ("read_exr", "path", lambda p, box, img, st: rll.read_exr(p)),
+    ("load", "path", lambda p, box, img, st: rll.load(p)),
+    ("load_state", "path", lambda p, box, img, st: rll.load_state(p, box)),
+    ("State.save", "path", lambda p, box, img, st: st.save(p)),
+    ("reference", "cache_dir", lambda p, box, img, st: rll.reference(box, spp=2, cache_dir=p)),
+    ("compare", "reference",
+     lambda p, box, img, st: rll.compare(box, ["power"], spp=1, reference=p)),
+]
+
+
+@pytest.mark.parametrize("fn,arg,call", NUL_CALLS, ids=[c[0] for c in NUL_CALLS])
+@pytest.mark.parametrize("as_bytes", [False, True], ids=["str", "bytes"])
+def test_a_path_with_a_nul_byte_is_refused(tmp_path, box, learnt, fn, arg, call, as_bytes):
+    # write_exr("victim.exr\0.tmp.exr") overwrote victim.exr: the system reads a name up to NUL.
+    victim = tmp_path / "victim.exr"
+    rll.write_exr(victim, np.full((30, 40, 3), 0.5, np.float32))
+    before = victim.read_bytes()
+    p = str(victim) + "\0.tmp.exr"
+    with pytest.raises(ValueError) as e:
+        call(os.fsencode(p) if as_bytes else p, box, np.ones((30, 40, 3), np.float32),
+             learnt.state)
+    assert isinstance(e.value, rll.Error)
+    msg = str(e.value)
+    assert msg.startswith(f"{fn}(): argument '{arg}': ") and "NUL byte (at byte" in msg, msg
+    assert victim.read_bytes() == before
+    assert sorted(os.listdir(tmp_path)) == ["victim.exr"]
+
+
+def test_the_fallback_module_names_the_interpreter():
+    # rll.py beside the compiled module is what a Python that cannot load it (another version)
+    # imports instead: it says which interpreter rll is for.
+    import importlib.util
+    path = os.path.join(os.path.dirname(rll.__file__), "rll.py")
+    assert os.path.exists(path)
+    spec = importlib.util.spec_from_file_location("rll_fallback", path)
+    with pytest.raises(ImportError) as e:
+        spec.loader.exec_module(importlib.util.module_from_spec(spec))
+    msg = str(e.value)
+    built_for = says_built_for(msg)
+    assert f"PYTHONPATH={os.path.dirname(path)} {built_for}" in msg, msg
+
+
+def says_built_for(msg):
+    """The interpreter that a message "rll was built for X (Python ...)" names: this one."""
+    import re
+    m = re.match(r"rll was built for (\S+) \(Python \d+\.\d+", msg)
+    assert m, msg
+    assert os.path.realpath(m.group(1)) == os.path.realpath(sys.executable), msg
+    return m.group(1)
+
+
+def other_interpreter():
+    """A python3 of another installation than this one (pyenv's first on PATH, say), or None."""
+    import shutil
+    seen = set()
+    for name in ("python3", "python3.11", "python3.12", "python3.13", "python3.10", "python"):
+        exe = shutil.which(name)
+        if not exe or exe in seen:
+            continue
+        seen.add(exe)
+        try:
+            r = subprocess.run([exe, "-c", "import sys; print(sys.base_prefix)"],
+                               capture_output=True, text=True, timeout=30)
+        except (OSError, subprocess.TimeoutExpired):
+            continue
+        if r.returncode == 0 and os.path.realpath(r.stdout.strip()) != \
+                os.path.realpath(sys.base_prefix):
+            return exe
+    return None
+
+
+def test_another_interpreter_is_told_which_one_to_use():
+    # PYTHONPATH=build/python python3 with pyenv's python3 first on PATH failed with "No module
+    # named numpy" (or an ABI mismatch) at the first array.
+    exe = other_interpreter()
+    if exe is None:
+        pytest.skip("no python3 of another installation on PATH")
+    folder = os.path.dirname(rll.__file__)
+    env = dict(os.environ, PYTHONPATH=folder)
+    r = subprocess.run([exe, "-c", "import rll"], capture_output=True, text=True, env=env,
+                       timeout=60)
+    assert r.returncode != 0
+    msg = r.stderr.strip().splitlines()[-1]
+    assert msg.startswith("ImportError: "), r.stderr
+    built_for = says_built_for(msg[len("ImportError: "):])
+    assert f"run PYTHONPATH={folder} {built_for}" in msg, msg
+    assert ", but this is " in msg and "cmake -DPython3_EXECUTABLE=" in msg, msg
+
+
+def test_a_venv_without_numpy_is_told_what_to_do(tmp_path):
+    # A venv of this very Python (so the same installation) that does not see its numpy: the
+    # import says so, rather than "No module named numpy" at the first array.
+    venv = tmp_path / "venv"
+    r = subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)],
+                       capture_output=True, text=True, timeout=60)
+    if r.returncode != 0:
+        pytest.skip("cannot make a venv here: " + r.stderr[-200:])
+    folder = os.path.dirname(rll.__file__)
+    r = subprocess.run([str(venv / "bin" / "python"), "-c", "import rll"], capture_output=True,
+                       text=True, env=dict(os.environ, PYTHONPATH=folder), timeout=60)
+    assert r.returncode != 0
+    msg = r.stderr.strip().splitlines()[-1]
+    assert msg.startswith(f"ImportError: rll needs numpy, which {venv}/bin/python (Python "), msg
+    assert "--system-site-packages" in msg and f"run PYTHONPATH={folder} " in msg, msg
