@@ -20,7 +20,7 @@ constexpr long long kMaxSpp = (1 << 30) - 1;  // as `rll compare --spp`
 constexpr int kMaxThreads = 4096;             // as render()'s
 
 SessionSettings measured_settings(const PyScene& scene, const std::string& integrator,
-                                  int max_depth, const py::dict& params) {
+                                  int max_depth, const std::vector<std::string>& params) {
   SessionSettings s = settings_with(scene, params);
   s.integrator = integrator;
   s.max_depth = max_depth;
@@ -70,7 +70,7 @@ py::dict py_reference(const Arg<PyScene>& scene_arg, const Arg<long long>& spp_a
   const uint64_t seed = c.get(seed_arg, "seed");
   const std::string integrator = c.get(integrator_arg, "integrator");
   const int max_depth = c.get(max_depth_arg, "max_depth");
-  const py::dict params = c.get(params_arg, "params");
+  const std::vector<std::string> params = c.params(params_arg, "params");
   const ReferenceCache cache = cache_at(c, cache_dir_arg);
   const bool force = c.get(force_arg, "force");
   const int threads = c.get(threads_arg, "threads");
@@ -120,7 +120,7 @@ py::dict py_compare(
   const std::string reference_sampler = c.get(reference_sampler_arg, "reference_sampler");
   const std::string integrator = c.get(integrator_arg, "integrator");
   const int max_depth = c.get(max_depth_arg, "max_depth");
-  const py::dict params = c.get(params_arg, "params");
+  const std::vector<std::string> params = c.params(params_arg, "params");
   const ReferenceCache cache = cache_at(c, cache_dir_arg);
   const int threads = c.get(threads_arg, "threads");
   const py::object progress = c.callback(progress_arg, "progress");

@@ -130,6 +130,12 @@ struct Call {
   // victim.exr).
   std::string path(const py::handle& obj, const char* arg) const;
   std::string path(const Arg<PathLike>& a, const char* arg) const { return path(a.obj, arg); }
+  // `--set` parameters as "key=value" from a dict of str keys and values that are not None (a
+  // value as str() writes it; Python's True is "true").
+  std::vector<std::string> params(const Arg<py::dict>& a, const char* arg) const;
+  // A str as UTF-8; one that UTF-8 cannot encode (a lone surrogate) or that holds a NUL (which
+  // would end the name where rll's messages and files read it) is refused.
+  std::string text(const py::handle& str, const char* arg) const;
   // A callable, or None.
   py::object callback(const Arg<Callback>& a, const char* arg) const;
   // "WIDTHxHEIGHT" from None (empty: the scene's own), a str or a (width, height) pair.
@@ -186,9 +192,17 @@ T Call::convert(const py::object& obj, const char* arg) const {
     if (obj.is_none()) type_error(arg, expected<T>(), obj);
     // pybind11 would take a str as a list of one-character str, and any object with __bool__
     // as a bool (None as False).
-    if constexpr (std::is_same_v<T, std::vector<std::string>>)
-      if (py::isinstance<py::str>(obj) || py::isinstance<py::bytes>(obj))
+    if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+      if (py::isinstance<py::str>(obj) || py::isinstance<py::bytes>(obj) ||
+          !py::isinstance<py::sequence>(obj))
         type_error(arg, expected<T>(), obj);
+      std::vector<std::string> items;
+      for (const auto& item : obj) {
+        if (!py::isinstance<py::str>(item)) item_type_error(arg, expected<T>(), item);
+        items.push_back(text(item, arg));
+      }
+      return items;
+    }
     if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
       // An int out of T's range is a ValueError that says the range, not a wrong type.
       if (PyIndex_Check(obj.ptr())) {
@@ -201,6 +215,8 @@ T Call::convert(const py::object& obj, const char* arg) const {
                                std::to_string(std::numeric_limits<T>::max()) + "]");
       }
     }
+    if constexpr (std::is_same_v<T, std::string>)
+      if (py::isinstance<py::str>(obj)) return text(obj, arg);
     // pybind11 would make a dict of any iterable of pairs.
     if constexpr (std::is_same_v<T, py::dict>) {
       if (!py::isinstance<py::dict>(obj)) type_error(arg, expected<T>(), obj);
@@ -236,8 +252,9 @@ struct SamplerHandle {
   std::shared_ptr<LightSampler> sampler;
 };
 
-// Settings for a render or sampler of `scene`: its own, with `params` (`--set` key: value) added.
-SessionSettings settings_with(const PyScene& scene, const py::dict& params);
+// Settings for a render or sampler of `scene`: its own, with `params` (`--set` key=value, as
+// Call::params makes them) added.
+SessionSettings settings_with(const PyScene& scene, const std::vector<std::string>& params);
 // The scene's session where `settings` are its own, else a new session loaded with them; call
 // with the scene's mutex held.
 std::shared_ptr<RenderSession> session_for(PyScene& scene, const SessionSettings& settings);

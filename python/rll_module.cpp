@@ -102,6 +102,36 @@ std::string Call::path(const py::handle& obj, const char* arg) const {
   return p;
 }
 
+std::vector<std::string> Call::params(const Arg<py::dict>& a, const char* arg) const {
+  std::vector<std::string> set;
+  for (const auto& [k, v] : get(a, arg)) {
+    if (!py::isinstance<py::str>(k)) item_type_error(arg, "a dict with str keys", k);
+    const std::string key = text(k, arg);
+    if (v.is_none())
+      value_error(
+          arg, fmt::format("the value of '{}' is None: give a value, or leave the key out", key));
+    const std::string value =
+        py::isinstance<py::bool_>(v) ? (v.cast<bool>() ? "true" : "false") : text(py::str(v), arg);
+    set.push_back(key + "=" + value);
+  }
+  return set;
+}
+
+std::string Call::text(const py::handle& str, const char* arg) const {
+  py::ssize_t size = 0;
+  const char* utf8 = PyUnicode_AsUTF8AndSize(str.ptr(), &size);
+  if (!utf8) {
+    PyErr_Clear();
+    value_error(arg, fmt::format("{} holds a character that UTF-8 cannot encode (a lone "
+                                 "surrogate)",
+                                 short_repr(str)));
+  }
+  std::string s(utf8, size_t(size));
+  if (const size_t nul = s.find('\0'); nul != std::string::npos)
+    value_error(arg, fmt::format("{} holds a NUL character (at {})", short_repr(str), nul));
+  return s;
+}
+
 py::object Call::callback(const Arg<Callback>& a, const char* arg) const {
   if (!a.obj.is_none() && !PyCallable_Check(a.obj.ptr()))
     type_error(arg, "a callable or None", a.obj);
@@ -112,7 +142,7 @@ std::string Call::resolution(const Arg<Resolution>& a, const char* arg) const {
   const py::object& res = a.obj;
   const char* expected = "None, 'WIDTHxHEIGHT' or (width, height)";
   if (res.is_none()) return "";
-  if (py::isinstance<py::str>(res)) return res.cast<std::string>();
+  if (py::isinstance<py::str>(res)) return text(res, arg);
   if (!py::isinstance<py::sequence>(res) || py::isinstance<py::bytes>(res))
     type_error(arg, expected, res);
   if (py::len(res) != 2)
@@ -129,13 +159,13 @@ std::string Call::resolution(const Arg<Resolution>& a, const char* arg) const {
 std::string Call::name_list(const Arg<NameList>& a, const char* arg) const {
   const py::object& names = a.obj;
   if (names.is_none()) return "";
-  if (py::isinstance<py::str>(names)) return names.cast<std::string>();
+  if (py::isinstance<py::str>(names)) return text(names, arg);
   if (!py::isinstance<py::sequence>(names) || py::isinstance<py::bytes>(names))
     type_error(arg, "None, 'a,b' or a sequence of str", names);
   std::string list;
   for (const auto& name : names) {
     if (!py::isinstance<py::str>(name)) item_type_error(arg, "a sequence of str", name);
-    list += (list.empty() ? "" : ",") + name.cast<std::string>();
+    list += (list.empty() ? "" : ",") + text(name, arg);
   }
   return list;
 }
@@ -227,12 +257,6 @@ constexpr int kMaxPassSpp = 1024;  // as `rll render --pass-spp`
 constexpr int kMaxThreads = 4096;
 constexpr double kMaxSeconds = 1e7;
 
-// A parameter value as `--set key=value` takes it (Python's True is "true").
-std::string param_value(const py::handle& v) {
-  if (py::isinstance<py::bool_>(v)) return v.cast<bool>() ? "true" : "false";
-  return py::str(v).cast<std::string>();
-}
-
 std::shared_ptr<RenderSession> make_session(const SessionSettings& s) {
   py::gil_scoped_release release;
   return std::make_shared<RenderSession>(s);
@@ -242,10 +266,9 @@ std::shared_ptr<RenderSession> make_session(const SessionSettings& s) {
 
 namespace rll::python {
 
-SessionSettings settings_with(const PyScene& scene, const py::dict& params) {
+SessionSettings settings_with(const PyScene& scene, const std::vector<std::string>& params) {
   SessionSettings settings = scene.settings;
-  for (const auto& [k, v] : params)
-    settings.set.push_back(py::str(k).cast<std::string>() + "=" + param_value(v));
+  settings.set.insert(settings.set.end(), params.begin(), params.end());
   Params::parse(settings.set);  // a malformed key fails before the scene is loaded again
   return settings;
 }
@@ -420,7 +443,7 @@ PyRender py_render(const Arg<PyScene>& scene_arg, const Arg<std::string>& sample
   const std::optional<double> time = c.get(time_arg, "time");
   const std::string resolution = c.resolution(res_arg, "res");
   const uint64_t seed = c.get(seed_arg, "seed");
-  const py::dict params = c.get(params_arg, "params");
+  const std::vector<std::string> params = c.params(params_arg, "params");
   const int threads = c.get(threads_arg, "threads");
   const py::object progress = c.callback(progress_arg, "progress");
   const std::string aov_list = c.name_list(aov_arg, "aov");
@@ -614,9 +637,9 @@ void py_write_exr(const Arg<PathLike>& path_arg, const Arg<ArrayLike>& image_arg
   }
   for (const auto& [k, v] : attributes) {
     if (!py::isinstance<py::str>(k)) c.item_type_error("attributes", "a dict of str -> str", k);
-    const std::string key = py::str(k).cast<std::string>();
+    const std::string key = c.text(k, "attributes");
     if (!py::isinstance<py::str>(v)) fail("attributes: the value of '{}' is not a str", key);
-    f.attributes.emplace_back(key, v.cast<std::string>());
+    f.attributes.emplace_back(key, c.text(v, "attributes"));
   }
   if (!share_arg.obj.is_none()) {
     const py::object& share = share_arg.obj;

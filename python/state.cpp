@@ -273,7 +273,7 @@ void bind_state(py::module_& m) {
         const std::string p = c.path(path, "path");
         const std::shared_ptr<PyScene> scene = c.scene(scene_arg, "scene");
         const std::string sampler = c.get(sampler_arg, "sampler");
-        const SessionSettings settings = settings_with(*scene, c.get(params_arg, "params"));
+        const SessionSettings settings = settings_with(*scene, c.params(params_arg, "params"));
         // The lock is taken without the GIL, as render() takes it.
         std::unique_lock<std::mutex> lock(scene->mutex, std::defer_lock);
         {

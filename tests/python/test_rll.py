@@ -826,6 +826,14 @@ def test_none_subprocess_ran_every_case(none_results):
     (lambda box: rll.render(box, max_depth=2**40), "render(): argument 'max_depth': "),
     (lambda box: rll.compare(box, "power", spp=1), "compare(): argument 'samplers' must be a list "
                                                    "of str, not str"),
+    (lambda box: rll.compare(box, ["power", None], spp=1),
+     "compare(): argument 'samplers' must be a list of str, not one holding None"),
+    (lambda box: rll.render(box, spp=1, params={"rll.cut_size": None}),
+     "render(): argument 'params': the value of 'rll.cut_size' is None: give a value"),
+    (lambda box: rll.render(box, spp=1, sampler="power\0rll"),
+     "render(): argument 'sampler': 'power\\x00rll' holds a NUL character (at 5)"),
+    (lambda box: rll.render(box, spp=1, params={"rll.cut\udcff": 1}),
+     "render(): argument 'params': 'rll.cut\\udcff' holds a character that UTF-8 cannot encode"),
     (lambda box: rll.compare(box, ["power"], spp=1, reference=[[1]]),
      "reference: expected an HxWx3 array"),
     (lambda box: rll.load_state("x.state", box, params=[("a", 1)]),
@@ -845,7 +853,7 @@ def test_none_subprocess_ran_every_case(none_results):
     (lambda box: rll.error(np.full((2, 2, 3), "a"), np.ones((2, 2, 3))),
      "img: expected an HxWx3 array of numbers, got dtype <U1"),
 ], ids=["res-float", "aov-int", "spp-str", "scene-str", "seed-negative", "depth-huge",
-        "samplers-str", "reference-list", "params-list", "share-set", "share-nested-set",
+        "samplers-str", "samplers-none-item", "params-none-value", "sampler-nul", "params-surrogate", "reference-list", "params-list", "share-set", "share-nested-set",
         "share-nan", "count-negative", "attribute-key", "path-int", "img-str-dtype"])
 def test_wrong_arguments_are_named(box, tmp_path, monkeypatch, call, names):
     # pybind11's "Unable to cast Python instance ..." and "incompatible function arguments" named
