@@ -204,11 +204,7 @@ py::array Call::real_array(const py::handle& obj, const char* arg, int ndim,
   if (obj.is_none()) type_error(arg, fmt::format("an {} array", shape_text), obj);
   // No copy of an ndarray (a broadcast or strided view stays one); other objects are made into
   // an array, no larger than what they hold already.
-  py::array a;
-  try {
-    a = py::array::ensure(obj);
-  } catch (const py::error_already_set&) {
-  }
+  const py::array a = py::array::ensure(obj);  // null (the error cleared) where numpy cannot
   if (!a) type_error(arg, fmt::format("an {} array of numbers", shape_text), obj);
   const char kind = a.dtype().kind();
   if (kind != 'b' && kind != 'i' && kind != 'u' && kind != 'f')
