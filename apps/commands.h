@@ -36,6 +36,10 @@ const std::atomic<bool>* interrupt_flag();
 void install_interrupt_handler();
 void begin_work();
 
+// What the command is doing now ("loading scene 'x.pbrt'", "rendering 640x480"), for the
+// message that a failed allocation gets; commands set it as they go (main thread only).
+void set_activity(std::string what);
+
 // Ends a command stopped by a signal once what it had is written: main prints the message and
 // exits with interrupt_exit_code().
 struct Interrupted : std::runtime_error {

@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "rll/core/error.h"
 #include "rll/core/file_checks.h"
+#include "rll/core/params.h"
 #include "rll/lights/light_sampler.h"
 
 namespace rll::cli {
@@ -41,7 +42,7 @@ CLI::Validator integer_in(long long lo, long long hi) {
       [lo, hi](std::string& text) -> std::string {
         long long v = 0;
         if (!parse_integer(text, v) || v < lo || v > hi)
-          return fmt::format("'{}' is not a whole number in [{}, {}]", text, lo, hi);
+          return fmt::format("'{}' is not a whole number in [{}, {}]", shown_text(text), lo, hi);
         return {};
       },
       fmt::format("INT in [{}, {}]", lo, hi));
@@ -52,7 +53,7 @@ CLI::Validator unsigned_integer() {
       [](std::string& text) -> std::string {
         uint64_t v = 0;
         if (!parse_integer(text, v))
-          return fmt::format("'{}' is not a whole number in [0, {}]", text, UINT64_MAX);
+          return fmt::format("'{}' is not a whole number in [0, {}]", shown_text(text), UINT64_MAX);
         return {};
       },
       "UINT64");
@@ -67,8 +68,8 @@ CLI::Validator number_in(double lo, double hi, bool positive) {
         const bool ok = !text.empty() && end == text.c_str() + text.size() && errno == 0 &&
                         std::isfinite(v) && v <= hi && (positive ? v > lo : v >= lo);
         if (!ok)
-          return fmt::format("'{}' is not a finite number in {}{}, {}]", text, positive ? "(" : "[",
-                             lo, hi);
+          return fmt::format("'{}' is not a finite number in {}{}, {}]", shown_text(text),
+                             positive ? "(" : "[", lo, hi);
         return {};
       },
       fmt::format("NUMBER in {}{}, {}]", positive ? "(" : "[", lo, hi));
@@ -255,13 +256,12 @@ void prepare_output(const fs::path& p, const char* flag,
     fail("{} {}: the file must end in {}", flag, p.string(), fmt::join(extensions, " or "));
   std::error_code ec;
   // Devices, pipes, folders and read-only files are refused; a link is written through, so its
-  // target's folder is the one written in.
+  // target's folder is the one written in (and never created through the link: check_output_file
+  // refuses a link into a missing folder).
   check_output_file(p, flag);
   const fs::path target = write_target(p);
-  if (target.has_parent_path() && !fs::exists(target.parent_path()) &&
-      !fs::create_directories(target.parent_path(), ec))
-    fail("{} {}: cannot create folder '{}': {}", flag, p.string(), target.parent_path().string(),
-         ec.message());
+  if (target.has_parent_path() && !fs::exists(target.parent_path(), ec))
+    create_output_folder(target.parent_path(), fmt::format("{} {}", flag, p.string()));
   if (target.has_parent_path() && !fs::is_directory(target.parent_path(), ec))
     fail("{} {}: '{}' is not a folder", flag, p.string(), target.parent_path().string());
   check_folder_writable(target.parent_path(), fmt::format("{} {}", flag, p.string()));
@@ -271,8 +271,7 @@ void prepare_output_dir(const fs::path& dir, const char* flag) {
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
     fail("{} {}: exists and is not a folder", flag, dir.string());
-  if (!fs::is_directory(dir, ec) && !fs::create_directories(dir, ec))
-    fail("{} {}: cannot create folder: {}", flag, dir.string(), ec.message());
+  create_output_folder(dir, fmt::format("{} {}", flag, dir.string()));
   check_folder_writable(dir, fmt::format("{} {}", flag, dir.string()));
 }
 

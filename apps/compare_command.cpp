@@ -305,13 +305,26 @@ void run(const CompareOptions& o) {
   prepare_output_dir(o.out, "--out");
   const fs::path out(o.out);
   scene_inputs(o.session.scene);  // refuses a scene, or a file it names, that is no file
+  set_activity(fmt::format("loading scene '{}'", o.session.scene));
   RenderSession session(o.session);
   const Scene& scene = session.scene();
+  // Per pixel, a run's film and image, the reference and its variance, and for each sampler its
+  // first image, its error map and its tile of the side-by-side figure (with --aov, its
+  // diagnostics too): the whole of it is checked before the first film is allocated.
+  session.check_film_memory(
+      kRenderBytesPerPixel + 2 * 3 * 4 +
+          double(samplers.size()) *
+              (3 * 4 + 4 + 4 + (o.aov.empty() ? 0 : kCameraVertexBytesPerPixel)),
+      "a run's film and image, the reference and its variance, and each sampler's image, error "
+      "map and figure");
+  set_activity("making the samplers");
   check_samplers(o, session, samplers);
   session.set_frame(o.frames - 1, nullptr);  // the measured frame, for the reference
 
   // Only now, when every check has passed, may an earlier compare's files go.
   prepare_folder(o, samplers);
+  set_activity(
+      fmt::format("comparing {} samplers at {}x{}", samplers.size(), scene.width, scene.height));
   begin_work();
   const ChosenReference ref = choose_reference(o, session);
   write_image(out / "reference.exr", ref.image);

@@ -38,6 +38,7 @@ bool is_side_file(const std::string& name, const std::string& stem, const std::s
 }
 
 void convert(const std::string& in, const std::string& out) {
+  install_interrupt_handler();
   const fs::path target(out);
   const std::string ext = lower_extension(target);
   if (ext != ".json" && ext != ".gltf" && ext != ".pbrt")
@@ -63,9 +64,14 @@ void convert(const std::string& in, const std::string& out) {
   if (ext == ".json")
     for (const char* side : {".obj", ".mtl"})
       check_output_file(fs::path(target).replace_extension(side), "convert");
+  set_activity(fmt::format("reading scene '{}'", in));
   Scene scene = read_scene(in);
   for (const auto& w : scene.warnings) fmt::print(stderr, "rll: warning: {}\n", w);
   std::vector<std::string> lost;
+  set_activity(fmt::format("writing '{}' and the files beside it", out));
+  // The writers replace the files of an earlier conversion all together or not at all
+  // (WriteBatch): a signal now lets them finish rather than end the program between two renames.
+  begin_work();
   if (ext == ".json")
     save_json_scene(scene, target);
   else if (ext == ".gltf")
@@ -73,6 +79,8 @@ void convert(const std::string& in, const std::string& out) {
   else
     lost = save_pbrt_scene(scene, target);
   for (const auto& w : lost) fmt::print(stderr, "rll: warning: {}: {}\n", out, w);
+  if (interrupted())
+    throw Interrupted(fmt::format("interrupted while writing; {} and its files are complete", out));
 }
 
 }  // namespace

@@ -99,6 +99,7 @@ void run(InteractiveOptions o) {
 
   SessionSettings settings = o.session;
   settings.wavefront = true;  // the renderer with stages to time
+  set_activity(fmt::format("loading scene '{}'", o.session.scene));
   RenderSession session(settings);
   const Scene& scene = session.scene();
   const IntegratorSettings& is = session.integrator();
@@ -122,6 +123,7 @@ void run(InteractiveOptions o) {
                session.gpu() ? "GPU wavefront on " + session.gpu()->device_name()
                              : std::string("CPU wavefront"),
                o.frames);
+  set_activity(fmt::format("rendering {}x{} frames", scene.width, scene.height));
   begin_work();
   bool cancelled = false;
   for (int f = 0; f < o.frames && !interrupted(); ++f) {
@@ -181,7 +183,12 @@ void run(InteractiveOptions o) {
     }
   }
 
-  if (!o.output.empty() && !frames.empty()) {
+  // An animated scene's film holds the interrupted frame alone, a part of it: no image of it.
+  if (!o.output.empty() && cancelled && animated)
+    fmt::print(stderr, "rll: the frame being rendered was interrupted: {} was not written\n",
+               o.output);
+  else if (!o.output.empty() && !frames.empty()) {
+    set_activity(fmt::format("writing '{}'", o.output));
     write_image(o.output, film.resolve(), o.exposure);
     fmt::print(stderr, "wrote {} ({})\n", o.output,
                animated ? "the last frame" : fmt::format("{} frames accumulated", frames.size()));

@@ -9,6 +9,8 @@
 
 #include "commands.h"
 #include "rll/core/error.h"
+#include "rll/core/memory_budget.h"
+#include "rll/core/params.h"
 
 namespace rll::cli {
 
@@ -50,6 +52,14 @@ void begin_work() {
   g_working.store(true);
 }
 
+namespace {
+std::string g_activity;  // set on the main thread only
+}  // namespace
+
+void set_activity(std::string what) {
+  g_activity = std::move(what);
+}
+
 void install_interrupt_handler() {
   struct sigaction sa {};
   sa.sa_handler = on_signal;
@@ -70,7 +80,7 @@ bool unknown_command(const CLI::App& app, int argc, char** argv) {
     for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
       names.push_back(sub->get_name());
     if (std::find(names.begin(), names.end(), arg) != names.end()) return false;
-    fmt::print(stderr, "rll: error: unknown command '{}' (commands: {})\n", arg,
+    fmt::print(stderr, "rll: error: unknown command '{}' (commands: {})\n", shown_text(arg),
                fmt::join(names, ", "));
     return true;
   }
@@ -91,6 +101,38 @@ std::vector<std::string> unknown_arguments(const CLI::App& app, const CLI::App**
   return app.remaining();
 }
 
+// An empty value ("-o ''", "--stats=") is refused for every option that takes one, positionals
+// included: CLI11 hands it on, and a command that reads "" as "not given" would do what the
+// user did not ask (-o "" wrote out/<scene>.png).
+void refuse_empty_values(CLI::App& app) {
+  const CLI::Validator non_empty(
+      [](std::string& value) {
+        return value.empty() ? std::string("an empty value: give one, or leave the option out")
+                             : std::string();
+      },
+      "");
+  for (CLI::Option* opt : app.get_options())
+    if (opt->get_type_size_max() > 0) opt->transform(non_empty);  // runs before other checks
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    refuse_empty_values(*sub);
+}
+
+// What main says when an allocation failed although the checks before it passed (the memory
+// the machine or the process's limits give is less than the budget assumed, or something
+// unchecked grew): what was being done, the budget, and what to try.
+void report_out_of_memory(const CLI::App& app) {
+  std::string doing = g_activity;
+  if (doing.empty())
+    for (const CLI::App* sub : app.get_subcommands())
+      doing = "running `rll " + sub->get_name() + "`";
+  fmt::print(stderr,
+             "rll: error: out of memory while {} (rll checks what inputs and flags ask for "
+             "against {}, and this allocation came on top of it): render fewer pixels (--res "
+             "WIDTHxHEIGHT), lower a learning sampler's capacity (--set rll.capacity=N), use a "
+             "smaller scene, or free memory\n",
+             doing.empty() ? "starting" : doing, memory_budget_phrase());
+}
+
 }  // namespace
 }  // namespace rll::cli
 
@@ -109,6 +151,7 @@ int main(int argc, char** argv) {
   rll::cli::add_error_command(app);
   rll::cli::add_devices_command(app);
   rll::cli::add_interactive_command(app);
+  rll::cli::refuse_empty_values(app);
   if (rll::cli::unknown_command(app, argc, argv)) return int(CLI::ExitCodes::ExtrasError);
   try {
     app.parse(argc, argv);
@@ -119,9 +162,11 @@ int main(int argc, char** argv) {
       const std::string& a = rest.front();
       const std::string command = where == &app ? std::string("rll") : "rll " + where->get_name();
       if (a.size() > 1 && a[0] == '-')
-        fmt::print(stderr, "rll: error: unknown option {} (see `{} --help`)\n", a, command);
+        fmt::print(stderr, "rll: error: unknown option {} (see `{} --help`)\n", rll::shown_text(a),
+                   command);
       else
-        fmt::print(stderr, "rll: error: unexpected argument '{}' (see `{} --help`)\n", a, command);
+        fmt::print(stderr, "rll: error: unexpected argument '{}' (see `{} --help`)\n",
+                   rll::shown_text(a), command);
       return int(CLI::ExitCodes::ExtrasError);
     }
     return app.exit(e);
@@ -132,7 +177,7 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "rll: error: {}\n", e.what());
     return 1;
   } catch (const std::bad_alloc&) {
-    fmt::print(stderr, "rll: error: out of memory\n");
+    rll::cli::report_out_of_memory(app);
     return 1;
   } catch (const std::exception& e) {
     fmt::print(stderr, "rll: error: {}\n", e.what());

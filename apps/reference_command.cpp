@@ -2,6 +2,8 @@
 // `rll compare` reuses.
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "commands.h"
 #include "rll/core/error.h"
 #include "rll/core/file_checks.h"
@@ -58,18 +60,38 @@ void run(const ReferenceOptions& o) {
     }
   }
 
+  set_activity(fmt::format("loading scene '{}'", o.session.scene));
   RenderSession session(o.session);
+  // A reference renders its two halves in turn and keeps both (image and counts), then their
+  // mean and variance: more a pixel than a render.
+  session.check_film_memory(3 * 8 + 4 + 2 * (3 * 4 + 4) + 2 * 3 * 4 + 8,
+                            "a film, the images and counts of both halves, their mean and its "
+                            "variance");
   // An unknown name or parameter fails before rendering.
   make_sampler_for(session, o.request.sampler, "--sampler");
   session.check_params_used();
+  set_activity(
+      fmt::format("rendering a {}x{} reference", session.scene().width, session.scene().height));
   begin_work();
   ObtainedReference ref = obtain_reference(session, cache, o.request, !o.quiet, interrupt_flag());
   if (!ref.complete) {
     fmt::print(stderr, "rll: interrupted after {} spp; the reference was not cached\n",
                ref.info.spp);
     if (o.output.empty()) return;
+    // As `rll render` does: nothing when no sample was taken, nor a .png (which cannot tell a
+    // pixel without a sample from a black one) before every pixel had one.
+    const bool exr = lower(fs::path(o.output).extension().string()) == ".exr";
+    const bool sampled =
+        std::any_of(ref.counts.begin(), ref.counts.end(), [](uint32_t n) { return n > 0; });
+    if (!sampled || (!exr && ref.info.spp == 0)) {
+      fmt::print(stderr, "rll: interrupted {}: {} was not written\n",
+                 sampled ? "before every pixel had a sample (0 spp)" : "before the first sample",
+                 o.output);
+      return;
+    }
+    set_activity(fmt::format("writing '{}'", o.output));
     // As `rll render` does, an .exr says how many samples each pixel holds.
-    if (lower(fs::path(o.output).extension().string()) == ".exr")
+    if (exr)
       write_exr(o.output, ExrFile{ref.image, {}, ref.counts, {}});
     else
       write_image(o.output, ref.image, o.exposure);
@@ -83,6 +105,7 @@ void run(const ReferenceOptions& o) {
     fmt::print(stderr, "reference: rendered {} spp in {}, cached as {}\n", ref.info.spp,
                format_duration(ref.info.seconds), ref.info.image.string());
   if (!o.output.empty()) {
+    set_activity(fmt::format("writing '{}'", o.output));
     write_image(o.output, ref.image, o.exposure);
     fmt::print(stderr, "wrote {}\n", o.output);
     if (const fs::path var = variance_path(o.output); !var.empty() && ref.variance.pixel_count() > 0) {

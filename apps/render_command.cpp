@@ -134,8 +134,15 @@ void run(const RenderOptions& o) {
   if (load_state && !save_state) inputs.emplace_back(o.state);
   for (const auto& [path, flag] : outputs) refuse_input(path, flag, inputs);
 
+  set_activity(fmt::format("loading scene '{}'", o.session.scene));
   RenderSession session(o.session);
   Scene& scene = session.scene();
+  // The per-pixel diagnostics of --aov are kept beside the film: checked with it.
+  if (!aovs.empty())
+    session.check_film_memory(
+        kRenderBytesPerPixel + kCameraVertexBytesPerPixel + 4.0 * double(aovs.size()),
+        fmt::format("{}, and the --aov diagnostics", kRenderPixelText));
+  set_activity(fmt::format("making sampler '{}'", o.sampler));
   auto sampler = make_sampler_for(session, o.sampler, "--sampler");
   const IntegratorSettings integrator = session.integrator_for(o.sampler);
   session.check_params_used();
@@ -167,13 +174,35 @@ void run(const RenderOptions& o) {
   for (int f = 0; f < frames && !interrupted(); ++f) {
     session.set_frame(f, sampler.get());
     rs.frame = f;
-    Film film(scene.width, scene.height);
-    if (!aovs.empty()) film.track_camera_vertex();
     std::string label =
         frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
+    set_activity(fmt::format("rendering {}x{} ({}{})", scene.width, scene.height, label,
+                             o.aov.empty() ? "" : ", with --aov " + o.aov));
+    Film film(scene.width, scene.height);
+    if (!aovs.empty()) film.track_camera_vertex();
     RenderProgress p = session.render(*sampler, film, rs, label, !o.quiet, interrupt_flag(), {},
                                       nullptr, &integrator);
     fs::path out = frame_path(output, f, frames);
+    total.seconds += p.seconds;
+    total.samples += p.samples;
+    total.rays += p.rays;
+    total.spp_done = p.spp_done;
+    total.cancelled = total.cancelled || p.cancelled;
+    total.nonfinite += p.nonfinite;
+    // Interrupted before any sample, or (a .png, which cannot tell a pixel without a sample from
+    // a black one) before every pixel had one: nothing worth writing, and writing a huge film
+    // would take long after the user asked to stop. An .exr keeps each pixel's sample count.
+    if (p.cancelled && (p.samples == 0 || (!exr_output && p.spp_done == 0))) {
+      fmt::print(
+          stderr, "rll: interrupted {}: {} was not written{}\n",
+          p.samples == 0 ? "before the first sample" : "before every pixel had a sample (0 spp)",
+          out.string(),
+          p.samples == 0 ? "" : " (an .exr output keeps the pixels that have samples)");
+      frame_stats.push_back(
+          {{"frame", f}, {"spp", 0}, {"seconds", p.seconds}, {"output", nullptr}});
+      break;
+    }
+    set_activity(fmt::format("writing '{}' ({}x{})", out.string(), scene.width, scene.height));
     if (exr_output) {
       ShareInfo share;
       share.settings = settings;
@@ -196,12 +225,6 @@ void run(const RenderOptions& o) {
       fmt::print(stderr, "rll: warning: {} non-finite samples were dropped\n", p.nonfinite);
     frame_stats.push_back(
         {{"frame", f}, {"spp", p.spp_done}, {"seconds", p.seconds}, {"output", out.string()}});
-    total.seconds += p.seconds;
-    total.samples += p.samples;
-    total.rays += p.rays;
-    total.spp_done = p.spp_done;
-    total.cancelled = total.cancelled || p.cancelled;
-    total.nonfinite += p.nonfinite;
   }
 
   if (save_state) {

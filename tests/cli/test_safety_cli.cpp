@@ -175,11 +175,12 @@ TEST(SafetyCli, NoFileIsBothAnInputAndAnOutput) {
                  {"-o", "cache"});
   EXPECT_EQ(read_text(entry), half);
 
-  // Two outputs of one render that are one file (here through a link).
-  fs::create_symlink(dir / "img.exr", dir / "stats.json");
-  expect_refused({"render", kScene, "--res", "8x8", "--spp", "1", "--quiet", "-o",
-                  (dir / "img.exr").string(), "--stats", (dir / "stats.json").string()},
-                 {"--stats", "-o", "same file"});
+  // Two outputs of one render that are one file (here through a link whose name has the
+  // target's extension: a link to another kind of file is refused before, as such).
+  fs::create_symlink(dir / "img.exr", dir / "state.exr");
+  expect_refused({"render", kScene, "--res", "8x8", "--spp", "1", "--quiet", "--sampler", "rll",
+                  "-o", (dir / "img.exr").string(), "--rll-state", (dir / "state.exr").string()},
+                 {"--rll-state", "-o", "same file"});
   // --rll-state by another spelling of --stats.
   expect_refused({"render", kScene, "--res", "8x8", "--spp", "1", "--quiet", "--sampler", "rll",
                   "-o", (dir / "x.exr").string(), "--stats", (dir / "s.json").string(),

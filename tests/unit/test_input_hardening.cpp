@@ -21,11 +21,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-TEST(Printable, KeepsPrintableAsciiAndEscapesEverythingElse) {
+TEST(Printable, KeepsPrintableTextAndEscapesEverythingElse) {
   EXPECT_EQ(printable("Shape \"sphere\" [ 1 ]"), "Shape \"sphere\" [ 1 ]");
   EXPECT_EQ(printable(std::string("a\x1b[2Jb\x07\n\t\x7f\0z", 12)),
             "a\\x1b[2Jb\\x07\\x0a\\x09\\x7f\\x00z");
-  EXPECT_EQ(printable("caf\xc3\xa9"), "caf\\xc3\\xa9");  // non-ASCII bytes too
+  // UTF-8 is shown as it is (a name in any language reads so); bytes that are not UTF-8 and C1
+  // controls are escaped.
+  EXPECT_EQ(printable("caf\xc3\xa9"), "caf\xc3\xa9");
+  EXPECT_EQ(printable("caf\xe9 \xc2\x9b"), "caf\\xe9 \\xc2\\x9b");
   // A backslash is doubled, so that "\x1b" in a file cannot pass for an escaped byte.
   EXPECT_EQ(printable("\\x1b"), "\\\\x1b");
 }

@@ -52,6 +52,7 @@ void commit(const fs::path& tmp, const fs::path& path) {
   std::error_code ec;
   // `tmp` lies beside the target: the name to replace is the target's, not a link's.
   const fs::path target = write_target(path);
+  if (WriteBatch::defer(tmp, target, path)) return;  // renamed in with the batch's other files
   fs::rename(tmp, target, ec);
   if (ec) {
     fs::remove(tmp, ec);
@@ -395,6 +396,7 @@ ExrFile read_exr(const fs::path& path, bool extras, LuminanceOnly luminance) {
 
 // A folder, a missing file or a device gets a clear message before any reader sees it.
 void read_image_checks(const fs::path& path) {
+  check_path_text(path, "image");
   std::error_code ec;
   const auto status = fs::status(path, ec);
   if (fs::is_directory(status))

@@ -28,6 +28,9 @@ void set_memory_budget_bytes(size_t bytes) {
 }
 
 std::string format_bytes(double bytes) {
+  // A product of claimed counts can be any size: past a pebibyte the number says nothing more.
+  if (!(bytes < double(1ull << 50))) return "more than 1 PiB";
+  if (bytes >= double(1ull << 40)) return fmt::format("{:.1f} TiB", bytes / double(1ull << 40));
   if (bytes >= double(1ull << 30)) return fmt::format("{:.1f} GiB", bytes / double(1ull << 30));
   if (bytes >= double(1ull << 20)) return fmt::format("{:.1f} MiB", bytes / double(1ull << 20));
   return fmt::format("{:.0f} bytes", bytes);

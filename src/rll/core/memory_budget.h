@@ -21,7 +21,7 @@ void check_memory_budget(double bytes, const std::string& what);
 
 // "the 18.4 GiB a scene may use (80% of the memory this process may use)": the budget for messages.
 std::string memory_budget_phrase();
-// "1.5 GiB", "12.0 MiB", "512 bytes": a size for messages.
+// "1.5 GiB", "12.0 MiB", "512 bytes", "2.0 TiB", "more than 1 PiB": a size for messages.
 std::string format_bytes(double bytes);
 
 }  // namespace rll

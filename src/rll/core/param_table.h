@@ -115,13 +115,15 @@ std::string describe_param(const std::string& key, ParamKind kind, const ParamRa
                            const std::vector<std::string>& choices, double value);
 }  // namespace detail
 
-// Reads every entry of `table` given as PREFIX.KEY in `params` into `s` (marking it used);
-// throws rll::Error naming PREFIX.KEY on a value out of its range or choices.
+// Reads every entry of `table` given as PREFIX.KEY in `params` into `s` (marking it used, and
+// every entry's key as known to the unknown-key error); throws rll::Error naming PREFIX.KEY on a
+// value out of its range or choices.
 template <class S>
 void read_params(const std::vector<ParamSpec<S>>& table, const Params& params,
                  const std::string& prefix, S& s) {
   for (const auto& e : table) {
     const std::string key = prefix + "." + e.key;
+    params.note_known(key);  // listed when a key of this prefix is unknown (a typo)
     if (!params.has(key)) continue;
     const double v = detail::read_param(params, key, e.kind, e.range, e.choices, e.note);
     e.field.set(s, v);

@@ -5,9 +5,17 @@
 #include <map>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace rll {
+
+// Text that a user or a file gave (a key, a value, an argument, a name) as a message shows it:
+// UTF-8 as it is; control characters and bytes that are not UTF-8 as \xNN (and, when
+// `escape_backslash`, a backslash doubled, so that no escape can be forged); at most `max_bytes`
+// bytes of it, cut between characters and followed by "...", so that a 100 KB key is not echoed
+// whole.
+std::string shown_text(std::string_view text, size_t max_bytes = 80, bool escape_backslash = false);
 
 class Params {
  public:
@@ -30,16 +38,26 @@ class Params {
                          const std::vector<std::string>& choices) const;
   // Whether a getter asked for `key`.
   bool used(const std::string& key) const { return m_used.count(key) > 0; }
-  // Throws rll::Error listing every key that no getter asked for.
+  // Records `key` as one that a component reads (read_params: a table's every key, given or
+  // not), so that an unknown key's error can list its neighbours.
+  void note_known(const std::string& key) const { m_known.insert(key); }
+  // Every key a getter asked for or note_known() recorded.
+  std::set<std::string> known_keys() const;
+  // Throws rll::Error naming every key that no getter asked for and, for each, the known keys
+  // that share its prefix ("rll.bogus": rll's keys), or every known key where none does.
   void check_all_used() const;
   // Marks as used every key that `other` (a copy with overrides) had asked for.
-  void merge_used(const Params& other) const { m_used.insert(other.m_used.begin(), other.m_used.end()); }
+  void merge_used(const Params& other) const {
+    m_used.insert(other.m_used.begin(), other.m_used.end());
+    m_known.insert(other.m_known.begin(), other.m_known.end());
+  }
   const std::map<std::string, std::string>& values() const { return m_values; }
 
  private:
   const std::string* find(const std::string& key) const;
   std::map<std::string, std::string> m_values;
   mutable std::set<std::string> m_used;
+  mutable std::set<std::string> m_known;
 };
 
 }  // namespace rll

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
 #include "rll/scene/transform.h"
 
 namespace rll {
@@ -132,9 +133,8 @@ void write_pretty(std::string& out, const json& j, int indent) {
   }
 }
 
-}  // namespace
-
-void save_json_scene(const Scene& scene, const fs::path& json_path) {
+// Writes the files of save_json_scene (inside its WriteBatch, which puts them in place together).
+void write_json_scene(const Scene& scene, const fs::path& json_path) {
   if (json_path.extension() != ".json")
     fail("{}: a scene is saved as a .json file", json_path.string());
   const fs::path dir = json_path.parent_path();
@@ -326,6 +326,16 @@ void save_json_scene(const Scene& scene, const fs::path& json_path) {
   std::string text;
   write_pretty(text, j, 0);
   write_file_atomic(json_path, text + "\n");
+}
+
+}  // namespace
+
+void save_json_scene(const Scene& scene, const fs::path& json_path) {
+  // The JSON, its OBJ, MTL and images replace an earlier conversion's together or not at all: a
+  // full disk halfway must not leave a new .mtl beside an old .obj.
+  WriteBatch batch;
+  write_json_scene(scene, json_path);
+  batch.commit();
 }
 
 std::string ply_bytes(const Mesh& mesh, PlyEncoding encoding) {

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
 #include "rll/io/save.h"
 
 namespace rll {
@@ -360,7 +361,11 @@ class GltfWriter {
 
 std::vector<std::string> save_gltf_scene(const Scene& scene, const fs::path& path) {
   if (path.extension() != ".gltf") fail("{}: a glTF scene is saved as a .gltf file", path.string());
-  return GltfWriter(scene, path).write();
+  // The .gltf and its textures replace an earlier conversion's together or not at all.
+  WriteBatch batch;
+  std::vector<std::string> warnings = GltfWriter(scene, path).write();
+  batch.commit();
+  return warnings;
 }
 
 }  // namespace rll

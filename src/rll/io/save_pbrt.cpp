@@ -8,6 +8,7 @@
 #include <set>
 
 #include "rll/core/error.h"
+#include "rll/core/file_checks.h"
 #include "rll/io/save.h"
 #include "rll/scene/transform.h"
 
@@ -83,10 +84,8 @@ std::string image_light(const Scene& scene, const Light& l, const fs::path& dir,
       m.a[2][2], m.t.x, m.t.y, m.t.z, params);
 }
 
-}  // namespace
-
-std::vector<std::string> save_pbrt_scene(const Scene& scene, const fs::path& path) {
-  if (path.extension() != ".pbrt") fail("{}: a pbrt scene is saved as a .pbrt file", path.string());
+// Writes the files of save_pbrt_scene (inside its WriteBatch, which puts them in place together).
+std::vector<std::string> write_pbrt_scene(const Scene& scene, const fs::path& path) {
   const fs::path dir = path.parent_path();
   const std::string stem = path.stem().string();
   std::vector<std::string> warnings;
@@ -306,6 +305,17 @@ std::vector<std::string> save_pbrt_scene(const Scene& scene, const fs::path& pat
     out += fmt::format("  Shape \"plymesh\" \"string filename\" \"{}\"\nAttributeEnd\n", file);
   }
   write_file_atomic(path, out);
+  return warnings;
+}
+
+}  // namespace
+
+std::vector<std::string> save_pbrt_scene(const Scene& scene, const fs::path& path) {
+  if (path.extension() != ".pbrt") fail("{}: a pbrt scene is saved as a .pbrt file", path.string());
+  // The .pbrt, its meshes and images replace an earlier conversion's together or not at all.
+  WriteBatch batch;
+  std::vector<std::string> warnings = write_pbrt_scene(scene, path);
+  batch.commit();
   return warnings;
 }
 

@@ -8,6 +8,7 @@
 
 #include "rll/core/error.h"
 #include "rll/core/file_checks.h"
+#include "rll/core/params.h"
 
 namespace rll {
 
@@ -22,20 +23,7 @@ std::string read_text_file(const std::filesystem::path& path) {
 }
 
 std::string printable(std::string_view bytes, size_t max_bytes) {
-  const std::string_view shown = bytes.substr(0, max_bytes);
-  std::string out;
-  out.reserve(shown.size() + 3);
-  for (char ch : shown) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c == '\\')
-      out += "\\\\";
-    else if (c >= 0x20 && c < 0x7f)
-      out += ch;
-    else
-      out += fmt::format("\\x{:02x}", c);
-  }
-  if (shown.size() < bytes.size()) out += "...";
-  return out;
+  return shown_text(bytes, max_bytes, true);
 }
 
 std::string without_control_bytes(std::string_view message) {

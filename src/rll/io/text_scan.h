@@ -11,10 +11,10 @@ namespace rll {
 // Reads a whole file; throws rll::Error naming it when it cannot be read.
 std::string read_text_file(const std::filesystem::path& path);
 
-// Bytes from a file as a message may show them: printable ASCII kept, every other byte
-// (control, escape, non-ASCII) written as \xNN and a backslash as \\, and at most `max_bytes`
-// of the input ("..." marks a cut), so that an error neither replays a file nor drives the
-// terminal.
+// Bytes from a file as a message may show them (shown_text, core/params.h): UTF-8 text as it is
+// (a material named "café" reads so), control characters and bytes that are not UTF-8 as \xNN
+// and a backslash as \\, and at most `max_bytes` of the input ("..." marks a cut), so that an
+// error neither replays a file nor drives the terminal.
 std::string printable(std::string_view bytes, size_t max_bytes = 48);
 // A whole message with only its control bytes (C0, DEL) written as \xNN: text that is already
 // quoted with printable() stays as it is, and so do UTF-8 file names.

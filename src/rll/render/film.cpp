@@ -1,8 +1,28 @@
 #include "rll/render/film.h"
 
 #include <algorithm>
+#include <cmath>
+
+#include "rll/core/error.h"
+#include "rll/core/memory_budget.h"
 
 namespace rll {
+
+void check_film_memory(int64_t width, int64_t height, double bytes_per_pixel,
+                       const std::string& source, const std::string& kept) {
+  const double bytes = double(width) * double(height) * bytes_per_pixel;
+  if (bytes <= double(memory_budget_bytes())) return;
+  // The largest film of this aspect ratio that fits, as a suggestion.
+  const double scale = std::sqrt(double(memory_budget_bytes()) / bytes);
+  const int64_t w = std::max<int64_t>(1, int64_t(double(width) * scale)),
+                h = std::max<int64_t>(1, int64_t(double(height) * scale));
+  fail(
+      "a film of {}x{} pixels ({}) needs {} ({:.0f} bytes a pixel: {}), more than {}: render it "
+      "smaller with --res WIDTHxHEIGHT (at most about {}x{} here){}",
+      width, height, source, format_bytes(bytes), bytes_per_pixel, kept, memory_budget_phrase(), w,
+      h,
+      source.rfind("--res", 0) == 0 ? "" : ", or lower the resolution the scene's film asks for");
+}
 
 uint32_t Film::min_count() const {
   return m_count.empty() ? 0 : *std::min_element(m_count.begin(), m_count.end());

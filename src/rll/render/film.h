@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "rll/core/device.h"
@@ -42,6 +43,25 @@ struct FilmView {
     ++count[pixel];
   }
 };
+
+// The bytes a render holds for each pixel of its film: the sums (3 doubles) and the sample count,
+// the image resolved from them, and what writing it adds (an .exr share's counts, a .png's 8-bit
+// pixels and their encoding).
+inline constexpr double kRenderBytesPerPixel = 3 * 8 + 4 + 3 * 4 + 8;
+// What --aov adds: the camera-vertex sums (Film::track_camera_vertex); each channel written adds 4.
+inline constexpr double kCameraVertexBytesPerPixel = 4 + 8 + 3 * 4;
+
+// What kRenderBytesPerPixel holds, for messages.
+inline constexpr const char* kRenderPixelText =
+    "its sums, sample counts and the image written from them";
+
+// Refuses, before anything is allocated, a film of width x height whose pixels at
+// `bytes_per_pixel` (what `kept` says they hold) need more than the memory budget
+// (core/memory_budget.h), with a message naming the resolution, `source` (what set it:
+// "--res 16384x16384", "the film of scene 'x.pbrt'") and what to do. A 300-byte pbrt file can
+// ask for a 16384x16384 film: 11 GB.
+void check_film_memory(int64_t width, int64_t height, double bytes_per_pixel,
+                       const std::string& source, const std::string& kept = kRenderPixelText);
 
 class Film {
  public:

@@ -85,6 +85,10 @@ RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_p
     }
   }
   progress.seconds = seconds_since(t0);
+  // A cancel that came before the first pass ran no pass at all: still a cancelled render (its
+  // caller would otherwise take an empty film for a finished one and write it).
+  progress.cancelled =
+      progress.cancelled || (cancel && cancel->load() && progress.spp_done < settings.spp);
   progress.out_of_time =
       progress.out_of_time ||
       (settings.time_limit > 0 && progress.spp_done < settings.spp && !progress.cancelled);

@@ -4,9 +4,12 @@
 
 #include <algorithm>
 #include <charconv>
+#include <map>
+#include <set>
 
 #include "rll/core/error.h"
 #include "rll/cuda/cuda.h"
+#include "rll/lights/light_sampler.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/render/progress.h"
 
@@ -27,12 +30,14 @@ LoadOptions parse_resolution(const std::string& res) {
   const size_t x = res.find_first_of("xX");
   const long long w = x == std::string::npos ? -1 : side(0, x);
   const long long h = x == std::string::npos ? -1 : side(x + 1, res.size());
-  if (w < 0 || h < 0) fail("--res '{}': expected WIDTHxHEIGHT, e.g. 640x480", res);
-  if (w == 0 || h == 0) fail("--res '{}': width and height must be positive", res);
+  if (w < 0 || h < 0) fail("--res '{}': expected WIDTHxHEIGHT, e.g. 640x480", shown_text(res));
+  if (w == 0 || h == 0) fail("--res '{}': width and height must be positive", shown_text(res));
   if (w > kMaxFilmSide || h > kMaxFilmSide)
-    fail("--res '{}': width and height must be at most {}", res, kMaxFilmSide);
+    fail("--res '{}': width and height must be at most {}", shown_text(res), kMaxFilmSide);
   if (w * h > kMaxFilmPixels)
     fail("--res '{}': {} pixels is more than the limit of {}", res, w * h, kMaxFilmPixels);
+  // Before the scene (perhaps slow to load) is read.
+  check_film_memory(w, h, kRenderBytesPerPixel, fmt::format("--res {}", res));
   lo.width = int(w);
   lo.height = int(h);
   return lo;
@@ -53,11 +58,23 @@ RenderSession::RenderSession(const SessionSettings& settings)
   // Before the scene (perhaps slow to load): a GPU render needs a GPU.
   if (settings.device == "cuda") cuda::require_gpu();
   m_scene = load_scene(settings.scene, lo);
+  // The scene's own film size is a claim of its file like any other: checked before the film
+  // is allocated (a render's commands check again with what else they keep a pixel).
+  check_film_memory(kRenderBytesPerPixel);
   // Reorders the lights: everything keyed by their order (fingerprint, learnt states) follows.
   build_light_tree(m_scene);
   m_integrator = make_integrator_settings(settings.integrator, settings.max_depth, m_params);
   m_accel = std::make_unique<Accel>(m_scene.mesh);
   if (settings.device == "cuda") m_gpu = std::make_unique<cuda::GpuRenderer>(m_scene);
+}
+
+std::string RenderSession::film_source() const {
+  if (!m_settings.resolution.empty()) return fmt::format("--res {}", m_settings.resolution);
+  return fmt::format("the film of scene '{}'", m_settings.scene);
+}
+
+void RenderSession::check_film_memory(double bytes_per_pixel, const std::string& kept) const {
+  rll::check_film_memory(m_scene.width, m_scene.height, bytes_per_pixel, film_source(), kept);
 }
 
 const char* RenderSession::renderer_name() const {
@@ -78,14 +95,25 @@ Params RenderSession::variant_params(const std::string& spec, std::string& name,
   const size_t colon = spec.find(':');
   name = spec.substr(0, colon);
   if (colon == std::string::npos) return params;
+  // A key given twice (twice in the spec, or in the spec and by --set) is refused rather than
+  // one value silently winning: the image's header and the summary record both.
+  std::map<std::string, std::string> given;  // key -> as the spec wrote it
   for (size_t start = colon + 1; start <= spec.size();) {
     size_t end = std::min(spec.find(':', start), spec.size());
     std::string kv = spec.substr(start, end - start);
     size_t eq = kv.find('=');
     if (eq == std::string::npos || eq == 0 || eq + 1 == kv.size())
-      fail("sampler '{}': '{}' is not key=value", spec, kv);
+      fail("sampler '{}': '{}' is not key=value", shown_text(spec), shown_text(kv));
     std::string key = kv.substr(0, eq);
     if (key.find('.') == std::string::npos) key = name + "." + key;
+    if (const auto it = given.find(key); it != given.end())
+      fail("sampler '{}': {} is given twice in it ({} and {}): give it once", shown_text(spec),
+           shown_text(key), shown_text(it->second), shown_text(kv));
+    if (m_params.has(key))
+      fail("sampler '{}': {} is given both in it ({}) and by --set {}={}: give it in one place",
+           shown_text(spec), shown_text(key), shown_text(kv), shown_text(key),
+           shown_text(m_params.values().at(key), 40));
+    given.emplace(key, kv);
     params.set(key, kv.substr(eq + 1));
     own.push_back(kv.substr(0, eq));
     start = end + 1;
@@ -94,8 +122,11 @@ Params RenderSession::variant_params(const std::string& spec, std::string& name,
 }
 
 std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::string& spec) const {
-  if (spec.find(':') == std::string::npos)
-    return make_light_sampler(spec, m_scene, m_params, m_accel.get());
+  if (spec.find(':') == std::string::npos) {
+    auto sampler = make_light_sampler(spec, m_scene, m_params, m_accel.get());
+    m_made.push_back(spec);
+    return sampler;
+  }
   std::string name;
   std::vector<std::string> own;  // the keys as the spec gives them
   Params params = variant_params(spec, name, own);
@@ -106,13 +137,44 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::str
   // --set keys, which the user may never have given).
   std::vector<std::string> unknown;
   for (const auto& k : own)
-    if (!params.used(k.find('.') == std::string::npos ? name + "." + k : k)) unknown.push_back(k);
-  if (!unknown.empty())
-    fail("sampler '{}': {} has no parameter {} (see `rll samplers`)", spec, name,
-         fmt::format("'{}'", fmt::join(unknown, "', '")));
+    if (!params.used(k.find('.') == std::string::npos ? name + "." + k : k))
+      unknown.push_back(shown_text(k));
+  if (!unknown.empty()) {
+    std::vector<std::string> keys;
+    for (const auto& k : params.known_keys())
+      if (k.rfind(name + ".", 0) == 0) keys.push_back(k.substr(name.size() + 1));
+    fail("sampler '{}': {} has no parameter {} ({}; see `rll samplers --params {}`)",
+         shown_text(spec), name, fmt::format("'{}'", fmt::join(unknown, "', '")),
+         keys.empty() ? fmt::format("{} has no parameters of its own", name)
+                      : fmt::format("its parameters: {}", fmt::join(keys, ", ")),
+         name);
+  }
   params.check_all_used();
   m_params.merge_used(params);
+  m_made.push_back(name);
   return sampler;
+}
+
+void RenderSession::check_params_used() const {
+  // A key of a sampler that this command does not render with: say so, rather than list the
+  // keys of the samplers it does (the oracle reads rll.* too: those are known then).
+  const std::set<std::string> known = m_params.known_keys();
+  const std::vector<std::string>& samplers = light_sampler_names();
+  for (const auto& [key, value] : m_params.values()) {
+    const size_t dot = key.find('.');
+    if (m_params.used(key) || dot == std::string::npos) continue;
+    const std::string prefix = key.substr(0, dot);
+    if (std::find(samplers.begin(), samplers.end(), prefix) == samplers.end()) continue;
+    if (std::any_of(known.begin(), known.end(),
+                    [&](const std::string& k) { return k.rfind(prefix + ".", 0) == 0; }))
+      continue;
+    fail(
+        "--set {}: a parameter of sampler {}, which this command does not render with (it renders "
+        "with {}): leave it out, or render with {}",
+        shown_text(key), prefix,
+        m_made.empty() ? "no sampler" : fmt::format("{}", fmt::join(m_made, ", ")), prefix);
+  }
+  m_params.check_all_used();
 }
 
 IntegratorSettings RenderSession::integrator_for(const std::string& spec) const {

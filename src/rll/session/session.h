@@ -54,6 +54,12 @@ class RenderSession {
   // The renderer that render() runs: "megakernel", "wavefront" (on the CPU; "wavefront-bvh" with
   // --tracer bvh) or "cuda-wavefront" (--stats and reports say it).
   const char* renderer_name() const;
+  // What set the film's size, for messages: "--res WxH" or "the film of scene 'FILE'".
+  std::string film_source() const;
+  // rll::check_film_memory (render/film.h) for this scene's film at `bytes_per_pixel` (holding
+  // what `kept` says); the constructor checks kRenderBytesPerPixel, commands that keep more a
+  // pixel check again.
+  void check_film_memory(double bytes_per_pixel, const std::string& kept = kRenderPixelText) const;
   // The GPU renderer of --device cuda, else null.
   const cuda::GpuRenderer* gpu() const { return m_gpu.get(); }
 
@@ -66,9 +72,10 @@ class RenderSession {
   // integrator keys in their place, so that "tree" and "tree:nee.candidates=4" run side by side
   // in one interleaved compare.
   IntegratorSettings integrator_for(const std::string& spec) const;
-  // Throws rll::Error naming every --set key that no sampler or integrator asked for; call it
-  // once every sampler the command needs has been made.
-  void check_params_used() const { m_params.check_all_used(); }
+  // Throws rll::Error naming every --set key that no sampler or integrator asked for, with the
+  // keys it may have meant (or that its sampler is not the one rendered with); call it once
+  // every sampler the command needs has been made.
+  void check_params_used() const;
 
   // Moves an animated scene to `frame` (lights switch and move), refits the ray tracer and the
   // light tree, and tells `sampler` (which keeps what it learnt). No-op for static scenes.
@@ -102,6 +109,7 @@ class RenderSession {
   PointSet m_points = PointSet::Sobol;
   std::unique_ptr<Accel> m_accel;
   std::unique_ptr<cuda::GpuRenderer> m_gpu;
+  mutable std::vector<std::string> m_made;  // the samplers made, by name (for messages)
 };
 
 }  // namespace rll
