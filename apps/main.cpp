@@ -9,6 +9,7 @@
 
 #include "commands.h"
 #include "rll/core/error.h"
+#include "rll/core/long_work.h"
 #include "rll/core/memory_budget.h"
 #include "rll/core/params.h"
 
@@ -66,6 +67,7 @@ void install_interrupt_handler() {
   sigemptyset(&sa.sa_mask);
   sa.sa_flags = SA_RESTART;
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+  rll::set_cancel_flag(&g_interrupted);  // the oracle's precompute and the like stop on it too
 }
 
 namespace {

@@ -7,6 +7,7 @@
 
 #include "rll/core/error.h"
 #include "rll/core/hash.h"
+#include "rll/core/memory_budget.h"
 #include "rll/core/parallel.h"
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
@@ -182,6 +183,7 @@ LtcLightSampler::LtcLightSampler(const Scene& scene, const LtcSettings& s)
   }
   m_reward_scale = reward_scale(scene);
   m_keys = m_clusters.size() * s.bins * s.bins;
+  check_memory(m_clusters, m_keys, s);
   m_slot = std::make_unique<std::atomic<uint32_t>[]>(m_keys);
   m_request = std::make_unique<std::atomic<uint32_t>[]>(m_keys);
   for (uint32_t k = 0; k < m_keys; ++k) {
@@ -217,11 +219,36 @@ LtcLightSampler::LtcLightSampler(const Scene& scene, const LtcSettings& s)
   for (uint32_t e = 0; e < cap; ++e) m_free[e] = e;
 }
 
+namespace {
+// Bytes of the tables per node slot, per entry and per key (cluster x direction bin), as the
+// constructor allocates them.
+constexpr size_t kNodeBytes =
+    3 * sizeof(uint32_t) + 7 * sizeof(float) + 3 * sizeof(ExactSum) + sizeof(uint32_t);
+constexpr size_t kEntryBytes =
+    2 * sizeof(uint32_t) + 4 * sizeof(double) + sizeof(float) + 1 + sizeof(uint32_t);
+constexpr size_t kKeyBytes = 2 * sizeof(uint32_t);
+}  // namespace
+
+void LtcLightSampler::check_memory(const SpatialClusters& clusters, uint32_t keys,
+                                   const LtcSettings& s) {
+  // As rll's cell table: the tables are allocated up front, so a configuration the machine cannot
+  // hold is refused before, not grown into the out-of-memory killer. A full table's end of pass
+  // lists the keys that asked for an entry: (visits, key) per key at most.
+  const double needed = double(clusters.bytes()) +
+                        double(keys) * (kKeyBytes + 2 * sizeof(uint32_t)) +
+                        double(s.capacity) * (kEntryBytes + double(s.max_cut) * kNodeBytes);
+  if (needed > double(memory_budget_bytes()))
+    fail(
+        "ltc.capacity={} with ltc.max_cut={} ({} spatial clusters x ltc.bins={}^2 direction bins) "
+        "needs {} for its entries, more than {}; lower ltc.capacity, ltc.max_cut, ltc.clusters or "
+        "ltc.bins",
+        s.capacity, s.max_cut, clusters.size(), s.bins, format_bytes(needed),
+        memory_budget_phrase());
+}
+
 size_t LtcLightSampler::bytes() const {
-  const size_t per_node = 3 * sizeof(uint32_t) + 7 * sizeof(float) + 3 * sizeof(ExactSum) + sizeof(uint32_t);
-  const size_t per_entry = 2 * sizeof(uint32_t) + 4 * sizeof(double) + sizeof(float) + 1 + sizeof(uint32_t);
-  return m_clusters.bytes() + size_t(m_keys) * 2 * sizeof(uint32_t) +
-         size_t(m_s.capacity) * (per_entry + size_t(m_m) * per_node);
+  return m_clusters.bytes() + size_t(m_keys) * kKeyBytes +
+         size_t(m_s.capacity) * (kEntryBytes + size_t(m_m) * kNodeBytes);
 }
 
 uint32_t LtcLightSampler::direction_bin(const Vec3& wo) const {

@@ -145,6 +145,8 @@ class LtcLightSampler final : public LightSampler {
   size_t bytes() const;
 
  private:
+  // Refuses (rll::Error naming the keys) tables beyond the memory budget, before they exist.
+  static void check_memory(const SpatialClusters& clusters, uint32_t keys, const LtcSettings& s);
   uint32_t find_node(uint32_t entry, uint32_t light) const;
   // Importance of a node at an entry's cluster centre (no receiver normal): the prior bound.
   float bound(uint32_t entry, uint32_t node) const;

@@ -4,10 +4,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <limits>
 #include <mutex>
 
 #include "rll/accel/accel.h"
 #include "rll/core/error.h"
+#include "rll/core/long_work.h"
 #include "rll/core/memory_budget.h"
 #include "rll/core/parallel.h"
 #include "rll/core/params.h"
@@ -15,8 +18,8 @@
 #include "rll/core/sampling.h"
 #include "rll/learn/cut_store.h"
 #include "rll/learn/split_collapse.h"
-#include "rll/lighttree/light_tree.h"
 #include "rll/lights/tree_sampler.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/scene/interaction.h"
 
 namespace rll {
@@ -55,7 +58,8 @@ double estimate(const Scene& scene, const Accel& accel, uint32_t node, const std
                 int rays, Pcg32& rng, uint64_t& traced) {
   const LightTree& tree = light_tree_of(scene);
   double sum = 0;
-  for (const LightContext& x : pts)
+  for (const LightContext& x : pts) {
+    if (cancel_requested()) break;  // the render that follows stops too
     for (int r = 0; r < rays; ++r) {
       const TreeSample t = tree_descend(tree, node, x.p, x.n, rng.next_double());
       Vec2 u{rng.next_float(), rng.next_float()};
@@ -74,7 +78,15 @@ double estimate(const Scene& scene, const Accel& accel, uint32_t node, const std
       if (accel.occluded(shadow)) continue;
       sum += double(luminance(ls.L)) * cos / ls.pdf / t.pmf;
     }
+  }
   return sum / double(pts.size() * size_t(rays));
+}
+
+// An estimate as the cuts keep it: a float, and finite where a light's radiance is near a
+// float's largest (the cuts' sums would turn to inf and their probabilities to NaN).
+float finite_estimate(double e) {
+  constexpr float kMax = std::numeric_limits<float>::max();
+  return e > double(kMax) ? kMax : float(e);
 }
 
 }  // namespace
@@ -110,9 +122,12 @@ void OracleLightSampler::precompute(const Scene& scene) {
                                   w, h, s.discovery_spp, s.bounces));
   std::mutex merge;
   std::vector<CellPoint> found;
+  m_interrupted = false;
+  LongWork discovery("the oracle's discovery", uint64_t(h), "rows of pixels");
   parallel_for(size_t(h), 1, [&](size_t y0, size_t y1) {
     std::vector<CellPoint> local;
-    for (size_t y = y0; y < y1; ++y)
+    for (size_t y = y0; y < y1; ++y) {
+      if (cancel_requested()) break;
       for (int x = 0; x < w; ++x)
         for (int k = 0; k < s.discovery_spp; ++k) {
           SampleStream st(s.seed, y * w + x, uint64_t(k));
@@ -138,6 +153,8 @@ void OracleLightSampler::precompute(const Scene& scene) {
             ray = spawn_ray(c.p, c.n, d);
           }
         }
+      discovery.add(1);
+    }
     std::lock_guard lock(merge);
     found.insert(found.end(), local.begin(), local.end());
   });
@@ -161,17 +178,41 @@ void OracleLightSampler::precompute(const Scene& scene) {
   CutStore& cuts = m_rll->cuts();
   const int M = rll.cut.cut_size;
   const std::vector<uint32_t> initial = initial_cut(tree, M);
+  // Its cost, known now and checked before a ray is traced: the settings' ranges allow plans of
+  // hours (oracle.points=4096:rays=4096). Each refinement step estimates two children; a cut
+  // that can hold every light stops splitting once it has.
+  const size_t steps =
+      tree.light_count() > size_t(M)
+          ? size_t(s.refine)
+          : std::min(size_t(s.refine),
+                     tree.light_count() - std::min(tree.light_count(), initial.size()));
+  double planned = 0;
+  for (const auto& [begin, end] : ranges) planned += double(end - begin);
+  planned *= double(s.rays) * double(initial.size() + 2 * steps);
+  if (planned > kMaxOracleShadowRays)
+    fail(
+        "the oracle would trace about {:.3g} shadow rays before rendering ({} cells x up to "
+        "oracle.points={} points x oracle.rays={} rays x ({} clusters + 2 x {} of oracle.refine={} "
+        "steps)), more than {:.3g}; lower oracle.points, oracle.rays or oracle.refine",
+        planned, ranges.size(), s.points_per_cell, s.rays, initial.size(), steps, s.refine,
+        kMaxOracleShadowRays);
+  m_cell_rays.assign(ranges.size(), {kNoCell, 0.0f});
+  LongWork progress(fmt::format("the oracle's estimates (about {:.3g} shadow rays)", planned),
+                    ranges.size(), "cells");
   std::atomic<uint64_t> rays{0};
   parallel_for(ranges.size(), 1, [&](size_t b, size_t e) {
     uint64_t traced = 0;
     for (size_t r = b; r < e; ++r) {
+      if (cancel_requested()) break;  // cells not reached sample like the light tree
+      const uint64_t traced_before = traced;
       std::vector<LightContext> pts;
       for (size_t i = ranges[r].first; i < ranges[r].second; ++i) pts.push_back(found[i].ctx);
       const uint32_t cell = found[ranges[r].first].cell;
       Pcg32 rng(s.seed, table.key_of(cell));
       std::vector<uint32_t> nodes = initial;
       std::vector<float> q(nodes.size());
-      for (size_t k = 0; k < nodes.size(); ++k) q[k] = float(estimate(scene, accel, nodes[k], pts, s.rays, rng, traced));
+      for (size_t k = 0; k < nodes.size(); ++k)
+        q[k] = finite_estimate(estimate(scene, accel, nodes[k], pts, s.rays, rng, traced));
       for (int step = 0; step < s.refine; ++step) {
         // The learnt cuts' choice (split_collapse.h) with score = value = the estimate and T = 1;
         // the children of a split are estimated, not shared.
@@ -188,15 +229,21 @@ void OracleLightSampler::precompute(const Scene& scene) {
         }
         uint32_t child = tree.node(nodes[best]).child;
         nodes[best] = child;
-        q[best] = float(estimate(scene, accel, child, pts, s.rays, rng, traced));
+        q[best] = finite_estimate(estimate(scene, accel, child, pts, s.rays, rng, traced));
         nodes.insert(nodes.begin() + best + 1, child + 1);
-        q.insert(q.begin() + best + 1, float(estimate(scene, accel, child + 1, pts, s.rays, rng, traced)));
+        q.insert(q.begin() + best + 1,
+                 finite_estimate(estimate(scene, accel, child + 1, pts, s.rays, rng, traced)));
       }
+      if (cancel_requested()) break;  // its estimates were cut short: it keeps no cut
       cuts.assign(cell, nodes, q);
+      m_cell_rays[r] = {cell, float(traced - traced_before)};
+      progress.add(1);
     }
     rays += traced;
   });
   m_rays = rays.load();
+  m_interrupted = cancel_requested();
+  std::sort(m_cell_rays.begin(), m_cell_rays.end());
   m_rll->freeze();
   m_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -207,7 +254,15 @@ nlohmann::json OracleLightSampler::describe() const {
   j["oracle"] = {{"discovery_spp", m_s.discovery_spp}, {"bounces", m_s.bounces},   {"points", m_s.points_per_cell},
                  {"rays", m_s.rays},                   {"refine", m_s.refine},     {"cells", m_cells},
                  {"shadow_rays", m_rays},              {"precompute_seconds", m_seconds}};
+  if (m_interrupted) j["oracle"]["interrupted"] = true;
   return j;
+}
+
+float OracleLightSampler::shadow_rays_of(uint32_t cell) const {
+  const auto it = std::lower_bound(m_cell_rays.begin(), m_cell_rays.end(),
+                                   std::pair<uint32_t, float>{cell, 0.0f});
+  return it != m_cell_rays.end() && it->first == cell ? it->second
+                                                      : std::numeric_limits<float>::quiet_NaN();
 }
 
 }  // namespace rll

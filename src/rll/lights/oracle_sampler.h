@@ -6,6 +6,8 @@
 #pragma once
 
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "rll/core/param_table.h"
 #include "rll/lights/rll_sampler.h"
@@ -24,6 +26,11 @@ struct OracleSettings {
   int refine = 32;            // greedy split-collapse steps per cell on the estimates
   uint64_t seed = 77;
 };
+
+// The most shadow rays the oracle's estimates may plan to trace (cells x points x rays x
+// estimates per cell, checked before the first): 2^32, minutes on a few cores, and more than ten
+// times what the defaults plan on a large image.
+inline constexpr double kMaxOracleShadowRays = 0x1p32;
 
 // oracle.* from --set, each checked against its range (errors name the key), by the table of the
 // oracle's parameters (core/param_table.h).
@@ -45,6 +52,12 @@ class OracleLightSampler final : public LightSampler {
   // For tests: the frozen RLL sampler holding the knowledge (a cell it has no cut for was not
   // found by discovery).
   const RllLightSampler& rll() const { return *m_rll; }
+  // The shadow rays the estimates of a cell's cut took (its `rewards` diagnostic: the oracle
+  // learns from no rewards); NaN for a cell it has no cut for.
+  float shadow_rays_of(uint32_t cell) const;
+  // The precompute stopped early at the cancel flag (core/long_work.h): cells it did not reach
+  // sample like the light tree.
+  bool interrupted() const { return m_interrupted; }
 
  private:
   void precompute(const Scene& scene);
@@ -55,6 +68,8 @@ class OracleLightSampler final : public LightSampler {
   double m_seconds = 0;
   uint64_t m_rays = 0;
   uint32_t m_cells = 0;
+  bool m_interrupted = false;
+  std::vector<std::pair<uint32_t, float>> m_cell_rays;  // (cell, shadow rays), by cell
 };
 
 }  // namespace rll

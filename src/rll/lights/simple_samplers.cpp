@@ -1,5 +1,6 @@
 #include "rll/lights/simple_samplers.h"
 
+#include "rll/lighttree/light_bounds.h"
 #include "rll/scene/scene.h"
 
 namespace rll {
@@ -7,7 +8,12 @@ namespace rll {
 std::vector<float> light_powers(const Scene& scene) {
   std::vector<float> w(scene.lights.size());
   double total = 0;
-  for (size_t i = 0; i < w.size(); ++i) total += w[i] = light_power(scene.lights[i], scene.radius);
+  for (size_t i = 0; i < w.size(); ++i) {
+    const float p = light_power(scene.lights[i], scene.radius);
+    // Capped as light_bounds caps it (lighttree/light_bounds.h): a power that overflowed a float
+    // made every pmf NaN.
+    total += w[i] = p <= kMaxSamplingPower ? p : kMaxSamplingPower;
+  }
   if (!(total > 0)) std::fill(w.begin(), w.end(), 1.0f);
   return w;
 }

@@ -1,5 +1,11 @@
 #include "rll/lighttree/light_bounds.h"
 
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "rll/scene/scene.h"
+
 namespace rll {
 
 namespace {
@@ -51,7 +57,51 @@ void merge_cones(const Vec3& wa, float cos_a, const Vec3& wb, float cos_b, Vec3&
   cos_out = widened_cos(theta_o);
 }
 
+namespace {
+// A light whose power exceeds kMaxSamplingPower (or overflows a float), sampled as one of that
+// power: its power and side power scaled down by one factor, computed in double where they are
+// finite, and its largest radiance with them, so that importance's near-field bound
+// (side_power / (pi max_radiance), the light's area) stays what it was.
+void cap_power(const Light& l, LightBounds& b) {
+  const double lum =
+      0.2126 * double(l.radiance.x) + 0.7152 * double(l.radiance.y) + 0.0722 * double(l.radiance.z);
+  double side = 0;
+  switch (l.type) {
+    case LightType::Triangle:
+      side = double(kPi) * double(l.area) * lum;
+      break;
+    case LightType::Point:
+    case LightType::Spot:
+      side = 4 * double(kPi) * lum;
+      break;
+    case LightType::Goniometric:
+      side = double(l.area) * lum;
+      break;
+    case LightType::Projection: {  // 4 pi area lum / frustum, as below
+      const double a = 1 / double(length(l.p1)), c = 1 / double(length(l.p2));
+      side = 4 * double(kPi) * double(l.area) * lum /
+             (4 * std::asin(a * c / std::sqrt((1 + a * a) * (1 + c * c))));
+      break;
+    }
+    case LightType::Directional:
+      side = double(kPi) * lum;
+      break;
+  }
+  const double sides = l.type == LightType::Triangle && l.two_sided ? 2 : 1;
+  b.power = kMaxSamplingPower;
+  b.side_power = float(double(kMaxSamplingPower) / sides);
+  const double f = double(kMaxSamplingPower) / (side * sides);
+  if (std::isfinite(b.max_radiance) && f > 0 && std::isfinite(f)) b.max_radiance = float(lum * f);
+}
+}  // namespace
+
 LightBounds light_bounds(const Light& l) {
+  LightBounds b = light_bounds_uncapped(l);
+  if (!(b.power <= kMaxSamplingPower)) cap_power(l, b);
+  return b;
+}
+
+LightBounds light_bounds_uncapped(const Light& l) {
   LightBounds b;
   switch (l.type) {
     case LightType::Triangle:
@@ -203,6 +253,52 @@ ImportanceBounds importance_bounds(const LightBounds& b, const DistantFrame* fra
 float light_importance(const LightBounds& b, const Vec3& p, const Vec3& n,
                        const DistantFrame* frame) {
   return light_importance(importance_bounds(b, frame), p, n);
+}
+
+namespace {
+std::string describe_light(const Scene& scene, size_t i) {
+  const Light& l = scene.lights[i];
+  const Vec3& p = l.p0;
+  switch (l.type) {
+    case LightType::Triangle: {
+      const bool known = l.triangle < scene.mesh.material.size() &&
+                         scene.mesh.material[l.triangle] < scene.materials.size();
+      return known ? fmt::format("light {} (emissive triangle {} of material '{}')", i, l.triangle,
+                                 scene.materials[scene.mesh.material[l.triangle]].name)
+                   : fmt::format("light {} (emissive triangle {})", i, l.triangle);
+    }
+    case LightType::Point:
+      return fmt::format("light {} (point light at ({}, {}, {}))", i, p.x, p.y, p.z);
+    case LightType::Spot:
+      return fmt::format("light {} (spot light at ({}, {}, {}))", i, p.x, p.y, p.z);
+    case LightType::Goniometric:
+      return fmt::format("light {} (goniometric light at ({}, {}, {}))", i, p.x, p.y, p.z);
+    case LightType::Projection:
+      return fmt::format("light {} (projection light at ({}, {}, {}))", i, p.x, p.y, p.z);
+    case LightType::Directional:
+      return fmt::format("light {} (distant light)", i);
+  }
+  return fmt::format("light {}", i);
+}
+}  // namespace
+
+std::string capped_power_warning(const Scene& scene) {
+  std::vector<size_t> capped;
+  for (size_t i = 0; i < scene.lights.size(); ++i)
+    if (!(light_bounds_uncapped(scene.lights[i]).power <= kMaxSamplingPower) ||
+        !(light_power(scene.lights[i], scene.radius) <= kMaxSamplingPower))
+      capped.push_back(i);
+  if (capped.empty()) return {};
+  std::string names;
+  for (size_t k = 0; k < std::min<size_t>(capped.size(), 3); ++k)
+    names += (k ? ", " : "") + describe_light(scene, capped[k]);
+  if (capped.size() > 3) names += fmt::format(" and {} more", capped.size() - 3);
+  return fmt::format(
+      "{}: {} emit{} more power than a float holds or the samplers weigh ({:.3g} W): sampled as "
+      "lights of that power, so that the other lights keep their share; their own light may "
+      "overflow the image's floats (such samples are dropped); lower their radiance or scale if "
+      "that was not meant",
+      scene.source, names, capped.size() == 1 ? "s" : "", double(kMaxSamplingPower));
 }
 
 }  // namespace rll

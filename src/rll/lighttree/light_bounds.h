@@ -4,10 +4,27 @@
 // unoccluded contribution there.
 #pragma once
 
+#include <string>
+
 #include "rll/core/math.h"
 #include "rll/scene/light.h"
 
 namespace rll {
+
+struct Scene;
+
+// The most power a light is sampled by: 2^100 W. pbrt-v4 defines nothing for a light whose power
+// overflows a float (an area light of L 3e38): its samplers' sums turn to inf and every
+// probability to NaN, which blacks out the image, the other lights' light included. rll caps the
+// power the samplers weigh a light by (light_bounds, light_powers), never its radiance: the image
+// stays unbiased, and sums over up to 2^27 lights of the cap stay finite floats. No physical scene
+// comes near it (the sun is 4e26 W), so the cap changes nothing else.
+inline constexpr float kMaxSamplingPower = 0x1p100f;
+
+// The most importance light_importance gives: 2^120. A light of kMaxSamplingPower a hair away
+// would otherwise give inf, and a descent's share inf / inf NaN; sums of 2^7 importances of the
+// cap stay finite floats. Normal scenes stay far below it.
+inline constexpr float kMaxImportance = 0x1p120f;
 
 struct LightBounds {
   Bounds3 box;         // lights with a position only
@@ -76,11 +93,11 @@ RLL_HD inline float light_importance(const ImportanceBounds& b, const Vec3& p, c
     // Distant lights' cones hold only for points within the frame's reach.
     if (!has_normal ||
         ((b.flags & ImportanceBounds::kDistant) && length_sq(p - b.center) > b.radius2))
-      return b.power;
+      return clamp(b.power, 0.0f, kMaxImportance);
     // Best cosine between the normal and any direction of the cone.
     float cos_i = dot(b.axis, n), sin_i = safe_sqrt(1 - cos_i * cos_i);
     float c = cos_sub_clamped(sin_i, cos_i, b.sin_o, b.cos_o);
-    return c > 0 ? b.power * c : 0;
+    return c > 0 ? clamp(b.power * c, 0.0f, kMaxImportance) : 0;
   }
   Vec3 d = p - b.center;  // from the lights to the point
   float dist2 = length_sq(d);
@@ -110,10 +127,13 @@ RLL_HD inline float light_importance(const ImportanceBounds& b, const Vec3& p, c
     if (cos_pi <= 0) return 0;
     importance *= cos_pi;
   }
-  return std::max(importance, 0.0f);
+  return clamp(importance, 0.0f, kMaxImportance);
 }
 
+// Power capped at kMaxSamplingPower.
 LightBounds light_bounds(const Light& light);
+// The same without the cap (the power may be inf): to tell which lights the cap acts on.
+LightBounds light_bounds_uncapped(const Light& light);
 // A sky-dome triangle as a distant light: the cone of directions towards it from any point
 // within frame.reach of frame.center (its own directions from the centre, widened by the
 // parallax); box and power as light_bounds gives them.
@@ -127,6 +147,9 @@ LightBounds merge(const LightBounds& a, const LightBounds& b);
 // without power.
 float light_importance(const LightBounds& b, const Vec3& p, const Vec3& n,
                        const DistantFrame* frame = nullptr);
+
+// A warning naming the lights whose power light_bounds caps at kMaxSamplingPower (empty: none).
+std::string capped_power_warning(const Scene& scene);
 
 // Union of two direction cones given as (axis, cos of half-angle); exposed for tests.
 void merge_cones(const Vec3& wa, float cos_a, const Vec3& wb, float cos_b, Vec3& w, float& cos_out);

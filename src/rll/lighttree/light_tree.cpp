@@ -1,5 +1,7 @@
 #include "rll/lighttree/light_tree.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -498,6 +500,13 @@ void build_light_tree(Scene& scene) {
   // the lights) is kept.
   if (scene.light_tree && scene.light_tree->light_count() == scene.lights.size()) return;
   scene.light_tree = std::make_shared<LightTree>(LightTree::build(scene));
+  // Said once, as the load's warnings are (the scene layer below cannot weigh lights).
+  if (std::string w = capped_power_warning(scene);
+      !w.empty() &&
+      std::find(scene.warnings.begin(), scene.warnings.end(), w) == scene.warnings.end()) {
+    fmt::print(stderr, "rll: warning: {}\n", w);
+    scene.warnings.push_back(std::move(w));
+  }
 }
 
 const LightTree& light_tree_of(const Scene& scene) {

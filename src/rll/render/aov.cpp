@@ -72,6 +72,9 @@ std::vector<std::pair<std::string, std::vector<float>>> resolve_aovs(const Film&
   const CameraVertexSums* v = film.camera_vertex();
   if (!v) fail("the film kept no camera vertices to make diagnostics of");
   const RllLightSampler* rll = sampler_cells(sampler);
+  // The oracle's cuts come from shadow rays, not rewards (its own count is a stand-in of 1e30
+  // that keeps the learnt share whole): its `rewards` are the shadow rays of the cell's estimates.
+  const auto* oracle = dynamic_cast<const OracleLightSampler*>(&sampler);
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   const size_t n = v->cell.size();
   // A pixel's cell, if the sampler still has it.
@@ -101,7 +104,8 @@ std::vector<std::pair<std::string, std::vector<float>>> resolve_aovs(const Film&
           if (v->shadow[i]) values[i] = float(double(v->visible[i]) / v->shadow[i]);
           break;
         case Aov::Rewards:
-          if (c != CameraVertexSample::kNone) values[i] = rll->cuts().rewards_seen(c);
+          if (c != CameraVertexSample::kNone)
+            values[i] = oracle ? oracle->shadow_rays_of(c) : rll->cuts().rewards_seen(c);
           break;
       }
     }

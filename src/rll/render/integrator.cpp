@@ -93,11 +93,17 @@ Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Ve
       if (s.setup.counts_shadow_ray) ++counters.shadow;
       const bool occluded = s.setup.traces && m_accel.occluded(s.setup.shadow);
       if (reaches_light(s.setup, occluded)) ++counters.shadow_visible;
-      if (camera) {  // the visible-sample ratio only: rht's samples have no one light pmf
+      if (camera) {
         camera->shadow += s.setup.counts_shadow_ray;
         camera->visible += reaches_light(s.setup, occluded);
       }
       sum += rht_nee_finish(m_constants, s, occluded, bsdf, wo, beta);
+    }
+    if (camera && samples.count > 0) {  // `probability`: the mean of its samples' rht pmfs
+      float p = 0;
+      for (int i = 0; i < samples.count; ++i) p += samples.sample[i].light.pmf;
+      camera->sampled = true;
+      camera->light_pmf = p / float(samples.count);
     }
     return sum;
   }

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numeric>
 #include <queue>
 
 #include "rll/core/memory_budget.h"
@@ -41,6 +43,29 @@ Polygon clip(const Polygon& p, int axis, double value, double sign) {
 
 double tri_area(const D2& a, const D2& b, const D2& c) {
   return 0.5 * std::abs((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]));
+}
+
+// About how many cells the exact integration's loop visits for the triangle P (in texel
+// coordinates): per row of cells, the row's extent and two more, and the rows' extents add up to
+// at most about the area plus the edges' horizontal lengths. Known before the loop runs, so that
+// a triangle tiling its texture a thousand times is never walked cell by cell.
+double exact_cost(const D2 P[3]) {
+  double dx = 0, ymin = P[0][1], ymax = P[0][1];
+  for (int k = 0; k < 3; ++k) {
+    dx += std::abs(P[k][0] - P[(k + 1) % 3][0]);
+    ymin = std::min(ymin, P[k][1]);
+    ymax = std::max(ymax, P[k][1]);
+  }
+  const double cost =
+      tri_area(P[0], P[1], P[2]) + dx + 2 * (std::floor(ymax) - std::floor(ymin) + 1);
+  return std::isfinite(cost) ? cost : std::numeric_limits<double>::infinity();
+}
+
+// The triangle with texture coordinates uv in texel coordinates (X = u W - 1/2, Y = (1 - v) H -
+// 1/2).
+void to_texels(const TexelView& tex, const std::array<D2, 3>& uv, D2 P[3]) {
+  const double W = tex.width, H = tex.height;
+  for (int k = 0; k < 3; ++k) P[k] = {uv[k][0] * W - 0.5, (1 - uv[k][1]) * H - 0.5};
 }
 
 // The integrals of 1, x, y and xy over polygon p (x, y relative to the cell's corner (x0, y0)):
@@ -117,7 +142,7 @@ TextureIntegral integrate_texture(const TexelView& tex, const std::array<D2, 3>&
   TextureIntegral r;
   const double W = tex.width, H = tex.height;
   D2 P[3];
-  for (int k = 0; k < 3; ++k) P[k] = {uv[k][0] * W - 0.5, (1 - uv[k][1]) * H - 0.5};
+  to_texels(tex, uv, P);
   const double area = tri_area(P[0], P[1], P[2]);  // in texel units
   r.uv_area = tri_area(uv[0], uv[1], uv[2]);
   if (tex.width <= 0 || tex.height <= 0) {  // sample_texture's "no texture": 1
@@ -139,6 +164,12 @@ TextureIntegral integrate_texture(const TexelView& tex, const std::array<D2, 3>&
     return r;
   }
   if (!(area > 1e-9 * extent * extent) || !std::isfinite(area)) {  // collinear uvs
+    r.exact = false;
+    from_mean(sampled_mean(tex, P));
+    return r;
+  }
+  // The cost checked first: the count below only stops a loop whose estimate was wrong.
+  if (exact_cost(P) > double(max_cells)) {
     r.exact = false;
     from_mean(sampled_mean(tex, P));
     return r;
@@ -191,6 +222,19 @@ TextureIntegral integrate_texture(const TexelView& tex, const std::array<Vec2, 3
   return integrate_texture(tex, d, max_cells);
 }
 
+double exact_integration_cost(const TexelView& tex, const std::array<D2, 3>& uv) {
+  if (tex.width <= 0 || tex.height <= 0) return 0;
+  D2 P[3];
+  to_texels(tex, uv, P);
+  return exact_cost(P);
+}
+
+double exact_integration_cost(const TexelView& tex, const std::array<Vec2, 3>& uv) {
+  std::array<D2, 3> d;
+  for (int k = 0; k < 3; ++k) d[k] = {double(uv[k].x), double(uv[k].y)};
+  return exact_integration_cost(tex, d);
+}
+
 std::array<Vec2, 3> triangle_uvs(const Scene& scene, uint32_t tri) {
   const Mesh& m = scene.mesh;
   if (m.uvs.empty()) return {Vec2{0, 0}, Vec2{1, 0}, Vec2{0, 1}};
@@ -208,10 +252,25 @@ struct Piece {
   bool operator<(const Piece& o) const { return key < o.key; }
 };
 
+// What the exact integrations of a scene's load may still cost, in cells (exact_cost's estimate).
+struct CellBudget {
+  double left = 0;
+  // The max_cells of an integration of `cost`: kMaxExactTextureCells where it is at most
+  // kAlwaysExactTextureCells (no dearer than the points), or at most that and what is left (then
+  // spent); else 0 (from points).
+  size_t take(double cost) {
+    if (cost <= double(kAlwaysExactTextureCells)) return kMaxExactTextureCells;
+    if (cost > double(kMaxExactTextureCells) || cost > left) return 0;
+    left -= cost;
+    return kMaxExactTextureCells;
+  }
+};
+
 // Splits triangle `tri` into at most `count` pieces, the brightest first, each in two across
-// its longest edge (in the world), down to pieces of about one texel cell.
+// its longest edge (in the world), down to pieces of about one texel cell. Each piece is
+// integrated exactly while `budget` lasts, from points after.
 std::vector<Piece> split_triangle(const Scene& scene, uint32_t tri, const TexelView& tex,
-                                  const Rgb& factor, size_t count) {
+                                  const Rgb& factor, size_t count, CellBudget& budget) {
   const std::array<Vec2, 3> uv = triangle_uvs(scene, tri);
   const Vec3 p[3] = {scene.mesh.vertex(tri, 0), scene.mesh.vertex(tri, 1),
                      scene.mesh.vertex(tri, 2)};
@@ -224,7 +283,7 @@ std::vector<Piece> split_triangle(const Scene& scene, uint32_t tri, const TexelV
       puv[k] = {uv[0].x * b0 + uv[1].x * b1 + uv[2].x * b2,
                 uv[0].y * b0 + uv[1].y * b1 + uv[2].y * b2};
     }
-    piece.integral = integrate_texture(tex, puv);
+    piece.integral = integrate_texture(tex, puv, budget.take(exact_integration_cost(tex, puv)));
     const auto& s = piece.integral.sum;
     piece.key = 0.2126 * factor.x * s[0] + 0.7152 * factor.y * s[1] + 0.0722 * factor.z * s[2];
     return piece;
@@ -283,10 +342,24 @@ std::vector<Rgb> prepare_textured_emitters(Scene& scene) {
   auto texture_of = [&](uint32_t t) {
     return scene.textures[size_t(scene.materials[mesh.material[t]].emission_texture)].texel_view();
   };
+  // Every exact integration's cost is estimated first and the load's are held to a budget,
+  // the cheapest first (a deterministic choice): a mesh of many triangles that each tile their
+  // texture a thousand times is integrated from points, not walked for hours cell by cell.
+  std::vector<double> cost(textured.size());
+  for (size_t i = 0; i < textured.size(); ++i)
+    cost[i] = exact_integration_cost(texture_of(textured[i]), triangle_uvs(scene, textured[i]));
+  std::vector<size_t> order(textured.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return cost[a] < cost[b]; });
+  CellBudget budget{double(kMaxExactTextureCellsPerLoad)};
+  std::vector<size_t> max_cells(textured.size());
+  for (size_t i : order) max_cells[i] = budget.take(cost[i]);
   std::vector<TextureIntegral> integrals(textured.size());
   parallel_for(textured.size(), 64, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
-      integrals[i] = integrate_texture(texture_of(textured[i]), triangle_uvs(scene, textured[i]));
+      integrals[i] = integrate_texture(texture_of(textured[i]), triangle_uvs(scene, textured[i]),
+                                       max_cells[i]);
   });
   std::vector<Rgb> means(mesh.triangle_count(), Rgb(0));
   size_t inexact = 0;
@@ -294,13 +367,26 @@ std::vector<Rgb> prepare_textured_emitters(Scene& scene) {
     means[textured[i]] = integrals[i].mean();
     inexact += !integrals[i].exact;
   }
-  if (inexact > 0)
-    scene.warnings.push_back(fmt::format(
-        "{}: {} textured emissive triangle{} collinear uvs or cover more than {} texel cells: "
-        "{} mean emission is measured at 64 x 64 points, not integrated exactly",
-        scene.source, inexact, inexact == 1 ? " has" : "s have", kMaxExactTextureCells,
-        inexact == 1 ? "its" : "their"));
-  if (scene.textured_emitters_split || mesh.uvs.empty()) return means;
+  auto warn = [&](size_t triangles, size_t pieces) {
+    if (triangles + pieces == 0) return;
+    std::string what;
+    if (triangles > 0)
+      what = fmt::format("{} textured emissive triangle{}", triangles, triangles == 1 ? "" : "s");
+    if (pieces > 0)
+      what += fmt::format("{}{} of the lights they were split into", what.empty() ? "" : " and ",
+                          pieces);
+    std::string w = fmt::format(
+        "{}: {} have collinear uvs, cover more than {} texel cells each (a texture tiled many "
+        "times) or go beyond the {} cells of exact integration a load may spend: their mean "
+        "emission is measured at 64 x 64 points, not integrated exactly",
+        scene.source, what, kMaxExactTextureCells, kMaxExactTextureCellsPerLoad);
+    if (std::find(scene.warnings.begin(), scene.warnings.end(), w) == scene.warnings.end())
+      scene.warnings.push_back(std::move(w));  // finalize() may run twice
+  };
+  if (scene.textured_emitters_split || mesh.uvs.empty()) {
+    warn(inexact, 0);
+    return means;
+  }
   scene.textured_emitters_split = true;
 
   // Lights of nearly equal power: each triangle gets pieces in proportion to its power, at most
@@ -312,7 +398,10 @@ std::vector<Rgb> prepare_textured_emitters(Scene& scene) {
     const Material& m = scene.materials[mesh.material[t]];
     total += power[i] = double(mesh.area(t)) * double(luminance(m.emission * means[t]));
   }
-  if (!(total > 0)) return means;
+  if (!(total > 0)) {
+    warn(inexact, 0);
+    return means;
+  }
   std::vector<size_t> pieces(textured.size(), 1);
   size_t new_triangles = 0;
   for (size_t i = 0; i < textured.size(); ++i) {
@@ -323,7 +412,10 @@ std::vector<Rgb> prepare_textured_emitters(Scene& scene) {
                                   double(kMaxPiecesPerTriangle)));
     new_triangles += pieces[i] - 1;
   }
-  if (new_triangles == 0) return means;
+  if (new_triangles == 0) {
+    warn(inexact, 0);
+    return means;
+  }
   const size_t vertex_bytes =
       sizeof(Vec3) + sizeof(Vec2) + (mesh.normals.empty() ? 0 : sizeof(Vec3));
   check_memory_budget(double(new_triangles + textured.size()) * 3 * double(vertex_bytes) +
@@ -333,11 +425,13 @@ std::vector<Rgb> prepare_textured_emitters(Scene& scene) {
   mesh.triangles.reserve(mesh.triangles.size() + new_triangles);
   mesh.material.reserve(mesh.material.size() + new_triangles);
   means.reserve(means.size() + new_triangles);
+  size_t inexact_pieces = 0;
   for (size_t i = 0; i < textured.size(); ++i) {
     if (pieces[i] <= 1) continue;
     const uint32_t t = textured[i];
     const Material& m = scene.materials[mesh.material[t]];
-    const std::vector<Piece> split = split_triangle(scene, t, texture_of(t), m.emission, pieces[i]);
+    const std::vector<Piece> split =
+        split_triangle(scene, t, texture_of(t), m.emission, pieces[i], budget);
     const Triangle original = mesh.triangles[t];
     for (size_t k = 0; k < split.size(); ++k) {
       Triangle nt;
@@ -357,6 +451,7 @@ std::vector<Rgb> prepare_textured_emitters(Scene& scene) {
                                 float(ua.y * b0 + ub.y * b1 + uc.y * b2)});
       }
       const Rgb mean = split[k].integral.mean();
+      inexact_pieces += !split[k].integral.exact;
       if (k == 0) {
         mesh.triangles[t] = nt;
         means[t] = mean;
@@ -367,6 +462,7 @@ std::vector<Rgb> prepare_textured_emitters(Scene& scene) {
       }
     }
   }
+  warn(inexact, inexact_pieces);
   return means;
 }
 

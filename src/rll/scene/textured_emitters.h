@@ -32,12 +32,25 @@ struct TextureIntegral {
 // Cells of the reconstruction (the squares between four texel centres) one triangle may cover
 // before its integral falls back to point samples: 2^26, a 8192^2 texture covered once.
 inline constexpr size_t kMaxExactTextureCells = size_t(1) << 26;
+// Cells all the exact integrations of one scene's load (its triangles, the cheapest first, then
+// the pieces they are split into) may cover together, by exact_integration_cost, before the rest
+// fall back to point samples: 2^26 too, a few seconds of work. Integrations of at most
+// kAlwaysExactTextureCells, no dearer than the points, are exact whatever is left: the small
+// pieces a split ends with (the lights) stay exact where only its larger, passing pieces were not.
+inline constexpr size_t kMaxExactTextureCellsPerLoad = size_t(1) << 26;
+inline constexpr size_t kAlwaysExactTextureCells = 4096;
 
+// Where the estimate of the cells the exact integration would visit (exact_integration_cost)
+// exceeds max_cells, the integral comes from points at once (exact = false).
 TextureIntegral integrate_texture(const TexelView& tex, const std::array<Vec2, 3>& uv,
                                   size_t max_cells = kMaxExactTextureCells);
 // The same over a triangle given in double-precision uvs (the splitter's pieces).
 TextureIntegral integrate_texture(const TexelView& tex, const std::array<std::array<double, 2>, 3>& uv,
                                   size_t max_cells = kMaxExactTextureCells);
+// About how many cells integrate_texture's exact integration visits over the triangle (its
+// area in texels, the rows' ends), known before it runs (infinity where the uvs overflow).
+double exact_integration_cost(const TexelView& tex, const std::array<Vec2, 3>& uv);
+double exact_integration_cost(const TexelView& tex, const std::array<std::array<double, 2>, 3>& uv);
 
 // The texture coordinates of mesh triangle `tri`'s vertices, as make_surface_hit reads them
 // (its barycentrics (0, 0), (1, 0), (0, 1) where the mesh has no uvs).
