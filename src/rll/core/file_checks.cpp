@@ -114,14 +114,12 @@ void check_output_file(const fs::path& path, const std::string& what) {
   if (target != path) {
     // A link is judged by the file it would change: its name says what that file is.
     const std::string ext = lower_extension(path), target_ext = lower_extension(target);
+    auto kind = [](const std::string& e) { return e.empty() ? std::string("no extension") : e; };
     if (ext != target_ext)
       fail(
-          "{} '{}' is a symbolic link to '{}', which is {}, not a {} file: refusing to write "
-          "through it (remove the link, or choose another output)",
-          what, path.string(), target.string(),
-          target_ext.empty() ? std::string("a file without an extension")
-                             : fmt::format("a {} file", target_ext),
-          ext.empty() ? std::string("such") : ext);
+          "{} '{}' is a symbolic link to '{}', a file of another kind ({} rather than {}): "
+          "refusing to write through it (remove the link, or choose another output)",
+          what, path.string(), target.string(), kind(target_ext), kind(ext));
     std::error_code ec;
     if (!exists && target.has_parent_path() && !fs::is_directory(target.parent_path(), ec))
       fail(
