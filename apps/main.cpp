@@ -155,6 +155,9 @@ int main(int argc, char** argv) {
   rll::cli::add_interactive_command(app);
   rll::cli::refuse_empty_values(app);
   if (rll::cli::unknown_command(app, argc, argv)) return int(CLI::ExitCodes::ExtrasError);
+  // --quiet silences the progress lines of pre-render work too (the commands run inside parse).
+  for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "--quiet") == 0) rll::set_long_work_progress(false);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

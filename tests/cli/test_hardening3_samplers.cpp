@@ -42,9 +42,9 @@ TEST(Hardening3SamplersCli, PbrtImageAreaLightTiledAThousandTimesLoadsInSeconds)
   const CommandResult r =
       run_rll({"render", scene.string(), "--res", "16x16", "--spp", "1", "--sampler", "power",
                "--quiet", "-o", (dir / "out.exr").string()},
-              120, &wall);
+              300, &wall);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_LT(wall, 60.0);
+  EXPECT_LT(wall, 120.0);  // about 5 s of work (hours before), on a loaded machine
   EXPECT_TRUE(contains(r.output, "64 x 64 points")) << r.output;
   EXPECT_GT(image_mean(read_image(dir / "out.exr")), 0);
 }
@@ -56,9 +56,9 @@ TEST(Hardening3SamplersCli, OracleSettingsPlanningHoursAreRefusedNamingTheKeys) 
       run_rll({"render", "builtin:cornell-boxes-room", "--res", "32x32", "--spp", "1", "--sampler",
                "oracle", "--set", "oracle.points=4096", "--set", "oracle.rays=4096", "--quiet",
                "-o", (dir / "out.exr").string()},
-              120, &wall);
+              300, &wall);
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_LT(wall, 60.0);
+  EXPECT_LT(wall, 120.0);  // refused after discovery (hours of shadow rays before)
   for (const char* part :
        {"shadow rays", "oracle.points=4096", "oracle.rays=4096", "lower oracle.points"})
     EXPECT_TRUE(contains(r.output, part)) << part << " not in: " << r.output;

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <limits>
 #include <thread>
 
@@ -37,6 +38,11 @@ namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The process's CPU seconds (all threads): a bound on work that a loaded machine cannot trip.
+double cpu_seconds() {
+  return double(std::clock()) / CLOCKS_PER_SEC;
 }
 
 Image random_texture(int w, int h, uint64_t seed) {
@@ -89,9 +95,9 @@ TEST(Hardening3Samplers, TexturedEmitterTiledAThousandTimesLoadsInSeconds) {
     for (const Rgb& c : s.textures[0].pixels()) sum += luminance(c);
     return sum / double(s.textures[0].pixel_count());
   }();
-  const auto t0 = std::chrono::steady_clock::now();
+  const double t0 = cpu_seconds();
   s.finalize();
-  EXPECT_LT(seconds_since(t0), 20.0);
+  EXPECT_LT(cpu_seconds() - t0, 20.0);  // about 4 (hours before)
   EXPECT_EQ(warnings_with(s, "64 x 64 points"), 1u) << "said once";
   expect_mentions(s.warnings.back(),
                   {"tiled", "texture tiled many times", "not integrated exactly"});
@@ -112,9 +118,9 @@ TEST(Hardening3Samplers, ManyLargeTexturedTrianglesShareOneBudget) {
     EXPECT_LT(cost, double(kMaxExactTextureCells));
     EXPECT_GT(cost, 1e7);
   }
-  const auto t0 = std::chrono::steady_clock::now();
+  const double t0 = cpu_seconds();
   s.finalize();
-  EXPECT_LT(seconds_since(t0), 30.0);
+  EXPECT_LT(cpu_seconds() - t0, 20.0);  // about 4 (minutes before)
   EXPECT_EQ(warnings_with(s, "64 x 64 points"), 1u);
 }
 
@@ -162,7 +168,8 @@ TEST(Hardening3Samplers, OracleRefusesAPlanBeyondItsBound) {
 TEST(Hardening3Samplers, OraclePrecomputeStopsAtTheCancelFlag) {
   Scene s = rll::test::small_builtin_scene("cornell-box", 32, 32);
   Accel accel(s.mesh);
-  const Params p = Params::parse({"oracle.points=1024", "oracle.rays=1024"});
+  // About 4e8 shadow rays planned (under the bound): minutes here, a minute on a large machine.
+  const Params p = Params::parse({"oracle.points=4096", "oracle.rays=4096"});
   std::atomic<bool> cancel{false};
   CancelScope scope(&cancel);
   // As a signal handler would, a second into the estimates (discovery at 32 x 32 takes less).
@@ -177,7 +184,9 @@ TEST(Hardening3Samplers, OraclePrecomputeStopsAtTheCancelFlag) {
   const auto* oracle = dynamic_cast<const OracleLightSampler*>(sampler.get());
   ASSERT_NE(oracle, nullptr);
   EXPECT_TRUE(oracle->interrupted());
-  EXPECT_TRUE(oracle->describe()["oracle"]["interrupted"].get<bool>());
+  const nlohmann::json d = oracle->describe()["oracle"];
+  EXPECT_TRUE(d["interrupted"].get<bool>());
+  EXPECT_LT(d["shadow_rays"].get<double>(), 2e8) << "stopped well before its plan";
 }
 
 // ltc.capacity's largest value (2^24 entries of 64 node slots: 99 GB) was allocated unchecked
@@ -187,17 +196,21 @@ TEST(Hardening3Samplers, LtcTablesBeyondTheBudgetAreRefusedBeforeAllocating) {
   EXPECT_REFUSED_IN_BOUNDED_MEMORY(
       make_light_sampler("ltc", s, Params::parse({"ltc.capacity=16777216"}), nullptr),
       "ltc.capacity=16777216.*needs .*lower ltc.capacity");
-  // A variant: the key table (spatial clusters x direction bins^2: 2^20 x 32^2 keys, 8 GiB)
+  // A variant: the key table (spatial clusters x direction bins^2: 2^17 x 32^2 keys, 2 GiB)
   // against a small budget.
   {
     rll::test::BudgetScope budget(size_t(1) << 30);
     const std::string msg = error_of([&] {
-      make_light_sampler("ltc", s, Params::parse({"ltc.clusters=1048576", "ltc.bins=32"}), nullptr);
+      make_light_sampler("ltc", s, Params::parse({"ltc.clusters=131072", "ltc.bins=32"}), nullptr);
     });
     expect_mentions(msg, {"ltc.bins=32", "spatial clusters", "more than", "lower ltc.capacity"});
   }
-  // The default still fits.
-  EXPECT_NO_THROW(make_light_sampler("ltc", s, Params{}, nullptr));
+  // Small tables still fit the small budget.
+  {
+    rll::test::BudgetScope budget(size_t(1) << 30);
+    EXPECT_NO_THROW(make_light_sampler(
+        "ltc", s, Params::parse({"ltc.clusters=64", "ltc.capacity=4096"}), nullptr));
+  }
 }
 
 namespace {

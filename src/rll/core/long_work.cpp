@@ -1,6 +1,7 @@
 #include "rll/core/long_work.h"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -9,6 +10,7 @@ namespace rll {
 
 namespace {
 std::atomic<const std::atomic<bool>*> g_cancel{nullptr};
+std::atomic<int> g_progress{-1};  // -1: where stderr is a terminal
 
 // "1.2 s", "3 min 05 s" (as render/progress.h's format_duration, which core cannot use).
 std::string duration(double s) {
@@ -19,6 +21,10 @@ std::string duration(double s) {
   return fmt::format("{} h {:02d} min", total / 3600, (total / 60) % 60);
 }
 }  // namespace
+
+void set_long_work_progress(bool enabled) {
+  g_progress.store(enabled ? 1 : 0);
+}
 
 void set_cancel_flag(const std::atomic<bool>* flag) {
   g_cancel.store(flag);
@@ -47,6 +53,8 @@ void LongWork::add(uint64_t n) {
   const int64_t ms = std::chrono::duration_cast<std::chrono::milliseconds>(elapsed).count();
   int64_t next = m_next_ms.load(std::memory_order_relaxed);
   if (ms < next || done >= m_total) return;
+  const int enabled = g_progress.load(std::memory_order_relaxed);
+  if (enabled == 0 || (enabled < 0 && !::isatty(STDERR_FILENO))) return;
   // One thread tells each line.
   if (!m_next_ms.compare_exchange_strong(next, ms + int64_t(kEverySeconds * 1000))) return;
   const double seconds = double(ms) * 1e-3, frac = m_total ? double(done) / double(m_total) : 1;

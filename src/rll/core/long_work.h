@@ -28,6 +28,10 @@ class CancelScope {
   const std::atomic<bool>* m_previous;
 };
 
+// Whether LongWork tells progress: by default where stderr is a terminal (as the render's
+// progress bar); the CLI turns it off for --quiet.
+void set_long_work_progress(bool enabled);
+
 // Progress of a long pre-render computation of `total` units, told on stderr as whole lines
 // ("rll: LABEL: 40% (1234 of 3000 cells), 1 min 20 s left") every kEverySeconds once it has run
 // that long, from whichever thread calls add(); silent when it finishes sooner.
