@@ -158,6 +158,15 @@ TEST(Hardening3Memory, EveryImageFormatIsHeldToTheBudget) {
     expect_mentions(error_of([&] { read_image(dir / "sky.exr"); }),
                     {"sky.exr", "400x300 pixels take 1.4 MiB once read", "1.0 MiB"});
   }
+  // A BMP cut in half read as black below the cut, and a binary PPM with no data at all.
+  std::vector<unsigned char> rgb(size_t(64) * 64 * 3, 200);
+  std::string bmp;
+  ASSERT_TRUE(stbi_write_bmp_to_func(append, &bmp, 64, 64, 3, rgb.data()));
+  expect_mentions(
+      error_of([&] { read_image(dir.write("cut.bmp", bmp.substr(0, bmp.size() / 2))); }),
+      {"cut.bmp", "64x64 pixels, 12288 bytes of uncompressed BMP data", "truncated or hostile"});
+  expect_mentions(error_of([&] { read_image(dir.write("empty.ppm", "P6\n4096 4096\n255\n")); }),
+                  {"empty.ppm", "4096x4096", "binary PNM"});
   // SOI, a baseline frame of 16384 x 16384 grey pixels, EOI: 17 bytes for 4 M blocks.
   const std::string jpeg = std::string(
       "\xff\xd8\xff\xc0\x00\x0b\x08\x40\x00\x40\x00\x01\x01\x11\x00"

@@ -21,6 +21,7 @@
 
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -176,6 +177,32 @@ void check_jpeg_data(size_t size, int64_t w, int64_t h, const std::string& name)
         name, w, h, blocks, size);
 }
 
+// Uncompressed formats checked against their size: stb_image allocates the image a binary
+// PNM (P5, P6) or an uncompressed BMP claims, then reads it, and a BMP that ends early comes
+// out black rather than failing. (stb_image reads no compressed BMP.)
+void check_raw_data(const unsigned char* bytes, size_t size, int64_t w, int64_t h, bool wide,
+                    const std::string& name) {
+  double need = 0;
+  const char* format = "";
+  if (size >= 2 && bytes[0] == 'P' && (bytes[1] == '5' || bytes[1] == '6')) {
+    need = double(w) * double(h) * (bytes[1] == '5' ? 1 : 3) * (wide ? 2 : 1);
+    format = "binary PNM";
+  } else if (size >= 30 && bytes[0] == 'B' && bytes[1] == 'M') {
+    const uint32_t header = uint32_t(bytes[14]) | uint32_t(bytes[15]) << 8 |
+                            uint32_t(bytes[16]) << 16 | uint32_t(bytes[17]) << 24;
+    const size_t at = header == 12 ? 24 : 28;  // bits per pixel (OS/2 or Windows header)
+    const int bpp = int(bytes[at]) | int(bytes[at + 1]) << 8;
+    const double row = std::floor((double(w) * bpp + 31) / 32) * 4;  // rows pad to 4 bytes
+    need = row * double(h);
+    format = "BMP";
+  }
+  if (need > double(size))
+    fail(
+        "cannot read '{}': its header claims {}x{} pixels, {:.0f} bytes of uncompressed {} data, "
+        "but the file has only {} bytes: a truncated or hostile image",
+        name, w, h, need, format, size);
+}
+
 // The most memory decoding a w x h image holds at once, checked against the memory budget
 // before stb_image allocates any of it: first stb_image's own buffers (a PNG's inflated rows
 // and its output in the file's `channels` of `bits` each, a JPEG's planes and its output), its
@@ -212,7 +239,9 @@ Image decode_stb(const unsigned char* bytes, size_t size, bool srgb, bool as_flo
   check_png_data(bytes, size, w, h, name);
   if (size >= 2 && bytes[0] == 0xff && bytes[1] == 0xd8) check_jpeg_data(size, w, h, name);
   // A Radiance file's pixels are RGBE, a byte a channel as far as memory goes.
-  const int bits = !hdr && stbi_is_16_bit_from_memory(bytes, len) ? 16 : 8;
+  const bool wide = !hdr && stbi_is_16_bit_from_memory(bytes, len);
+  check_raw_data(bytes, size, w, h, wide, name);
+  const int bits = wide ? 16 : 8;
   check_decoding_memory(w, h, std::max(n, 1), bits, as_float, name);
   if (as_float) {
     float* data = stbi_loadf_from_memory(bytes, len, &w, &h, &n, 3);
