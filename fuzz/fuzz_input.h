@@ -1,6 +1,6 @@
-// One untrusted input through one reader (a scene parser, the gzip inflater, the EXR reader), as
-// the fuzz targets and the regression test run it: an rll::Error is a clean rejection; anything
-// else (another exception, a crash, a sanitizer report) is a bug.
+// One untrusted input through one reader (a scene parser, the gzip inflater, the EXR reader, the
+// image decoder), as the fuzz targets and the regression test run it: an rll::Error is a clean
+// rejection; anything else (another exception, a crash, a sanitizer report) is a bug.
 #pragma once
 
 #include <unistd.h>
@@ -16,7 +16,7 @@
 
 namespace rll::fuzz {
 
-enum class Format { Ply, Gltf, Pbrt, Json, Obj, Gzip, Exr };
+enum class Format { Ply, Gltf, Pbrt, Json, Obj, Gzip, Exr, Image };
 
 // The memory budget an untrusted input is read under: far below the fuzzers' 1 GiB limit on
 // resident memory, so that a size claim within it cannot exceed the limit either.
@@ -70,13 +70,20 @@ inline void parse_untrusted(Format format, std::string_view bytes) {
       parse_ply(bytes, "fuzz.ply");
       break;
     case Format::Gzip:
-      parse_ply(
-          gunzip(bytes, "fuzz.ply.gz", 0,
-                 [](std::string_view head) { return ply_declared_bytes(head, "fuzz.ply.gz"); }),
-          "fuzz.ply.gz");
+      parse_ply(gunzip(bytes, "fuzz.ply.gz", 0,
+                       [&](std::string_view head) {
+                         return ply_declared_bytes(head, "fuzz.ply.gz", bytes.size());
+                       }),
+                "fuzz.ply.gz");
       break;
     case Format::Exr:
       read_untrusted_exr(bytes);
+      break;
+    case Format::Image:
+      // What stb_image reads (PNG, JPEG, Radiance HDR, BMP, ...), as a glTF image or a texture
+      // in memory is decoded: its size claims checked before anything is allocated for them.
+      decode_image(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), true,
+                   "fuzz.png");
       break;
     case Format::Gltf:
       parse_gltf(bytes, "fuzz.gltf", "", scene, policy);

@@ -1,8 +1,10 @@
 // Writes the fuzz targets' seed corpora: small valid files of each format, made by rll's own
 // writers (PLY, gzip, glTF, OBJ + MTL, EXR) or written out here (pbrt and JSON, which must not
-// refer to other files). Usage: rll_fuzz_seeds DIR  (writes DIR/ply, DIR/gltf, DIR/pbrt,
-// DIR/json, DIR/obj, DIR/gzip, DIR/exr)
+// refer to other files), and images in the formats stb_image reads (by stb_image_write). Usage:
+// rll_fuzz_seeds DIR  (writes DIR/ply, DIR/gltf, DIR/pbrt, DIR/json, DIR/obj, DIR/gzip, DIR/exr,
+// DIR/image)
 #include <fmt/format.h>
+#include <stb/stb_image_write.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -57,6 +59,29 @@ std::string glb_of(std::string json) {
   u32(uint32_t(json.size()));
   u32(0x4E4F534A);
   return out + json;
+}
+
+// An image of w x h pixels with `channels` channels as stb_image_write encodes it in `format`
+// (png, jpg, bmp, tga, hdr).
+std::string encoded_image(const std::string& format, int w, int h, int channels) {
+  std::vector<unsigned char> px(size_t(w) * size_t(h) * size_t(channels));
+  std::vector<float> fpx(px.size());
+  for (size_t i = 0; i < px.size(); ++i) {
+    px[i] = static_cast<unsigned char>((i * 37) % 256);
+    fpx[i] = float(i % 7) * 0.75f;
+  }
+  std::string out;
+  auto append = [](void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
+  };
+  int ok = 0;
+  if (format == "png") ok = stbi_write_png_to_func(append, &out, w, h, channels, px.data(), 0);
+  if (format == "jpg") ok = stbi_write_jpg_to_func(append, &out, w, h, channels, px.data(), 80);
+  if (format == "bmp") ok = stbi_write_bmp_to_func(append, &out, w, h, channels, px.data());
+  if (format == "tga") ok = stbi_write_tga_to_func(append, &out, w, h, channels, px.data());
+  if (format == "hdr") ok = stbi_write_hdr_to_func(append, &out, w, h, channels, fpx.data());
+  if (!ok) fail("cannot encode a {} seed", format);
+  return out;
 }
 
 const char* kPbrtSeeds[] = {
@@ -243,7 +268,7 @@ int main(int argc, char** argv) {
   }
   try {
     const fs::path dir = argv[1];
-    for (const char* f : {"ply", "gltf", "pbrt", "json", "obj", "gzip", "exr"})
+    for (const char* f : {"ply", "gltf", "pbrt", "json", "obj", "gzip", "exr", "image"})
       fs::create_directories(dir / f);
     Scene s = small_scene();
     Mesh tri;
@@ -282,6 +307,12 @@ int main(int argc, char** argv) {
     share.attributes = {{"rll.share", "seed 1 spp 4"}, {"rll.scene", "builtin:cornell-box"}};
     share.counts.assign(image.pixel_count(), 4);
     write_exr(dir / "exr/share.exr", share);
+    // Images: each format stb_image reads that stb_image_write writes, in grey, RGB and RGBA
+    // (an HDR of 8 pixels or more a row is run-length coded).
+    for (const char* format : {"png", "jpg", "bmp", "tga", "hdr"})
+      for (int channels : {1, 3, 4})
+        write(dir / fmt::format("image/seed-{}.{}", channels, format),
+              encoded_image(format, 9, 5, channels));
     const fs::path gltf = dir / "gltf/scene.gltf";
     save_gltf_scene(s, gltf);
     write(dir / "gltf/scene.glb", glb_of(read_text_file(gltf)));

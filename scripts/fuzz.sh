@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs each fuzzer (the PLY, glTF, pbrt, JSON and OBJ+MTL parsers, the gzip inflater, the EXR
-# reader) for a bounded time (make fuzz), each input held to 1 GiB of memory and 10 seconds.
+# reader, the image decoder) for a bounded time (make fuzz), each input held to 1 GiB of memory
+# and 10 seconds.
 # Usage: fuzz.sh BUILD SECONDS
 set -euo pipefail
 build=${1:-build-fuzz}
@@ -15,7 +16,7 @@ mkdir -p "$crashes" "$logs"
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 status=0
-for format in ply gltf pbrt json obj gzip exr; do
+for format in ply gltf pbrt json obj gzip exr image; do
   fuzzer=$build/fuzz/rll_fuzz_$format
   regressions=$root/tests/fuzz/$format
   mkdir -p "$corpus/$format"

@@ -18,9 +18,9 @@ TEST(FuzzRegressions, EveryInputIsParsedOrCleanlyRejected) {
   ::testing::FLAGS_gtest_death_test_style = "threadsafe";
   const fs::path root = fs::path(RLL_SOURCE_DIR) / "tests" / "fuzz";
   const std::pair<const char*, fuzz::Format> formats[] = {
-      {"ply", fuzz::Format::Ply},   {"gltf", fuzz::Format::Gltf}, {"pbrt", fuzz::Format::Pbrt},
-      {"json", fuzz::Format::Json}, {"obj", fuzz::Format::Obj},   {"gzip", fuzz::Format::Gzip},
-      {"exr", fuzz::Format::Exr}};
+      {"ply", fuzz::Format::Ply},   {"gltf", fuzz::Format::Gltf},  {"pbrt", fuzz::Format::Pbrt},
+      {"json", fuzz::Format::Json}, {"obj", fuzz::Format::Obj},    {"gzip", fuzz::Format::Gzip},
+      {"exr", fuzz::Format::Exr},   {"image", fuzz::Format::Image}};
   for (const auto& [folder, format] : formats) {
     size_t inputs = 0;
     for (const auto& entry : fs::directory_iterator(root / folder)) {

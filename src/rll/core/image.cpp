@@ -21,7 +21,9 @@
 
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <optional>
@@ -95,6 +97,164 @@ uint64_t min_hdr_bytes(int64_t w, int64_t h) {
   uint64_t line = 4 * uint64_t(w);
   if (w >= 8 && w < 32768) line = std::min(line, 4 + 4 * 2 * uint64_t((w + 126) / 127));
   return line * uint64_t(h);
+}
+
+// A file's bytes, for stb_image to decode from memory (the checks below read its headers).
+std::string read_file_bytes(const fs::path& path) {
+  std::error_code ec;
+  const uintmax_t size = fs::file_size(path, ec);
+  if (ec) fail("cannot read '{}': {}", path.string(), ec.message());
+  // stb_image takes an int length; no image rll reads (2^28 pixels) needs a larger file.
+  if (size > uintmax_t(INT32_MAX))
+    fail("cannot read '{}': the file has {} bytes, more than the {} an image may have",
+         path.string(), size, INT32_MAX);
+  std::ifstream f(path, std::ios::binary);
+  std::string bytes(size_t(size), '\0');
+  if (!f || !f.read(bytes.data(), std::streamsize(size)))
+    fail("cannot read '{}': read error", path.string());
+  return bytes;
+}
+
+uint32_t big_endian32(const unsigned char* p) {
+  return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | uint32_t(p[3]);
+}
+
+// A PNG's claim checked against its compressed data: stb_image allocates the whole inflated
+// size its header claims before inflating (a 300-byte file claiming 16384x16384 pixels would
+// take 805 MB before failing), while all its IDAT chunks together inflate to at most
+// kDeflateMaxRatio times their size. Anything this walk cannot read is left to stb_image.
+void check_png_data(const unsigned char* bytes, size_t size, int64_t w, int64_t h,
+                    const std::string& name) {
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (size < 33 || std::memcmp(bytes, kSignature, 8) != 0 || std::memcmp(bytes + 12, "IHDR", 4))
+    return;
+  const int depth = bytes[24], colour = bytes[25];
+  int channels = 0;
+  switch (colour) {
+    case 0:  // grey
+    case 3:  // palette indices
+      channels = 1;
+      break;
+    case 2:
+      channels = 3;
+      break;
+    case 4:
+      channels = 2;
+      break;
+    case 6:
+      channels = 4;
+      break;
+    default:
+      return;
+  }
+  uint64_t idat = 0;
+  for (uint64_t at = 8; at + 8 <= size;) {
+    const uint64_t length = big_endian32(bytes + at);
+    if (std::memcmp(bytes + at + 4, "IDAT", 4) == 0) idat += length;
+    if (std::memcmp(bytes + at + 4, "IEND", 4) == 0) break;
+    at += 12 + length;  // length, type, data, CRC
+  }
+  // The pixels' bits alone (without the rows' filter bytes): a lower bound, interlaced or not.
+  const double pixel_bytes = double(w) * double(h) * channels * depth / 8;
+  const double most = double(idat) * kDeflateMaxRatio + 1024;
+  if (pixel_bytes > most)
+    fail(
+        "cannot read '{}': its header claims {}x{} pixels ({} channel{} of {} bits: {:.0f} "
+        "bytes once inflated), but its {} bytes of compressed data (IDAT) inflate to at most "
+        "{:.0f}: a damaged or hostile PNG",
+        name, w, h, channels, channels == 1 ? "" : "s", depth, pixel_bytes, idat, most);
+}
+
+// A JPEG's claim checked against its size: stb_image allocates a plane per component at the
+// frame header, before the data, and decodes data that ends early as grey rather than failing.
+// Every 8x8 block of the component at full resolution takes at least one bit (its DC code),
+// in baseline and progressive files alike.
+void check_jpeg_data(size_t size, int64_t w, int64_t h, const std::string& name) {
+  const double blocks = double((w + 7) / 8) * double((h + 7) / 8);
+  if (blocks > 8 * double(size))
+    fail(
+        "cannot read '{}': its header claims {}x{} pixels ({:.0f} blocks of 8x8, each at least "
+        "a bit of data), but the file has only {} bytes: a damaged or hostile JPEG",
+        name, w, h, blocks, size);
+}
+
+// Uncompressed formats checked against their size: stb_image allocates the image a binary
+// PNM (P5, P6) or an uncompressed BMP claims, then reads it, and a BMP that ends early comes
+// out black rather than failing. (stb_image reads no compressed BMP.)
+void check_raw_data(const unsigned char* bytes, size_t size, int64_t w, int64_t h, bool wide,
+                    const std::string& name) {
+  double need = 0;
+  const char* format = "";
+  if (size >= 2 && bytes[0] == 'P' && (bytes[1] == '5' || bytes[1] == '6')) {
+    need = double(w) * double(h) * (bytes[1] == '5' ? 1 : 3) * (wide ? 2 : 1);
+    format = "binary PNM";
+  } else if (size >= 30 && bytes[0] == 'B' && bytes[1] == 'M') {
+    const uint32_t header = uint32_t(bytes[14]) | uint32_t(bytes[15]) << 8 |
+                            uint32_t(bytes[16]) << 16 | uint32_t(bytes[17]) << 24;
+    const size_t at = header == 12 ? 24 : 28;  // bits per pixel (OS/2 or Windows header)
+    const int bpp = int(bytes[at]) | int(bytes[at + 1]) << 8;
+    const double row = std::floor((double(w) * bpp + 31) / 32) * 4;  // rows pad to 4 bytes
+    need = row * double(h);
+    format = "BMP";
+  }
+  if (need > double(size))
+    fail(
+        "cannot read '{}': its header claims {}x{} pixels, {:.0f} bytes of uncompressed {} data, "
+        "but the file has only {} bytes: a truncated or hostile image",
+        name, w, h, need, format, size);
+}
+
+// The most memory decoding a w x h image holds at once, checked against the memory budget
+// before stb_image allocates any of it: first stb_image's own buffers (a PNG's inflated rows
+// and its output in the file's `channels` of `bits` each, a JPEG's planes and its output), its
+// conversion to RGB, then that RGB (8-bit, or float for `as_float`) beside rll's Image.
+void check_decoding_memory(int64_t w, int64_t h, int channels, int bits, bool as_float,
+                           const std::string& name) {
+  const double out = as_float ? 3 * sizeof(float) : 3;
+  const double per_pixel = std::max(2.0 * channels * (bits / 8.0) + out, out + double(sizeof(Rgb)));
+  const double bytes = double(w) * double(h) * per_pixel;
+  if (!(bytes <= double(memory_budget_bytes())))
+    fail(
+        "cannot read '{}': its {}x{} pixels take {} to decode, more than {}; use a smaller "
+        "image",
+        name, w, h, format_bytes(bytes), memory_budget_phrase());
+}
+
+// An image stb_image reads (PNG, JPEG, Radiance HDR, ...) from its bytes, its size claims
+// checked first; `as_float` decodes through stb_image's float path (a Radiance file, or any
+// file named .hdr, as read_image always has), otherwise through its 8-bit one.
+Image decode_stb(const unsigned char* bytes, size_t size, bool srgb, bool as_float,
+                 const std::string& name) {
+  if (size > size_t(INT32_MAX)) fail("cannot read '{}': the image is too large", name);
+  const int len = int(size);
+  int w = 0, h = 0, n = 0;
+  if (!stbi_info_from_memory(bytes, len, &w, &h, &n))
+    fail("cannot read '{}': {}", name, stbi_failure_reason());
+  check_claimed_size(w, h, name);
+  const bool hdr = stbi_is_hdr_from_memory(bytes, len);
+  if (hdr && min_hdr_bytes(w, h) > size)
+    fail(
+        "cannot read '{}': its header claims {}x{} pixels, which take at least {} bytes, but "
+        "it has only {}",
+        name, w, h, min_hdr_bytes(w, h), size);
+  check_png_data(bytes, size, w, h, name);
+  if (size >= 2 && bytes[0] == 0xff && bytes[1] == 0xd8) check_jpeg_data(size, w, h, name);
+  // A Radiance file's pixels are RGBE, a byte a channel as far as memory goes.
+  const bool wide = !hdr && stbi_is_16_bit_from_memory(bytes, len);
+  check_raw_data(bytes, size, w, h, wide, name);
+  const int bits = wide ? 16 : 8;
+  check_decoding_memory(w, h, std::max(n, 1), bits, as_float, name);
+  if (as_float) {
+    float* data = stbi_loadf_from_memory(bytes, len, &w, &h, &n, 3);
+    if (!data) fail("cannot read '{}': {}", name, stbi_failure_reason());
+    Image img(w, h);
+    for (size_t i = 0; i < img.pixel_count(); ++i)
+      img[i] = Rgb(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
+    stbi_image_free(data);
+    return img;
+  }
+  unsigned char* data = stbi_load_from_memory(bytes, len, &w, &h, &n, 3);
+  return from_8bit(data, w, h, srgb, name);
 }
 
 // An attribute name or type as a message can show it: printable ASCII, at most 64 bytes.
@@ -326,6 +486,18 @@ ExrFile read_exr_unchecked(const fs::path& path, bool extras, LuminanceOnly lumi
   const Imath::Box2i dw = header.dataWindow();
   const int64_t w = int64_t(dw.max.x) - dw.min.x + 1, h = int64_t(dw.max.y) - dw.min.y + 1;
   check_claimed_size(w, h, name);
+  {
+    // What the pixels take once read (RGB as floats, the counts, the further channels): a
+    // compressed file can claim 16384x16384 pixels in a few hundred bytes.
+    const double per_pixel =
+        double(sizeof(Rgb)) + (has_counts ? 4.0 : 0.0) + 4.0 * double(out.channels.size());
+    const double bytes = double(w) * double(h) * per_pixel;
+    if (!(bytes <= double(memory_budget_bytes())))
+      fail(
+          "cannot read '{}': its {}x{} pixels take {} once read, more than {}; use a smaller "
+          "image",
+          name, w, h, format_bytes(bytes), memory_budget_phrase());
+  }
   if (header.compression() == Imf::NO_COMPRESSION) {
     uint64_t pixel_bytes = 0;
     for (auto c = header.channels().begin(); c != header.channels().end(); ++c)
@@ -449,6 +621,14 @@ fs::path check_writable_image(const fs::path& path, const Image& image) {
 
 }  // namespace
 
+std::string bad_emission_texel(const Image& image) {
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x)
+      if (const Rgb& c = image.at(x, y); !is_finite(c) || min_component(c) < 0)
+        return fmt::format("texel ({}, {}) is ({}, {}, {})", x, y, c.x, c.y, c.z);
+  return "";
+}
+
 const std::string* ExrFile::attribute(const std::string& name) const {
   for (const auto& [n, v] : attributes)
     if (n == name) return &v;
@@ -527,56 +707,15 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
 
 Image read_image(const fs::path& path, bool srgb, LuminanceOnly luminance) {
   read_image_checks(path);
-  std::error_code ec;
-  std::string ext = lower_extension(path);
-  if (ext == ".exr") return read_exr(path, false, luminance).image;
-  int w = 0, h = 0, n = 0;
-  if (!stbi_info(path.c_str(), &w, &h, &n))
-    fail("cannot read '{}': {}", path.string(), stbi_failure_reason());
-  check_claimed_size(w, h, path.string());
-  if (stbi_is_hdr(path.c_str())) {
-    const uintmax_t size = fs::file_size(path, ec);
-    if (!ec && min_hdr_bytes(w, h) > size)
-      fail(
-          "cannot read '{}': its header claims {}x{} pixels, which take at least {} bytes, but "
-          "the file has only {}",
-          path.string(), w, h, min_hdr_bytes(w, h), size);
-  }
-  if (ext == ".hdr") {
-    float* data = stbi_loadf(path.c_str(), &w, &h, &n, 3);
-    if (!data) fail("cannot read '{}': {}", path.string(), stbi_failure_reason());
-    Image img(w, h);
-    for (size_t i = 0; i < img.pixel_count(); ++i)
-      img[i] = Rgb(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
-    stbi_image_free(data);
-    return img;
-  }
-  unsigned char* data = stbi_load(path.c_str(), &w, &h, &n, 3);
-  return from_8bit(data, w, h, srgb, path.string());
+  if (lower_extension(path) == ".exr") return read_exr(path, false, luminance).image;
+  const std::string bytes = read_file_bytes(path);
+  return decode_stb(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), srgb,
+                    lower_extension(path) == ".hdr", path.string());
 }
 
 Image decode_image(const unsigned char* bytes, size_t size, bool srgb, const std::string& name) {
   if (size > size_t(INT32_MAX)) fail("cannot read '{}': the image is too large", name);
-  int w = 0, h = 0, n = 0;
-  if (!stbi_info_from_memory(bytes, int(size), &w, &h, &n))
-    fail("cannot read '{}': {}", name, stbi_failure_reason());
-  check_claimed_size(w, h, name);
-  if (stbi_is_hdr_from_memory(bytes, int(size))) {
-    if (min_hdr_bytes(w, h) > size)
-      fail(
-          "cannot read '{}': its header claims {}x{} pixels, which take at least {} bytes, but "
-          "it has only {}",
-          name, w, h, min_hdr_bytes(w, h), size);
-    float* data = stbi_loadf_from_memory(bytes, int(size), &w, &h, &n, 3);
-    if (!data) fail("cannot read '{}': {}", name, stbi_failure_reason());
-    Image img(w, h);
-    for (size_t i = 0; i < img.pixel_count(); ++i)
-      img[i] = Rgb(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
-    stbi_image_free(data);
-    return img;
-  }
-  unsigned char* data = stbi_load_from_memory(bytes, int(size), &w, &h, &n, 3);
-  return from_8bit(data, w, h, srgb, name);
+  return decode_stb(bytes, size, srgb, stbi_is_hdr_from_memory(bytes, int(size)) != 0, name);
 }
 
 }  // namespace rll

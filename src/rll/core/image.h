@@ -23,6 +23,10 @@ struct TexelView {
 constexpr int64_t kMaxImageSide = int64_t(1) << 16;
 constexpr size_t kMaxImagePixels = size_t(1) << 28;
 
+// The most bytes deflate data (a PNG's IDAT chunks, a gzip member) inflates to per byte: zlib's
+// documented limit, 1032:1. Readers check what a header claims against it before inflating.
+constexpr double kDeflateMaxRatio = 1032;
+
 class Image {
  public:
   Image() = default;
@@ -88,6 +92,13 @@ ExrFile read_exr_file(const std::filesystem::path& path);
 // Decodes an image file held in memory (PNG, JPEG and the other formats stb_image reads);
 // `name` is for messages.
 Image decode_image(const unsigned char* bytes, size_t size, bool srgb, const std::string& name);
+
+// The first texel of `image` that no light can emit, a negative or non-finite one, as "texel
+// (X, Y) is (R, G, B)" (x from the left, y from the top), or "" when there is none. Every
+// reader of a light's image (an area light's, an image light's, an environment map) refuses
+// such an image with it: a negative texel would subtract light, a NaN or infinite one would
+// poison every sample that sees it.
+std::string bad_emission_texel(const Image& image);
 
 // Writes bytes to `path` atomically (temporary file in the same folder, then rename).
 void write_file_atomic(const std::filesystem::path& path, const std::string& bytes);

@@ -74,8 +74,12 @@ std::string gunzip(std::string_view bytes, const std::string& name, size_t max_b
                    const std::function<size_t(std::string_view head)>& declared = {});
 // The most bytes a PLY file can take by its header (its element counts times the largest entry
 // each can have: a list its longest, an ASCII value 64 characters); 0 while `head` does not yet
-// hold the whole header. A bad header is an error naming `name`, as parse_ply would give.
-size_t ply_declared_bytes(std::string_view head, const std::string& name);
+// hold the whole header. A bad header is an error naming `name`, as parse_ply would give, and
+// so is a header whose counts need more than the memory budget (the least data they take and
+// the mesh they make), or, where the file is `compressed_bytes` of gzip data (0: unknown), more
+// data than those bytes inflate to (kDeflateMaxRatio).
+size_t ply_declared_bytes(std::string_view head, const std::string& name,
+                          size_t compressed_bytes = 0);
 // `bytes` as one gzip member at zlib's `level` (0-9, -1 its default): what a .ply.gz holds (tests,
 // benchmarks and fuzz seeds write them).
 std::string gzip(std::string_view bytes, int level = -1);

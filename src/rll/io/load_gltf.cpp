@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -54,6 +55,36 @@ bool no_file_read(std::vector<unsigned char>*, std::string* err, const std::stri
 }
 bool no_file_write(std::string*, const std::string&, const std::vector<unsigned char>&, void*) {
   return false;
+}
+
+// tinygltf's own file reader takes the size of whatever it opens: a URI naming a folder ("."
+// or "images/") reads as a file of 2^63 bytes and ends in std::bad_alloc. This one reads regular
+// files only, within the memory budget, and keeps why a file could not be read (by its path)
+// for the message of the image or buffer that named it.
+struct FileReads {
+  std::map<std::string, std::string> failures;  // path -> why it could not be read
+};
+bool checked_file_read(std::vector<unsigned char>* out, std::string* err, const std::string& p,
+                       void* user) {
+  auto& reads = *static_cast<FileReads*>(user);
+  auto refuse = [&](const std::string& why) {
+    reads.failures[p] = why;
+    if (err) *err += why + "\n";
+    return false;
+  };
+  if (const std::string why = unreadable_reason(p); !why.empty())
+    return refuse(fmt::format("'{}' {}", printable(p, 256), why));
+  std::error_code ec;
+  const uintmax_t size = fs::file_size(p, ec);
+  if (ec) return refuse(fmt::format("'{}': {}", printable(p, 256), ec.message()));
+  if (!(double(size) <= double(memory_budget_bytes())))
+    return refuse(fmt::format("'{}' has {}, more than {}", printable(p, 256),
+                              format_bytes(double(size)), memory_budget_phrase()));
+  std::ifstream f(p, std::ios::binary);
+  out->resize(size_t(size));
+  if (!f || !f.read(reinterpret_cast<char*>(out->data()), std::streamsize(size)))
+    return refuse(fmt::format("'{}': read error", printable(p, 256)));
+  return true;
 }
 
 std::string one_line(std::string s) {
@@ -235,9 +266,11 @@ double number_or(const tinygltf::Value& obj, const char* key, double def) {
 
 class GltfReader {
  public:
+  // `failures`: the files tinygltf could not read (path -> why), for the messages of the images
+  // that named them.
   GltfReader(const tinygltf::Model& model, const std::string& name, Scene& scene,
-             const ReadPolicy& policy)
-      : m_model(model), m_name(name), m_scene(scene), m_policy(policy) {}
+             const ReadPolicy& policy, const std::map<std::string, std::string>& failures = {})
+      : m_model(model), m_name(name), m_scene(scene), m_policy(policy), m_failures(failures) {}
 
   void read() {
     for (const auto& e : m_model.extensionsRequired)
@@ -838,9 +871,15 @@ class GltfReader {
       const auto [bytes, size] = view_bytes(img.bufferView, iw);
       decoded = decode_image(bytes, size, srgb, iw);
     } else {
-      if (img.image.empty())
-        fail("{} ('{}') could not be read{}", iw, img.uri,
+      if (img.image.empty()) {
+        // Why, where the file reader said: the failure at the path that ends in the URI.
+        for (const auto& [path, why] : m_failures)
+          if (!img.uri.empty() && path.size() >= img.uri.size() &&
+              path.compare(path.size() - img.uri.size(), img.uri.size(), img.uri) == 0)
+            fail("{} ('{}') could not be read: {}", iw, printable(img.uri, 256), why);
+        fail("{} ('{}') could not be read{}", iw, printable(img.uri, 256),
              m_policy.read_files ? " (missing file?)" : " (reading files is turned off)");
+      }
       decoded = decode_image(img.image.data(), img.image.size(), srgb, iw);
     }
     if (decoded.width() <= 0 || decoded.height() <= 0) fail("{}: empty image", iw);
@@ -942,6 +981,7 @@ class GltfReader {
   // A material with an emission texture -> its variant for primitives without TEXCOORD_0.
   std::map<uint32_t, uint32_t> m_untextured_emitters;
   std::set<std::string> m_warned;
+  std::map<std::string, std::string> m_failures;
 };
 
 }  // namespace
@@ -951,8 +991,12 @@ void parse_gltf(std::string_view bytes, const std::string& name, const fs::path&
   if (bytes.size() >= (size_t(1) << 31)) fail("{}: the file is too large (2 GiB at most)", name);
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keep_image_bytes, nullptr);
+  FileReads reads;
   if (!policy.read_files)
     loader.SetFsCallbacks({no_file_exists, same_path, no_file_read, no_file_write, nullptr});
+  else
+    loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, checked_file_read,
+                           no_file_write, &reads});
   tinygltf::Model model;
   std::string err, warn;
   if (bytes.empty()) fail("{}: empty file", name);
@@ -983,7 +1027,7 @@ void parse_gltf(std::string_view bytes, const std::string& name, const fs::path&
          err.empty() ? "cannot parse the file"
                      : one_line(shorten_uri_errors(err, gltf_json_text(bytes, binary))));
   if (!warn.empty()) scene.warnings.push_back(fmt::format("{}: {}", name, one_line(warn)));
-  GltfReader(model, name, scene, policy).read();
+  GltfReader(model, name, scene, policy, reads.failures).read();
 }
 
 void load_gltf(const fs::path& path, Scene& scene) {

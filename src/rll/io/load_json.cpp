@@ -12,10 +12,11 @@
 #include <set>
 
 #include "rll/core/error.h"
+#include "rll/core/memory_budget.h"
 #include "rll/core/paths.h"
-#include "rll/scene/builder.h"
 #include "rll/io/load.h"
 #include "rll/io/text_scan.h"
+#include "rll/scene/builder.h"
 #include "rll/scene/transform.h"
 
 namespace rll {
@@ -184,8 +185,25 @@ Affine to_transform(const json& v, const std::string& ptr) {
     }
     if (auto it = v.find("translate"); it != v.end()) x.t = to_vec3(*it, child(ptr, "translate"));
   }
-  float d = x.det();
-  if (!(std::abs(d) > 0) || !std::isfinite(d)) fail("{} is singular (it flattens the shape)", ptr);
+  const float d = x.det();
+  if (!(std::abs(d) > 0) || !std::isfinite(d)) {
+    // Say which: a determinant of 0 flattens the shape; one beyond a float (a scale of 1e30 in
+    // each axis gives 1e90), or below one, is a scale rll's single precision cannot apply.
+    double dd = 0;
+    for (int j = 0; j < 3; ++j)
+      dd += double(x.a[0][j]) * (double(x.a[1][(j + 1) % 3]) * x.a[2][(j + 2) % 3] -
+                                 double(x.a[1][(j + 2) % 3]) * x.a[2][(j + 1) % 3]);
+    std::string matrix = "[";
+    for (int i = 0; i < 3; ++i)
+      matrix += fmt::format("{:g} {:g} {:g} {:g}{}", x.a[i][0], x.a[i][1], x.a[i][2], x.t[i],
+                            i < 2 ? "; " : "]");
+    if (dd == 0)
+      fail("{} is singular: its determinant is 0 (it flattens the shape); matrix {}", ptr, matrix);
+    fail(
+        "{} scales volumes by {:g} (lengths by about {:g}), {} for rll, which transforms in single "
+        "precision; matrix {}",
+        ptr, dd, std::cbrt(std::abs(dd)), std::abs(dd) >= 1 ? "too large" : "too small", matrix);
+  }
   return x;
 }
 
@@ -509,6 +527,17 @@ class JsonSceneReader {
   }
 
   void read_light(const json& v, const std::string& ptr) {
+    const size_t before = m_scene.lights.size();
+    read_light_fields(v, ptr);
+    for (size_t i = before; i < m_scene.lights.size(); ++i)
+      if (const std::string why = light_parameter_problem(m_scene.lights[i]); !why.empty())
+        fail(
+            "{}: the {} light: {}; a light's parameters must be finite and its emission not "
+            "negative",
+            ptr, light_type_name(m_scene.lights[i].type), why);
+  }
+
+  void read_light_fields(const json& v, const std::string& ptr) {
     if (!v.is_object()) fail("{} must be an object (got {})", ptr, v.type_name());
     std::string type = required_field(v, ptr, "type", to_string);
     if (type == "directional") {
@@ -554,9 +583,9 @@ class JsonSceneReader {
                child(ptr, "image"), printable(file), image.width(), image.height());
         for (Rgb& c : image.pixels()) c = Rgb((c.x + c.y + c.z) / 3);
       }
-      for (const Rgb& c : image.pixels())
-        if (!is_finite(c) || min_component(c) < 0)
-          fail("{}: '{}' has a negative or non-finite pixel", child(ptr, "image"), printable(file));
+      if (const std::string bad = bad_emission_texel(image); !bad.empty())
+        fail("{}: '{}' has a negative or non-finite pixel, which no light can emit: {}",
+             child(ptr, "image"), printable(file), bad);
       const std::array<Vec3, 3> to_light = required_field(v, ptr, "to_light", to_rows);
       Light l = make_image_light(gonio ? LightType::Goniometric : LightType::Projection,
                                  required_field(v, ptr, "position", to_vec3), to_light.data(),
@@ -587,12 +616,21 @@ class JsonSceneReader {
     if (sky.full_sphere && (sky.triangles < 8 || sky.triangles % 2 != 0))
       fail("{} must be even and at least 8 for a full sphere (got {})", child(ptr, "triangles"),
            sky.triangles);
+    // 4 M dome triangles from a few bytes of JSON: counted as every other geometry is (with a
+    // map, each triangle also gets a material of its own, held to the memory budget below).
+    if (const std::string why = triangle_budget_problem(
+            double(m_scene.mesh.triangle_count()) + sky.triangles, m_policy);
+        !why.empty())
+      fail("{}: {}", child(ptr, "triangles"), why);
     sky.radiance = optional_field(v, ptr, "radiance", to_colour).value_or(sky.radiance);
     sky.up = normalize(optional_field(v, ptr, "up", to_direction).value_or(sky.up));
     sky.radius_scale = optional_field(v, ptr, "radius_scale", to_number).value_or(sky.radius_scale);
     if (!(sky.radius_scale > 2))
       fail("{} must be greater than 2 (got {})", child(ptr, "radius_scale"), sky.radius_scale);
     if (v.contains("image")) {
+      check_memory_budget(double(sky.triangles) * double(sizeof(Material)),
+                          fmt::format("{} (a material for each of the sky's {} triangles)",
+                                      child(ptr, "triangles"), sky.triangles));
       auto map = std::make_shared<EnvironmentMap>();
       const fs::path file = referenced_file(v["image"], child(ptr, "image"));
       try {
@@ -600,6 +638,10 @@ class JsonSceneReader {
       } catch (const Error& e) {
         fail("{}: {}", child(ptr, "image"), e.what());
       }
+      // As every light's image: the sky emits its map.
+      if (const std::string bad = bad_emission_texel(map->image); !bad.empty())
+        fail("{}: '{}' has a negative or non-finite pixel, which no light can emit: {}",
+             child(ptr, "image"), printable(file.string()), bad);
       std::string mapping = optional_field(v, ptr, "mapping", to_string).value_or("equal-area");
       if (mapping == "equirect")
         map->mapping = EnvironmentMap::Mapping::Equirect;

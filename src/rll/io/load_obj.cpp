@@ -19,13 +19,25 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// What the validating scan of an MTL file notes beside tinyobjloader's reading of it, by
+// material name.
+struct MtlNotes {
+  std::set<std::string> with_kd, with_ke;     // materials with a Kd, a Ke statement
+  std::map<std::string, size_t> map_ke_line;  // the line of each material's map_Ke
+};
+
 // All MTL files an OBJ names, parsed by tinyobjloader into one list.
 struct MtlLibrary {
   std::vector<tinyobj::material_t> materials;
   std::map<std::string, int> by_name;
   std::vector<fs::path> source;  // the MTL file of each material
   std::vector<bool> has_kd;      // whether the material has a Kd statement
+  std::vector<bool> has_ke;      // whether the material has a Ke statement
+  std::vector<size_t> map_ke_line;  // the line of its map_Ke (0: none)
   std::vector<fs::path> files;   // loaded files, each once
+  // Texture statements rll does not read (map_Bump, map_d, ...), each with its first file and
+  // line: one warning lists them.
+  std::map<std::string, std::string> ignored_maps;
 };
 
 // Vertex data read by the scan, in file order (the order tinyobjloader's indices refer to).
@@ -64,10 +76,10 @@ int read_numbers(std::string_view rest, float* out, int max, const std::string& 
 
 // Validates an MTL file's numeric statements and returns its text with one-value colours
 // ("Kd 0.5") spelt out as three, which the MTL format allows and tinyobjloader does not read.
-// Adds to `with_kd` the materials that have a Kd (tinyobjloader makes a missing one 0.6 when
-// there is a map_Kd, 0 otherwise).
-std::string normalize_mtl(std::string_view text, const std::string& file,
-                          std::set<std::string>& with_kd) {
+// Notes the materials that have a Kd (tinyobjloader makes a missing one 0.6 when there is a
+// map_Kd, 0 otherwise) or a Ke, where each map_Ke is, and the texture statements rll ignores.
+std::string normalize_mtl(std::string_view text, const std::string& file, MtlNotes& notes,
+                          std::map<std::string, std::string>& ignored_maps) {
   static const char* kColours[] = {"Ka", "Kd", "Ks", "Ke", "Tf"};
   static const char* kScalars[] = {"Ns", "Ni", "d",   "Tr",    "Pr",    "Pm",
                                    "Ps", "Pc", "Pcr", "aniso", "anisor"};
@@ -85,7 +97,15 @@ std::string normalize_mtl(std::string_view text, const std::string& file,
         size_t at = line.find("newmtl") + 7;
         material = at <= line.size() ? std::string(line.substr(at)) : std::string();
       }
-      if (kw == "Kd") with_kd.insert(material);
+      if (kw == "Kd") notes.with_kd.insert(material);
+      if (kw == "Ke") notes.with_ke.insert(material);
+      if (kw == "map_Ke") notes.map_ke_line[material] = lines.number();
+      // Texture statements other than map_Kd and map_Ke (bump, opacity, specular maps...):
+      // tinyobjloader reads them, rll renders without them.
+      const bool texture_statement = kw.substr(0, 4) == "map_" || kw == "bump" || kw == "disp" ||
+                                     kw == "decal" || kw == "refl" || kw == "norm";
+      if (texture_statement && kw != "map_Kd" && kw != "map_Ke")
+        ignored_maps.emplace(std::string(kw), fmt::format("{}:{}", file, lines.number()));
       bool colour = std::find(std::begin(kColours), std::end(kColours), kw) != std::end(kColours);
       bool scalar = std::find(std::begin(kScalars), std::end(kScalars), kw) != std::end(kScalars);
       if (colour) {
@@ -145,16 +165,21 @@ void load_mtl(const fs::path& mtl, const std::string& obj_file, size_t obj_line,
                             printable(mtl.string(), 256)));
     bytes = read_text_file(mtl);
   }
-  std::set<std::string> with_kd;
-  std::string text = normalize_mtl(bytes, mtl.string(), with_kd);
+  MtlNotes notes;
+  std::string text = normalize_mtl(bytes, mtl.string(), notes, lib.ignored_maps);
   std::istringstream in(text);
   std::string warn, err;
   const size_t first = lib.materials.size();
   tinyobj::LoadMtl(&lib.by_name, &lib.materials, &in, &warn, &err);
   if (!err.empty()) fail("{}: {}", mtl.string(), err);
   lib.source.resize(lib.materials.size(), mtl);
-  for (size_t i = first; i < lib.materials.size(); ++i)
-    lib.has_kd.push_back(with_kd.count(lib.materials[i].name) > 0);
+  for (size_t i = first; i < lib.materials.size(); ++i) {
+    const std::string& name = lib.materials[i].name;
+    lib.has_kd.push_back(notes.with_kd.count(name) > 0);
+    lib.has_ke.push_back(notes.with_ke.count(name) > 0);
+    const auto line = notes.map_ke_line.find(name);
+    lib.map_ke_line.push_back(line == notes.map_ke_line.end() ? 0 : line->second);
+  }
   lib.files.push_back(mtl);
 }
 
@@ -321,18 +346,26 @@ Rgb rgb(const tinyobj::real_t* c) {
   return Rgb(float(c[0]), float(c[1]), float(c[2]));
 }
 
-// The MTL -> Material mapping documented in docs/scene-format.md.
-Material convert_material(const tinyobj::material_t& t, bool has_kd, const fs::path& mtl,
-                          Scene& scene, std::map<fs::path, int>& textures,
-                          const ReadPolicy& policy) {
+// What an MTL material says beside tinyobjloader's reading of it.
+struct MtlMaterialNotes {
+  bool has_kd = false, has_ke = false;
+  size_t map_ke_line = 0;  // 0: no map_Ke
+};
+
+// The MTL -> Material mapping documented in docs/scene-format.md. `has_uvs`: whether the OBJ has
+// texture coordinates, which an emission texture needs.
+Material convert_material(const tinyobj::material_t& t, const MtlMaterialNotes& notes,
+                          const fs::path& mtl, Scene& scene, std::map<fs::path, int>& textures,
+                          const ReadPolicy& policy, bool has_uvs) {
   Material m;
   m.name = t.name;
-  Rgb kd = has_kd ? rgb(t.diffuse) : Rgb(0), ks = rgb(t.specular);
+  Rgb kd = notes.has_kd ? rgb(t.diffuse) : Rgb(0), ks = rgb(t.specular);
   m.emission = rgb(t.emission);
-  if (!t.diffuse_texname.empty()) {
-    fs::path tex = mtl.parent_path() / t.diffuse_texname;
-    if (!fs::exists(tex) && t.diffuse_texname.find('\\') != std::string::npos) {
-      std::string unix_name = t.diffuse_texname;
+  // A texture of the material (map_Kd, map_Ke), read once per file as sRGB.
+  auto texture = [&](const std::string& texname) {
+    fs::path tex = mtl.parent_path() / texname;
+    if (!fs::exists(tex) && texname.find('\\') != std::string::npos) {
+      std::string unix_name = texname;
       std::replace(unix_name.begin(), unix_name.end(), '\\', '/');
       tex = mtl.parent_path() / unix_name;
     }
@@ -341,10 +374,10 @@ Material convert_material(const tinyobj::material_t& t, bool has_kd, const fs::p
     if (it == textures.end()) {
       if (!policy.read_files)
         fail("{}: material '{}': texture '{}': reading other files is turned off", mtl.string(),
-             printable(t.name), printable(t.diffuse_texname));
+             printable(t.name), printable(texname));
       if (const std::string why = unreadable_reason(tex); !why.empty())
         fail("{}: material '{}': texture '{}' {} ({})", mtl.string(), printable(t.name),
-             printable(t.diffuse_texname), why, printable(tex.string(), 256));
+             printable(texname), why, printable(tex.string(), 256));
       try {
         scene.textures.push_back(read_image(tex));
       } catch (const Error& e) {
@@ -352,9 +385,38 @@ Material convert_material(const tinyobj::material_t& t, bool has_kd, const fs::p
       }
       it = textures.emplace(tex, int(scene.textures.size() - 1)).first;
     }
-    m.albedo_texture = it->second;
+    return it->second;
+  };
+  if (!t.diffuse_texname.empty()) {
+    m.albedo_texture = texture(t.diffuse_texname);
     if (is_black(kd))
       kd = Rgb(1);  // the texture multiplies Kd; a missing or black Kd must not hide it
+  }
+  if (!t.emissive_texname.empty()) {
+    // map_Ke multiplies Ke as map_Kd multiplies Kd: an absent Ke counts as 1, a black one
+    // leaves the material dark (said, since the file names a texture it then does not show).
+    const std::string at = fmt::format("{}:{}", mtl.string(), notes.map_ke_line);
+    const int tex = texture(t.emissive_texname);
+    if (!notes.has_ke) m.emission = Rgb(1);
+    if (is_black(m.emission)) {
+      scene.warnings.push_back(fmt::format(
+          "{}: material '{}': map_Ke '{}' has no effect: its Ke is 0 and the texture multiplies "
+          "it (give Ke 1 1 1 for the texture's own colours)",
+          at, printable(t.name), printable(t.emissive_texname)));
+    } else if (!has_uvs) {
+      // Without texture coordinates, the emission cannot vary over the surface: the texture's
+      // mean colour stands for it, as for a glTF primitive without TEXCOORD_0.
+      const Image& img = scene.textures[size_t(tex)];
+      Rgb mean(0);
+      for (const Rgb& c : img.pixels()) mean += c;
+      m.emission = m.emission * (mean / float(std::max<size_t>(1, img.pixel_count())));
+      scene.warnings.push_back(fmt::format(
+          "{}: material '{}': map_Ke '{}': the OBJ has no texture coordinates (vt), so the "
+          "material emits Ke times the texture's mean colour",
+          at, printable(t.name), printable(t.emissive_texname)));
+    } else {
+      m.emission_texture = tex;
+    }
   }
   float alpha = std::sqrt(2.0f / (float(t.shininess) + 2.0f));
   if (t.illum == 3 || (is_black(kd) && !is_black(ks))) {
@@ -505,7 +567,16 @@ void parse_obj(std::string_view text_view, const std::string& file, const fs::pa
   std::map<fs::path, int> textures;
   for (size_t i = 0; i < lib.materials.size(); ++i)
     scene.materials.push_back(
-        convert_material(lib.materials[i], lib.has_kd[i], lib.source[i], scene, textures, policy));
+        convert_material(lib.materials[i], {lib.has_kd[i], lib.has_ke[i], lib.map_ke_line[i]},
+                         lib.source[i], scene, textures, policy, !v.uvs.empty()));
+  if (!lib.ignored_maps.empty()) {
+    std::string list;
+    for (const auto& [statement, at] : lib.ignored_maps)
+      list += fmt::format("{}{} ({})", list.empty() ? "" : ", ", printable(statement), at);
+    scene.warnings.push_back(fmt::format(
+        "{}: texture statements rll does not read are ignored: {} (rll reads map_Kd and map_Ke)",
+        file, list));
+  }
   if (uses_default) {
     Material m;
     m.name = "default";

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <optional>
@@ -101,9 +102,20 @@ class PlyReader {
  public:
   PlyReader(std::string_view bytes, const std::string& name) : m_data(bytes), m_name(name) {}
 
-  // The most bytes the whole file can take by its header, which `bytes` must hold.
-  double declared_bytes() {
+  // The most bytes the whole file can take by its header, which `bytes` must hold. The least
+  // it takes is checked first: against the memory budget (with the mesh it makes), and, where
+  // the file is `compressed_bytes` of gzip data (0: not known), against what those inflate to.
+  double declared_bytes(size_t compressed_bytes) {
     read_header();
+    const double least = double(m_body) + least_body_bytes();
+    if (compressed_bytes > 0 && least > double(compressed_bytes) * kDeflateMaxRatio + 1024)
+      fail(
+          "{}: its header claims {}, which take at least {:.0f} bytes, but its {} bytes of gzip "
+          "data inflate to at most {:.0f} (deflate's limit is {:.0f}:1): a damaged or hostile "
+          "file",
+          m_name, counts_text(), least, compressed_bytes,
+          double(compressed_bytes) * kDeflateMaxRatio + 1024, kDeflateMaxRatio);
+    check_memory(least);
     // An ASCII value (with the space after it) is at most this long: "-1.2345678901234567e-308"
     // is 24 characters.
     constexpr double kAsciiValue = 64;
@@ -145,6 +157,64 @@ class PlyReader {
   }
 
  private:
+  // The fewest bytes the body can take by the header: each entry its fewest (a binary value its
+  // size, a list its count; an ASCII value a character and a space or line end).
+  double least_body_bytes() const {
+    double total = 0;
+    for (const Element& el : m_elements) {
+      double entry = 0;
+      for (const auto& p : el.properties)
+        entry +=
+            m_encoding == Encoding::Ascii ? 2 : double(type_size(p.list ? p.count_type : p.type));
+      if (m_encoding == Encoding::Ascii) entry = std::max(entry, 2.0);
+      total += double(el.count) * entry;
+    }
+    return total;
+  }
+
+  // "300000000 vertices (line 3) and 1 face (line 7)": the counts the header claims.
+  std::string counts_text() const {
+    std::string out;
+    for (const Element& el : m_elements)
+      if (el.name == "vertex" || el.name == "face")
+        out += fmt::format("{}{} {} (line {})", out.empty() ? "" : " and ", el.count,
+                           el.count == 1         ? el.name
+                           : el.name == "vertex" ? std::string("vertices")
+                                                 : el.name + "s",
+                           el.line);
+    return out.empty() ? "its elements" : out;
+  }
+
+  // Checks what the header's counts need in memory, at the least, before anything is allocated
+  // for them: `data_bytes` (the file's bytes as read, inflated where compressed) and the mesh
+  // made of them, a position per vertex (and a normal and a uv where the vertex has them) and a
+  // scene triangle per face (kSceneBytesPerTriangle: with its share of the acceleration
+  // structure).
+  void check_memory(double data_bytes) const {
+    double mesh = 0;
+    for (const Element& el : m_elements) {
+      if (el.name == "vertex") {
+        auto has = [&](const char* n) {
+          return std::any_of(el.properties.begin(), el.properties.end(),
+                             [&](const Property& p) { return p.name == n; });
+        };
+        const double per_vertex =
+            double(sizeof(Vec3)) + (has("nx") && has("ny") && has("nz") ? sizeof(Vec3) : 0.0) +
+            ((has("u") || has("s") || has("texture_u") || has("texture_s")) ? sizeof(Vec2) : 0.0);
+        mesh += double(el.count) * per_vertex;
+      } else if (el.name == "face") {
+        mesh += double(el.count) * kSceneBytesPerTriangle;
+      }
+    }
+    const double bytes = data_bytes + mesh;
+    if (!(bytes <= double(memory_budget_bytes())))
+      fail(
+          "{}: its header claims {}, which need at least {} as a mesh (and {} of file data), "
+          "more than {}; is the file damaged, or the mesh too large for this machine?",
+          m_name, counts_text(), format_bytes(mesh), format_bytes(data_bytes),
+          memory_budget_phrase());
+  }
+
   [[noreturn]] void fail_line(size_t line, const std::string& what) const {
     fail("{}:{}: {}", m_name, line, what);
   }
@@ -309,6 +379,7 @@ class PlyReader {
       }
       needed += el.count * min_size;
     }
+    check_memory(double(m_data.size()));
     m_mesh.positions.resize(v.count);
     if (m_layout.normal[0] >= 0) m_mesh.normals.resize(v.count);
     if (m_layout.uv[0] >= 0) m_mesh.uvs.resize(v.count);
@@ -428,10 +499,15 @@ class PlyReader {
     switch (parse_float(tok, v)) {
       case NumberStatus::Ok:
         return v;
-      case NumberStatus::NonFinite:
+      case NumberStatus::NonFinite: {
         // Positions are checked when stored; other properties (an unused colour) may be inf.
-        if (tok.find_first_of("nN") != std::string_view::npos) return std::nan("");
+        // The value as written, for the message: "nan", or an infinity ("inf", "-Infinity" and
+        // "1e39" alike, which hold an 'n' and no "nan").
+        std::string lower(tok);
+        for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+        if (lower.find("nan") != std::string::npos) return std::nan("");
         return tok[0] == '-' ? -HUGE_VAL : HUGE_VAL;
+      }
       case NumberStatus::Malformed:
         break;
     }
@@ -592,7 +668,7 @@ Mesh parse_ply(std::string_view bytes, const std::string& name) {
   return PlyReader(bytes, name).read();
 }
 
-size_t ply_declared_bytes(std::string_view head, const std::string& name) {
+size_t ply_declared_bytes(std::string_view head, const std::string& name, size_t compressed_bytes) {
   // A header longer than this is not one: say so rather than inflate on to find its end.
   constexpr size_t kMaxHeader = size_t(1) << 20;
   // The header is whole once a line of "end_header" (and spaces) has ended.
@@ -610,7 +686,7 @@ size_t ply_declared_bytes(std::string_view head, const std::string& name) {
       fail("{}: no 'end_header' line in the first {} bytes", name, kMaxHeader);
     return 0;
   }
-  const double bytes = PlyReader(head, name).declared_bytes();
+  const double bytes = PlyReader(head, name).declared_bytes(compressed_bytes);
   return bytes >= double(SIZE_MAX) ? SIZE_MAX : size_t(bytes);
 }
 
@@ -710,8 +786,9 @@ Mesh read_ply_file(const fs::path& path) {
   const std::string file = path.string();
   std::string bytes = read_text_file(path);
   if (is_gzip(bytes))
-    bytes = gunzip(bytes, file, 0,
-                   [&](std::string_view head) { return ply_declared_bytes(head, file); });
+    bytes = gunzip(bytes, file, 0, [&, compressed = bytes.size()](std::string_view head) {
+      return ply_declared_bytes(head, file, compressed);
+    });
   return parse_ply(bytes, file);
 }
 

@@ -63,6 +63,46 @@ Vec3 apply_vector(const Mat4& t, const Vec3& d) {
               to_float(t.m[2][0] * d.x + t.m[2][1] * d.y + t.m[2][2] * d.z));
 }
 
+std::string matrix_text(const Mat4& m) {
+  std::string out = "[";
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      out += fmt::format("{:g}{}", m.m[i][j], j < 3 ? " " : i < 3 ? "; " : "]");
+  return out;
+}
+
+std::string transform_problem(const Mat4& m) {
+  const Affine x = to_affine(m);
+  const float det = x.det();
+  bool finite = true;
+  for (int i = 0; i < 3; ++i) {
+    finite = finite && std::isfinite(x.t[i]);
+    for (int j = 0; j < 3; ++j) finite = finite && std::isfinite(x.a[i][j]);
+  }
+  if (finite && std::abs(det) > 0 && std::isfinite(det)) return "";
+  // The determinant in double, for the message: the factor by which the transform scales volumes.
+  double d = 0;
+  for (int j = 0; j < 3; ++j)
+    d += m.m[0][j] *
+         (m.m[1][(j + 1) % 3] * m.m[2][(j + 2) % 3] - m.m[1][(j + 2) % 3] * m.m[2][(j + 1) % 3]);
+  const std::string matrix = matrix_text(m);
+  if (d == 0)
+    return fmt::format(
+        "the transform is singular: its determinant is 0 (it flattens the shape onto a plane, a "
+        "line or a point); matrix {}",
+        matrix);
+  if (!finite || !std::isfinite(det) || std::abs(d) >= 1)
+    return fmt::format(
+        "the transform is too large for rll, which transforms in single precision (at most "
+        "3.4e+38): it scales volumes by {:g} (lengths by about {:g}){}; scale the scene down; "
+        "matrix {}",
+        d, std::cbrt(std::abs(d)), finite ? "" : " and has an entry beyond 3.4e+38", matrix);
+  return fmt::format(
+      "the transform is degenerate for rll, which transforms in single precision: it scales "
+      "volumes by {:g} (lengths by about {:g}), too small a factor for a float; matrix {}",
+      d, std::cbrt(std::abs(d)), matrix);
+}
+
 Affine to_affine(const Mat4& t) {
   Affine x;
   for (int i = 0; i < 3; ++i) {
@@ -351,7 +391,10 @@ void PbrtReader::camera(const Token& t) {
     return;
   }
   auto world_from_camera = inverse(m_state.ctm);
-  if (!world_from_camera) syntax(t, "Camera: the camera transform is singular");
+  if (!world_from_camera)
+    syntax(t, fmt::format("Camera: the camera transform is singular (it has no inverse); matrix "
+                          "{}",
+                          matrix_text(m_state.ctm)));
   m_camera_fov = p.get_float("fov", 90);
   if (!(m_camera_fov > 0 && m_camera_fov < 180))
     syntax(t, fmt::format("Camera: fov must be in (0, 180) degrees (got {})", m_camera_fov));
@@ -376,7 +419,10 @@ void PbrtReader::camera(const Token& t) {
   // The shutter interval is the exposure time of pbrt-v4's sensor (see film()).
   m_exposure_time = p.get_float("shutterclose", 1) - p.get_float("shutteropen", 0);
   if (!(m_exposure_time > 0)) syntax(t, "Camera: shutterclose must be after shutteropen");
-  p.find("frameaspectratio");
+  if (const Param* q = p.typed("frameaspectratio", {"float"})) {
+    m_frame_aspect = float(p.one_number(*q));
+    m_frame_aspect_where = where(t.file, q->line);
+  }
   m_world_from_camera = *world_from_camera;
   m_has_camera = true;
   p.warn_unused();
@@ -395,9 +441,23 @@ void PbrtReader::film(const Token& t) {
   m_iso = p.get_float("iso", 100);
   if (!(m_iso > 0) || !std::isfinite(m_iso)) syntax(t, "Film: iso must be positive");
   // Output settings that do not change the image rll renders.
-  for (const char* name : {"filename", "whitebalance", "sensor", "savefp16", "maxcomponentvalue",
-                           "diagonal", "writefp16"})
-    p.find(name);
+  for (const char* name : {"filename", "savefp16", "diagonal", "writefp16"}) p.find(name);
+  // Settings that change pbrt-v4's image and that rll does not have, at their defaults (no white
+  // balance, the CIE 1931 sensor, no clamping of samples) or said.
+  auto ignored = [&](const char* name, const std::string& value, const char* why) {
+    const Param* q = p.find(name);
+    warn(fmt::format("Film {}", name),
+         fmt::format("{}: Film: parameter \"{} {}\" {} is ignored: {}", where(t.file, q->line),
+                     q->type, name, value, why));
+  };
+  if (const float wb = p.get_float("whitebalance", 0); wb != 0)
+    ignored("whitebalance", fmt::format("{}", wb), "rll applies no white balance");
+  if (const auto sensor = p.get_string("sensor"); sensor && *sensor != "cie1931")
+    ignored("sensor", "\"" + printable(*sensor) + "\"",
+            "rll renders linear sRGB as pbrt-v4's default sensor \"cie1931\" does");
+  if (const Param* q = p.typed("maxcomponentvalue", {"float"}))
+    ignored("maxcomponentvalue", fmt::format("{}", p.one_number(*q)),
+            "rll clamps no sample (pbrt-v4's default, infinity)");
   p.warn_unused();
 }
 
@@ -431,6 +491,10 @@ void PbrtReader::area_light(const Token& t) {
     syntax(t, "AreaLightSource: scale must be finite and not negative");
   m_state.emissive = true;
   m_state.emission = given_L.value_or(Rgb(1)) * s;
+  if (!is_finite(m_state.emission))
+    syntax(t, fmt::format("AreaLightSource: L x scale = ({}, {}, {}) is not finite (beyond a "
+                          "float's 3.4e+38): lower L or scale",
+                          m_state.emission.x, m_state.emission.y, m_state.emission.z));
   m_state.emission_texture = -1;
   m_state.texture_luminance = 1;
   if (const auto file = p.get_string("filename")) {
@@ -448,11 +512,10 @@ void PbrtReader::area_light(const Token& t) {
       } catch (const Error& e) {
         fail("{}: AreaLightSource: {}", where(t), e.what());
       }
-      for (const Rgb& c : image.pixels())
-        if (!is_finite(c) || min_component(c) < 0)
-          syntax(t, fmt::format("AreaLightSource: '{}' has a negative or non-finite pixel, which "
-                                "no light can emit",
-                                *file));
+      if (const std::string bad = bad_emission_texel(image); !bad.empty())
+        syntax(t, fmt::format("AreaLightSource: '{}' has a negative or non-finite pixel, which "
+                              "no light can emit: {}",
+                              *file, bad));
       m_scene.textures.push_back(std::move(image));
       cached = m_image_cache.emplace(key, int(m_scene.textures.size() - 1)).first;
     }
@@ -488,7 +551,7 @@ void PbrtReader::light(const Token& t) {
     const auto power = normalization(t, p, "power");
     if (type == "point") {
       if (power) I *= *power / (4 * kPi);
-      m_lights.push_back(make_point_light(pos, I));
+      add_light(t, type, make_point_light(pos, I));
     } else {
       const Vec3 to = p.get_point("to").value_or(Vec3(0, 0, 1));
       const float cone = p.get_float("coneangle", 30), delta = p.get_float("conedeltaangle", 5);
@@ -504,7 +567,7 @@ void PbrtReader::light(const Token& t) {
         syntax(t, "LightSource \"spot\": from and to are the same point");
       const float cos_end = std::cos(radians(cone)), cos_start = std::cos(radians(cone - delta));
       if (power) I *= *power / spot_solid_angle(cos_start, cos_end);
-      m_lights.push_back(make_spot_light(pos, axis, I, cos_start, cos_end));
+      add_light(t, type, make_spot_light(pos, axis, I, cos_start, cos_end));
     }
   } else if (type == "distant") {
     Rgb L = p.get_spectrum("L").value_or(Rgb(1)) * s;
@@ -514,7 +577,7 @@ void PbrtReader::light(const Token& t) {
     Vec3 d = apply_vector(m_state.ctm, from - to);
     if (!(length_sq(d) > 0) || !is_finite(d))
       syntax(t, "LightSource \"distant\": from and to are the same point");
-    m_lights.push_back(make_directional_light(normalize(d), L));
+    add_light(t, type, make_directional_light(normalize(d), L));
   } else if (type == "infinite") {
     infinite_light(t, p, s);
   } else if (type == "goniometric" || type == "projection") {
@@ -551,6 +614,12 @@ void PbrtReader::infinite_light(const Token& t, const Params& p, float s) {
     } catch (const Error& e) {
       fail("{}: LightSource \"infinite\": {}", where(t), e.what());
     }
+    // As every image light: pbrt-v4 would sample a negative texel as negative light, and a
+    // NaN or infinite one would poison every sample that sees it.
+    if (const std::string bad = bad_emission_texel(map->image); !bad.empty())
+      syntax(t, fmt::format("LightSource \"infinite\": '{}' has a negative or non-finite pixel, "
+                            "which no light can emit: {}",
+                            *file, bad));
     const int w = map->image.width(), h = map->image.height();
     if (w == h) {
       map->mapping = EnvironmentMap::Mapping::EqualArea;
@@ -584,8 +653,16 @@ void PbrtReader::infinite_light(const Token& t, const Params& p, float s) {
     }
     sky.map = map;
   }
+  if (!is_finite(sky.radiance))
+    syntax(t, fmt::format("LightSource \"infinite\": its radiance ({}, {}, {}) is not finite "
+                          "(L or the map times scale{} beyond a float's 3.4e+38)",
+                          sky.radiance.x, sky.radiance.y, sky.radiance.z,
+                          illuminance ? ", normalized to the illuminance," : ""));
   const auto light_from_world = inverse(m_state.ctm);
-  if (sky.map && !light_from_world) syntax(t, "LightSource \"infinite\": singular transform");
+  if (sky.map && !light_from_world)
+    syntax(t, fmt::format("LightSource \"infinite\": the transform is singular (it has no "
+                          "inverse); matrix {}",
+                          matrix_text(m_state.ctm)));
   m_infinite.push_back({sky.radiance, std::const_pointer_cast<EnvironmentMap>(sky.map),
                         light_from_world.value_or(Mat4())});
   if (m_infinite.size() == 2)
@@ -625,11 +702,14 @@ bool PbrtReader::image_light(const Token& t, const Params& p, const std::string&
   } catch (const Error& e) {
     fail("{}: {}: {}", where(t), what, e.what());
   }
-  for (const Rgb& c : image.pixels())
-    if (!is_finite(c) || min_component(c) < 0)
-      syntax(t, fmt::format("{}: '{}' has a negative or non-finite pixel", what, *file));
+  if (const std::string bad = bad_emission_texel(image); !bad.empty())
+    syntax(t, fmt::format("{}: '{}' has a negative or non-finite pixel, which no light can emit: "
+                          "{}",
+                          what, *file, bad));
   const auto inv = inverse(m_state.ctm);
-  if (!inv) syntax(t, fmt::format("{}: singular transform", what));
+  if (!inv)
+    syntax(t, fmt::format("{}: the transform is singular (it has no inverse); matrix {}", what,
+                          matrix_text(m_state.ctm)));
   Vec3 row[3];
   for (int i = 0; i < 3; ++i)
     row[i] = Vec3(to_float(inv->m[i][0]), to_float(inv->m[i][1]), to_float(inv->m[i][2]));
@@ -659,9 +739,20 @@ bool PbrtReader::image_light(const Token& t, const Params& p, const std::string&
     if (!(l.area > 0)) syntax(t, fmt::format("{}: \"power\" asks to normalize a black image", what));
     l.radiance *= *power / l.area;
   }
+  add_light(t, type, l);
   m_scene.textures.push_back(std::move(image));
-  m_lights.push_back(l);
   return true;
+}
+
+void PbrtReader::add_light(const Token& t, const std::string& type, const Light& l) {
+  const std::string what = fmt::format("{}: LightSource \"{}\"", where(t), type);
+  if (const std::string why = light_parameter_problem(l); !why.empty())
+    fail(
+        "{}: {}; a light's parameters must be finite and its emission not negative (is a value "
+        "or a scale too large?)",
+        what, why);
+  m_lights.push_back(l);
+  m_light_where.push_back(what);
 }
 
 // Several infinite lights as one sky: constant ones sum exactly; with maps, their sum is
@@ -731,9 +822,9 @@ void PbrtReader::instance(const Token& t, const std::shared_ptr<const ObjectMesh
       !why.empty())
     syntax(t, fmt::format("ObjectInstance of {} triangles (instance {} of the file): {}", count,
                           m_instances.size() + 1, why));
+  if (const std::string why = transform_problem(m_state.ctm); !why.empty())
+    syntax(t, "ObjectInstance: " + why);
   const Affine x = to_affine(m_state.ctm);
-  if (!(std::abs(x.det()) > 0) || !std::isfinite(x.det()))
-    syntax(t, "ObjectInstance: the transform is singular");
   m_instances.emplace_back(obj, x);
   m_instanced_triangles += count;
 }
@@ -750,7 +841,12 @@ void PbrtReader::finish() {
   if (const float ratio = m_exposure_time * m_iso / 100; ratio != 1) {
     for (size_t i = m_first_material; i < m_scene.materials.size(); ++i)
       m_scene.materials[i].emission *= ratio;
-    for (auto& l : m_lights) l.radiance *= ratio;
+    for (size_t i = 0; i < m_lights.size(); ++i) {
+      m_lights[i].radiance *= ratio;
+      if (const std::string why = light_parameter_problem(m_lights[i]); !why.empty())
+        fail("{}: {} once scaled by the film's imaging ratio {} (exposure time x iso / 100)",
+             m_light_where[i], why, ratio);
+    }
     if (m_scene.sky) m_scene.sky->radiance *= ratio;
     for (auto& l : m_infinite) l.radiance *= ratio;
   }
@@ -761,7 +857,10 @@ void PbrtReader::finish() {
                up = normalize(apply_vector(c, Vec3(0, 1, 0))),
                right = apply_vector(c, Vec3(1, 0, 0));
     if (!is_finite(pos) || !is_finite(fwd) || !is_finite(up) || !(length_sq(cross(fwd, up)) > 0))
-      fail("{}: the camera transform is degenerate", m_names[0]);
+      fail(
+          "{}: the camera transform is degenerate: it places the camera at ({}, {}, {}) looking "
+          "along ({}, {}, {}) with up ({}, {}, {}); camera-to-world matrix {}",
+          m_names[0], pos.x, pos.y, pos.z, fwd.x, fwd.y, fwd.z, up.x, up.y, up.z, matrix_text(c));
     Camera& cam = m_scene.camera;
     cam.position = pos;
     cam.target = pos + fwd;
@@ -770,6 +869,14 @@ void PbrtReader::finish() {
     const float w = float(m_scene.width), h = float(m_scene.height);
     cam.fov = m_camera_fov;
     if (h > w) cam.fov = 2 * std::atan(std::tan(radians(m_camera_fov) / 2) * h / w) * (180 / kPi);
+    // pbrt-v4 frames the screen window by "frameaspectratio" where no screenwindow is given;
+    // rll by the film's aspect ratio: the same where they agree.
+    if (m_frame_aspect && !m_screen_window && std::abs(*m_frame_aspect - w / h) > 1e-3f * (w / h))
+      m_warnings.push_back(
+          {fmt::format("{}: Camera: \"float frameaspectratio\" {} is ignored: rll frames the "
+                       "image by the film's aspect ratio, {}x{} ({})",
+                       m_frame_aspect_where, *m_frame_aspect, m_scene.width, m_scene.height, w / h),
+           1});
     cam.lens_radius = m_lens_radius;
     cam.focal_distance = m_focal_distance;
     if (m_screen_window) {

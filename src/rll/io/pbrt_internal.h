@@ -54,6 +54,12 @@ Mat4 translate(double x, double y, double z);
 Mat4 scale(double x, double y, double z);
 // Rotation by `deg` degrees about `axis` (pbrt's Rotate).
 Mat4 rotate(double deg, double ax, double ay, double az);
+// "[1e+30 0 0 0; 0 1e+30 0 0; 0 0 1e+30 0; 0 0 0 1]": a matrix row by row, for messages.
+std::string matrix_text(const Mat4& m);
+// Why rll cannot apply `m` to geometry (its 3x3 part and offset, in float), "" when it can: it
+// is singular (determinant 0), or scales beyond what a float holds, or below it; the message
+// says which, by how much, and shows the matrix.
+std::string transform_problem(const Mat4& m);
 
 // --- tokens ---
 
@@ -344,13 +350,16 @@ class PbrtReader {
   std::optional<float> normalization(const Token& t, const Params& p, const char* name);
   void combine_infinite_lights();
   bool image_light(const Token& t, const Params& p, const std::string& type, float s);
+  // Adds a light, refusing one whose parameters came out non-finite or negative (say, an
+  // intensity that overflows a float once scaled), with the file, line and light named.
+  void add_light(const Token& t, const std::string& type, const Light& l);
 
   // --- shapes ---
 
   static constexpr int kInvisible = -2;
 
-  // The material of the next shape, with the active area light's emission.
-  uint32_t shape_material(float k = 1);
+  // The material of the next shape (at `t`), with the active area light's emission times `k`.
+  uint32_t shape_material(const Token& t, float k = 1);
   static constexpr size_t kMaxEmissiveMaterials = 1 << 16;
 
   void shape(const Token& t);
@@ -416,6 +425,8 @@ class PbrtReader {
   std::set<std::string> m_unread_textures;  // names of the Texture directives rll skipped
   std::map<std::string, int> m_image_cache;
   std::map<std::tuple<int, int, float, float, bool>, ImageTexture> m_alpha_cache;
+  // (image, scale) -> the image times its scale clamped to [0, 1] (a reflectance above 1)
+  std::map<std::tuple<int, float, float, float>, ImageTexture> m_clamped_cache;
   std::map<std::tuple<int, float, float, float, bool, int>, uint32_t> m_emissive;
   int m_default_material = -1;
 
@@ -436,7 +447,10 @@ class PbrtReader {
   float m_exposure_time = 1, m_iso = 100;
   size_t m_first_material = 0;  // the scene's materials before this file's
   Mat4 m_world_from_camera;
+  std::optional<float> m_frame_aspect;  // the Camera's "frameaspectratio", where given
+  std::string m_frame_aspect_where;
   std::vector<Light> m_lights;
+  std::vector<std::string> m_light_where;  // per light: "FILE:LINE: LightSource \"KIND\""
   // The bilinear patch of each triangle of the shape being read (bilinear meshes only).
   std::vector<uint32_t> m_shape_of_triangle;
   // Every infinite light read: its radiance scale, map (or none) and, with a map, the light's

@@ -155,7 +155,16 @@ std::optional<ImageTexture> PbrtReader::image_texture(const Token& t, const std:
     if (p.get_float(uv, 1) != 1) unsupported(t, fmt::format("Texture \"{}\"", uv));
   for (const char* uv : {"udelta", "vdelta"})
     if (p.get_float(uv, 0) != 0) unsupported(t, fmt::format("Texture \"{}\"", uv));
-  for (const char* ignored : {"filter", "maxanisotropy", "wrap", "mapping"}) p.find(ignored);
+  // The filter changes only how a texel is averaged (rll filters bilinearly); wrap modes and
+  // mappings other than pbrt-v4's defaults change where the image lands.
+  for (const char* ignored : {"filter", "maxanisotropy"}) p.find(ignored);
+  for (const auto& [param, def, instead] :
+       {std::tuple{"wrap", "repeat", "rll repeats the image"},
+        std::tuple{"mapping", "uv", "rll maps the image by the shape's uv"}})
+    if (const auto v = p.get_string(param); v && *v != def)
+      warn(fmt::format("Texture {} {}", param, *v),
+           fmt::format("{}: Texture \"{}\": \"string {}\" \"{}\" is not supported; {}",
+                       where(t.file, p.find(param)->line), name, param, printable(*v), instead));
   auto cached = m_image_cache.find(path.string() + "|" + encoding);
   if (cached != m_image_cache.end()) {
     tex.index = cached->second;
@@ -181,7 +190,27 @@ std::optional<ImageTexture> PbrtReader::image_texture(const Token& t, const std:
 void PbrtReader::roughness(const Token& t, const Params& p, Material& m, const std::string& prefix,
                            float def) {
   const bool remap = p.get_bool("remaproughness", true);
-  auto op = [&](const std::string& n) { return texture_operand(t, p, (prefix + n).c_str(), true); };
+  // pbrt-v4 takes the square root of a roughness (or uses it as alpha): a negative one gives NaN
+  // there, and would be clamped to a smooth surface here; either way not what the file meant.
+  auto op = [&](const std::string& n) {
+    const std::string name = prefix + n;
+    auto v = texture_operand(t, p, name.c_str(), true);
+    if (!v) return v;
+    if (v->index < 0) {
+      if (v->scale.x < 0)
+        p.bad(*p.find(name.c_str()),
+              fmt::format("is negative ({}): a roughness must be 0 or more", v->scale.x));
+      return v;
+    }
+    const Image& img = m_scene.textures[size_t(v->index)];
+    for (int y = 0; y < img.height(); ++y)
+      for (int x = 0; x < img.width(); ++x)
+        if (const float r = img.at(x, y).x * v->scale.x; r < 0 || !std::isfinite(r))
+          p.bad(*p.find(name.c_str()),
+                fmt::format("is {} at texel ({}, {}) of its texture: a roughness must be 0 or more",
+                            r, x, y));
+    return v;
+  };
   ImageTexture d;
   d.scale = Rgb(def);
   const ImageTexture r = op("roughness").value_or(d);
@@ -216,6 +245,40 @@ void PbrtReader::reflectance(const Token& t, const Params& p, const char* name, 
   m.albedo = def;
   auto tex = texture_operand(t, p, name, false);
   if (!tex) return;
+  // pbrt-v4's diffuse and coated diffuse materials clamp their reflectance to [0, 1] where they
+  // evaluate it (a surface cannot reflect more light than reaches it): rll clamps it here, a
+  // texture texel by texel (before its bilinear filter, where pbrt-v4 clamps after it), and says
+  // so once.
+  auto in_range = [](const Rgb& c) { return min_component(c) >= 0 && max_component(c) <= 1; };
+  const Param* q = p.find(name);
+  auto say = [&](const std::string& what) {
+    warn("reflectance outside [0, 1]",
+         fmt::format("{}: parameter \"{} {}\" {}: clamped to [0, 1], as pbrt-v4 does (a "
+                     "surface cannot reflect more light than reaches it)",
+                     where(t.file, q->line), q->type, q->name, what));
+  };
+  if (tex->index < 0) {
+    if (!in_range(tex->scale)) {
+      say(fmt::format("is ({}, {}, {})", tex->scale.x, tex->scale.y, tex->scale.z));
+      tex->scale = min(max(tex->scale, Rgb(0)), Rgb(1));
+    }
+  } else {
+    const Image& img = m_scene.textures[size_t(tex->index)];
+    const bool outside = std::any_of(img.pixels().begin(), img.pixels().end(),
+                                     [&](const Rgb& c) { return !in_range(c * tex->scale); });
+    if (outside) {
+      const auto key = std::make_tuple(tex->index, tex->scale.x, tex->scale.y, tex->scale.z);
+      auto it = m_clamped_cache.find(key);
+      if (it == m_clamped_cache.end()) {
+        auto baked = bake(t, "reflectance", {*tex},
+                          [](const Rgb* v) { return min(max(v[0], Rgb(0)), Rgb(1)); });
+        if (!baked) return;
+        it = m_clamped_cache.emplace(key, *baked).first;
+      }
+      say("has texels outside [0, 1] (times its scale)");
+      tex = it->second;
+    }
+  }
   m.albedo = tex->scale;
   m.albedo_texture = tex->index;
 }
@@ -255,8 +318,11 @@ float PbrtReader::ior_of(const Token& t, const std::string& material, const Para
 int PbrtReader::make_material(const Token& t, const std::string& type, const Params& p) {
   Material m;
   m.name = fmt::format("{} (line {})", type, t.line);
-  p.find("normalmap");
-  p.find("displacement");
+  for (const char* name : {"normalmap", "displacement"})
+    if (const Param* q = p.find(name))
+      warn(name, fmt::format("{}: Material \"{}\": parameter \"{} {}\" is not supported; "
+                             "ignored (the surface is shaded with its mesh's own normals)",
+                             where(t.file, q->line), type, q->type, name));
   if (type == "diffuse") {
     m.type = MaterialType::Diffuse;
     reflectance(t, p, "reflectance", m, Rgb(0.5f));
@@ -272,7 +338,16 @@ int PbrtReader::make_material(const Token& t, const std::string& type, const Par
     m.specular = Rgb(1);
     if (auto a = p.get_spectrum("albedo"); a && max_component(*a) > 0)
       unsupported(t, "Material \"coateddiffuse\" with a scattering layer (\"albedo\" > 0)");
-    for (const char* name : {"g", "maxdepth", "nsamples"}) p.find(name);
+    // "g" shapes the scattering layer, which an albedo of 0 leaves out (as in pbrt-v4).
+    p.find("g");
+    // rll's coated walk is pbrt-v4's with its defaults, fixed: say so where the file asks for
+    // other values.
+    for (const auto [name, def] : {std::pair{"maxdepth", 10}, std::pair{"nsamples", 1}})
+      if (const Param* q = p.typed(name, {"integer"}); q && p.get_int(name, def) != def)
+        warn(fmt::format("coateddiffuse {}", name),
+             fmt::format("{}: Material \"coateddiffuse\": \"integer {}\" {} is ignored: rll's "
+                         "coated walk always uses pbrt-v4's defaults, maxdepth 10 and nsamples 1",
+                         where(t.file, q->line), name, p.get_int(name, def)));
   } else if (type == "conductor" || type == "coatedconductor") {
     m.type = MaterialType::Conductor;
     const std::string prefix = type == "conductor" ? "" : "conductor.";

@@ -136,6 +136,7 @@ std::optional<Rgb> PbrtReader::Params::get_spectrum(const char* name) const {
   }
   if (p->type == "float") {  // pbrt-v4 accepts a float for a spectrum in some places
     const float v = float(one_number(*p));
+    if (v < 0) bad(*p, "must not be negative");  // as an rgb value
     return Rgb(v);
   }
   if (p->type != "spectrum") bad(*p, "must be of type rgb, spectrum or blackbody");

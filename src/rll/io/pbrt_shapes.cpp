@@ -8,7 +8,7 @@
 namespace rll::pbrt {
 
 // The material of the next shape, with the active area light's emission times `k`.
-uint32_t PbrtReader::shape_material(float k) {
+uint32_t PbrtReader::shape_material(const Token& t, float k) {
   int base = m_state.material;
   if (base == -1) {
     if (m_default_material < 0) {
@@ -22,6 +22,11 @@ uint32_t PbrtReader::shape_material(float k) {
   }
   if (!m_state.emissive) return uint32_t(base);
   const Rgb e = m_state.emission * k;
+  if (!is_finite(e))
+    syntax(t, fmt::format("the area light's emission ({}, {}, {}) x {} (its \"power\" over the "
+                          "shape's area) is not finite: the power is too large or the shape too "
+                          "small",
+                          m_state.emission.x, m_state.emission.y, m_state.emission.z, k));
   auto key = std::make_tuple(base, e.x, e.y, e.z, m_state.two_sided, m_state.emission_texture);
   auto it = m_emissive.find(key);
   if (it != m_emissive.end()) return it->second;
@@ -83,9 +88,9 @@ void PbrtReader::shape(const Token& t) {
 }
 
 void PbrtReader::add_mesh(const Token& t, Mesh mesh, bool quadric) {
+  if (const std::string why = transform_problem(m_state.ctm); !why.empty())
+    syntax(t, "Shape: " + why);
   const Affine x = to_affine(m_state.ctm);
-  if (!(std::abs(x.det()) > 0) || !std::isfinite(x.det()))
-    syntax(t, "Shape: the transform is singular");
   transform_mesh(mesh, x, 0, 0);
   const bool swaps = x.det() < 0;
   if (quadric ? (m_state.reverse_orientation != swaps) : m_state.reverse_orientation) {
@@ -134,9 +139,10 @@ void PbrtReader::add_mesh(const Token& t, Mesh mesh, bool quadric) {
       area[k] += mesh.area(i);
     }
     mesh.material.resize(n);
-    for (uint32_t i = 0; i < n; ++i) mesh.material[i] = shape_material(factor(area[shape_of(i)]));
+    for (uint32_t i = 0; i < n; ++i)
+      mesh.material[i] = shape_material(t, factor(area[shape_of(i)]));
   } else {
-    mesh.material.assign(mesh.triangle_count(), shape_material());
+    mesh.material.assign(mesh.triangle_count(), shape_material(t));
   }
   m_scene.mesh.append(mesh, 0);
 }

@@ -1,5 +1,7 @@
 #include "rll/scene/light.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -113,6 +115,60 @@ float light_power(const Light& l, float scene_radius) {
       return l.area * lum;
   }
   return 0;
+}
+
+const char* light_type_name(LightType type) {
+  switch (type) {
+    case LightType::Triangle:
+      return "triangle";
+    case LightType::Point:
+      return "point";
+    case LightType::Directional:
+      return "directional";
+    case LightType::Spot:
+      return "spot";
+    case LightType::Goniometric:
+      return "goniometric";
+    case LightType::Projection:
+      return "projection";
+  }
+  return "?";
+}
+
+std::string light_parameter_problem(const Light& l) {
+  auto values = [](const Vec3& v) { return fmt::format("({}, {}, {})", v.x, v.y, v.z); };
+  auto not_finite = [&](const char* what, const Vec3& v) {
+    return fmt::format("its {} {} is not finite", what, values(v));
+  };
+  switch (l.type) {
+    case LightType::Triangle:
+      for (const Vec3* p : {&l.p0, &l.p1, &l.p2})
+        if (!is_finite(*p)) return not_finite("vertex", *p);
+      break;
+    case LightType::Directional:
+      if (!is_finite(l.p0)) return not_finite("direction", l.p0);
+      break;
+    case LightType::Spot:
+      if (!is_finite(l.n)) return not_finite("axis", l.n);
+      [[fallthrough]];
+    case LightType::Point:
+      if (!is_finite(l.p0)) return not_finite("position", l.p0);
+      break;
+    case LightType::Goniometric:
+    case LightType::Projection:
+      if (!is_finite(l.p0)) return not_finite("position", l.p0);
+      for (const Vec3* r : {&l.p1, &l.p2, &l.n})
+        if (!is_finite(*r)) return not_finite("transform's row", *r);
+      break;
+  }
+  const char* emission = l.type == LightType::Triangle      ? "radiance"
+                         : l.type == LightType::Directional ? "irradiance"
+                         : l.has_image()                    ? "scale"
+                                                            : "intensity";
+  if (!is_finite(l.radiance)) return not_finite(emission, l.radiance);
+  if (min_component(l.radiance) < 0)
+    return fmt::format("its {} {} is negative", emission, values(l.radiance));
+  return "";
 }
 
 }  // namespace rll

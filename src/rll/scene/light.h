@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "rll/core/image.h"
 #include "rll/core/math.h"
@@ -344,5 +345,14 @@ SpotAngles spot_angles(const Light& spot);
 float spot_solid_angle(float cos_falloff_start, float cos_falloff_end);
 // Updates a triangle light's cached normal and area after its vertices moved.
 void refresh_triangle_light(Light& light);
+
+// The kind of a light as messages and files name it: "triangle", "point", "directional",
+// "spot", "goniometric", "projection".
+const char* light_type_name(LightType type);
+// What no light may have, "" when it has none: a non-finite position, direction or frame, or a
+// non-finite or negative emission, named as the light's kind calls it and with its values
+// ("its intensity (inf, inf, inf) is not finite"). Readers ask it of each light they make, to
+// name the file and line; Scene::finalize asks it of every light.
+std::string light_parameter_problem(const Light& light);
 
 }  // namespace rll

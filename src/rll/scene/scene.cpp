@@ -243,16 +243,27 @@ void Scene::finalize() {
       fail("{}: material '{}' uses an emission texture that was not loaded", source, m.name);
   for (const auto& m : materials)
     if (m.emission_texture >= 0 && m.is_emissive())
-      for (const Rgb& c : textures[size_t(m.emission_texture)].pixels())
-        if (!is_finite(c) || min_component(c) < 0)
-          fail("{}: material '{}': its emission texture has a negative or non-finite texel",
-               source, m.name);
+      if (const std::string bad = bad_emission_texel(textures[size_t(m.emission_texture)]);
+          !bad.empty())
+        fail(
+            "{}: material '{}': its emission texture has a texel no light can emit: {} (texels "
+            "must be finite and not negative)",
+            source, m.name, bad);
+  if (sky && sky->map)
+    if (const std::string bad = bad_emission_texel(sky->map->image); !bad.empty())
+      fail(
+          "{}: the sky's environment map has a texel no light can emit: {} (texels must be "
+          "finite and not negative)",
+          source, bad);
   for (const auto& m : materials)
     if (m.roughness_texture >= int(textures.size()))
       fail("{}: material '{}' uses a roughness texture that was not loaded", source, m.name);
-  for (const auto& l : lights)
-    if (!is_finite(l.p0) || !is_finite(l.radiance) || min_component(l.radiance) < 0)
-      fail("{}: a light has a non-finite or negative parameter", source);
+  for (size_t i = 0; i < lights.size(); ++i)
+    if (const std::string why = light_parameter_problem(lights[i]); !why.empty())
+      fail(
+          "{}: light {} of {} (a {} light): {}; a light's parameters must be finite and its "
+          "emission not negative",
+          source, i, lights.size(), light_type_name(lights[i].type), why);
   for (const auto& l : lights)
     if (l.has_image() && l.triangle >= textures.size())
       fail("{}: an image light's image was not loaded", source);
@@ -303,6 +314,16 @@ void Scene::finalize() {
   if (surfaces > 0 && visible == 0)
     fail("{}: all {} triangles have zero area (is the geometry scaled to nothing?)", source,
          surfaces);
+  // A sky is a light only where it emits: say so rather than that there is no sky.
+  if (lights.empty() && sky)
+    fail(
+        "{}: the scene has no lights: it has a sky (an infinite light or environment), but {}, "
+        "and nothing else emits; give the sky a positive radiance or add a light",
+        source,
+        sky->map && max_component(sky->radiance) > 0
+            ? "its map is black over the dome"
+            : fmt::format("the sky's radiance is ({}, {}, {})", sky->radiance.x, sky->radiance.y,
+                          sky->radiance.z));
   if (lights.empty())
     fail("{}: the scene has no lights (no emissive material, light source or sky)", source);
   // A light of zero intensity or irradiance renders as black as no light at all, and is refused
