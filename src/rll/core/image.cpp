@@ -150,7 +150,15 @@ void check_png_data(const unsigned char* bytes, size_t size, int64_t w, int64_t 
   uint64_t idat = 0;
   for (uint64_t at = 8; at + 8 <= size;) {
     const uint64_t length = big_endian32(bytes + at);
-    if (std::memcmp(bytes + at + 4, "IDAT", 4) == 0) idat += length;
+    const bool is_idat = std::memcmp(bytes + at + 4, "IDAT", 4) == 0;
+    // stb_image allocates an IDAT chunk's length before it reads the chunk (the fuzzer's case: a
+    // 110-byte file whose chunk claims 1.9 GB).
+    if (is_idat && length > size - at - 8)
+      fail(
+          "cannot read '{}': its IDAT chunk at byte {} claims {} bytes, but the file has only {} "
+          "left: a truncated or hostile PNG",
+          name, at, length, size - at - 8);
+    if (is_idat) idat += length;
     if (std::memcmp(bytes + at + 4, "IEND", 4) == 0) break;
     at += 12 + length;  // length, type, data, CRC
   }

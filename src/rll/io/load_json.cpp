@@ -202,7 +202,7 @@ Affine to_transform(const json& v, const std::string& ptr) {
     fail(
         "{} scales volumes by {:g} (lengths by about {:g}), {} for rll, which transforms in single "
         "precision; matrix {}",
-        ptr, dd, std::cbrt(std::abs(dd)), std::abs(dd) >= 1 ? "too large" : "too small", matrix);
+        ptr, dd, std::cbrt(std::abs(dd)), !(std::abs(dd) < 1) ? "too large" : "too small", matrix);
   }
   return x;
 }

@@ -234,7 +234,7 @@ struct WavefrontKernels {
     p.light[i] = ch.light;
     if (!(ch.light.pmf > 0)) return;
     p.nee[i] = ch.setup;
-    p.resample[i] = Vec2(ch.weight, ch.weight_sum);
+    p.resample[i] = Vec2{ch.weight, ch.weight_sum};  // clang 14 has no Vec2(a, b)
     p.occluded[i] = 0;
     if (ch.setup.counts_shadow_ray) atomic_add(&tally->shadow, uint64_t(1));
     if (ch.setup.traces) queue(kShadows).push(i);
