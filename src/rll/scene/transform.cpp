@@ -18,7 +18,9 @@ Vec3 Affine::apply_normal(const Vec3& n) const {
           a[0][1] * a[2][0] - a[0][0] * a[2][1]);
   Vec3 c2(a[0][1] * a[1][2] - a[0][2] * a[1][1], a[0][2] * a[1][0] - a[0][0] * a[1][2],
           a[0][0] * a[1][1] - a[0][1] * a[1][0]);
-  Vec3 r = c0 * n.x + c1 * n.y + c2 * n.z;
+  // c0, c1, c2 are the cofactor matrix's rows: r = cof(A) n (cof(A)^T n, as this once was,
+  // turned a rotated mesh's normals the other way round).
+  Vec3 r(dot(c0, n), dot(c1, n), dot(c2, n));
   return det() < 0 ? -r : r;
 }
 
