@@ -79,6 +79,10 @@ uint64_t integrator_settings_hash(const IntegratorSettings& st) {
   h.add(int64_t(st.max_depth));
   h.word(uint64_t(st.strategy));
   h.add(int64_t(st.rr_depth));
+  // pbrt-v4's coated weight changes what a render converges to; the default adds nothing, so
+  // that the references cached before the key existed keep their names.
+  if (st.coated_weights != CoatedWeights::Unbiased)
+    h.word(0xc0a7ed00ull + uint64_t(st.coated_weights));
   return h.value();
 }
 

@@ -22,6 +22,15 @@ const char* strategy_name(LightStrategy s) {
   return "?";
 }
 
+const std::vector<ParamSpec<IntegratorSettings>>& coated_params() {
+  // The order of the names is CoatedWeights' (the field holds the index).
+  static const std::vector<ParamSpec<IntegratorSettings>> table = {
+      choice_param("weights", {"unbiased", "pbrt"},
+                   field<IntegratorSettings, &IntegratorSettings::coated_weights>()),
+  };
+  return table;
+}
+
 IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
                                             const Params& params) {
   IntegratorSettings s;
@@ -47,6 +56,7 @@ IntegratorSettings make_integrator_settings(const std::string& name, int max_dep
   s.nee_candidates = int(params.get_int_in("nee.candidates", 1, 1, kMaxNeeCandidates));
   s.nee_learnt_target =
       params.get_choice("nee.target", "unshadowed", {"unshadowed", "learnt"}) == "learnt";
+  read_params(coated_params(), params, "coated", s);
   return s;
 }
 
@@ -62,6 +72,7 @@ PathConstants make_path_constants(const Scene& scene, const SceneView& view,
   c.rr_depth = settings.rr_depth;
   c.nee_candidates = settings.nee_candidates;
   c.nee_learnt_target = settings.nee_learnt_target;
+  c.coated_weights = settings.coated_weights;
   return c;
 }
 

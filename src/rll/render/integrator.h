@@ -4,8 +4,10 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "rll/accel/accel.h"
+#include "rll/core/param_table.h"
 #include "rll/core/rng.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/render/film.h"
@@ -25,12 +27,17 @@ struct IntegratorSettings {
   int nee_candidates = 1;  // resampled next-event estimation's M (docs/nee.md)
   // nee.target=learnt: its target carries the sampler's learnt factor (SampledLight::target)
   bool nee_learnt_target = false;
+  // coated.weights: CoatedDiffuse's MIS weight in eval() (scene/bsdf.h); pbrt only to match
+  // pbrt-v4's images (docs/materials.md)
+  CoatedWeights coated_weights = CoatedWeights::Unbiased;
 };
 
 // Parses --integrator and the integrator's `--set` keys (path.strategy, path.rr_depth,
-// nee.candidates, nee.target).
+// nee.candidates, nee.target, coated.*).
 IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
                                             const Params& params);
+// The coated.* keys (core/param_table.h): coated.weights=unbiased|pbrt.
+const std::vector<ParamSpec<IntegratorSettings>>& coated_params();
 const char* integrator_name(IntegratorType t);
 const char* strategy_name(LightStrategy s);
 

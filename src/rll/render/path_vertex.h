@@ -81,6 +81,7 @@ struct PathConstants {
   int rr_depth = 3;
   int nee_candidates = 1;  // resampled next-event estimation (docs/nee.md): 1 = one light sample
   bool nee_learnt_target = false;  // its target times the sampler's SampledLight::target
+  CoatedWeights coated_weights = CoatedWeights::Unbiased;  // coated.weights (scene/bsdf.h)
 };
 
 // What a path carries from one vertex to the next.
@@ -161,7 +162,7 @@ RLL_HD inline Bsdf make_vertex_bsdf(const PathConstants& c, const SurfaceHit& sh
                                                     << 32) ^
       mix64(std::bit_cast<uint32_t>(u.u_dir.y) + 0x9e3779b97f4a7c15ull * uint64_t(depth + 1));
   return Bsdf(c.scene.materials[sh.material], albedo_at(c.scene, sh), sh.ns, sh.ng, wo,
-              roughness_at(c.scene, sh), seed);
+              roughness_at(c.scene, sh), seed, c.coated_weights);
 }
 
 // Widens the footprint by the segment to this hit and returns the light sampler's context there.

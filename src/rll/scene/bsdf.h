@@ -69,15 +69,24 @@ struct DielectricInterface {
 // Roughness (GGX alpha) below which Dielectric and CoatedDiffuse interfaces are perfectly smooth.
 inline constexpr float kSmoothAlpha = 1e-3f;
 
+// The MIS weight CoatedDiffuse's eval() gives the base sample joined to wi through a rough coat
+// (`--set coated.weights`, docs/materials.md). Unbiased: against the density of the join it
+// competes with, so the two weights sum to one and eval() estimates f without bias. Pbrt: the
+// weight of pbrt-v4's LayeredBxDF::f() (the coat's pdf from inside towards wi), which makes f()
+// too high wherever light reaches a rough coat by light sampling; only to match pbrt-v4's images.
+enum class CoatedWeights : uint8_t { Unbiased, Pbrt };
+
 class Bsdf {
  public:
   // `albedo` is the material's albedo times its texture at the hit, `roughness` the roughness
   // there (negative: the material's). `ns` is the shading normal, `ng` the geometric normal as
   // wound (its side is the outside of a Dielectric, so that `ior` is the inside's index over the
   // outside's); both are flipped to the side of wo, so surfaces are two-sided. `seed` feeds the
-  // random walk of the stochastic CoatedDiffuse (see eval()); other materials ignore it.
+  // random walk of the stochastic CoatedDiffuse (see eval()), `weights` one of its MIS weights;
+  // other materials ignore both.
   RLL_HD Bsdf(const MaterialData& material, const Rgb& albedo, const Vec3& ns, const Vec3& ng,
-              const Vec3& wo, float roughness = -1, uint64_t seed = 0);
+              const Vec3& wo, float roughness = -1, uint64_t seed = 0,
+              CoatedWeights weights = CoatedWeights::Unbiased);
 
   // CoatedDiffuse evaluates by a random walk between its interfaces (as pbrt-v4's LayeredBxDF):
   // eval() is then an unbiased estimate of f, seeded by (seed, wo, wi); pdf() an approximation
@@ -125,6 +134,7 @@ class Bsdf {
   DielectricInterface m_interface;  // Dielectric (eta relative to wo's side), CoatedDiffuse's coat
   float m_thickness = 0;
   uint64_t m_seed = 0;
+  CoatedWeights m_weights = CoatedWeights::Unbiased;
   bool m_black;
   bool m_delta_only = false, m_has_delta = false;
 };
@@ -341,7 +351,7 @@ RLL_HD inline uint64_t bits_of(const Vec3& v) {
 }  // namespace bsdf_detail
 
 RLL_HD inline Bsdf::Bsdf(const MaterialData& m, const Rgb& albedo, const Vec3& ns, const Vec3& ng,
-                         const Vec3& wo, float roughness, uint64_t seed)
+                         const Vec3& wo, float roughness, uint64_t seed, CoatedWeights weights)
     : m_type(m.type),
       m_albedo(albedo),
       m_specular(m.specular),
@@ -349,7 +359,8 @@ RLL_HD inline Bsdf::Bsdf(const MaterialData& m, const Rgb& albedo, const Vec3& n
       m_k(m.k),
       m_ior(m.ior),
       m_ggx{std::max(1e-3f, roughness >= 0 ? roughness : m.roughness)},
-      m_seed(seed) {
+      m_seed(seed),
+      m_weights(weights) {
   m_ng = face_forward(ng, wo);
   Vec3 n = dot(ns, m_ng) < 0 ? -ns : ns;
   m_frame = Frame(n);
@@ -457,8 +468,12 @@ RLL_HD inline Rgb Bsdf::layered_eval(const Vec3& wo, const Vec3& wi, Pcg32& rng)
       if (!top.smooth) {  // the base sample leaving through the coating towards wi
         float f_exit = top.f(-w, wi, true);
         if (f_exit > 0) {
-          // Against the density of the joining strategy: wis drawn from wi, here -w.
-          float wt2 = power_heuristic(d.z * kInvPi, top.pdf(wi, -w, Lobes::Transmission));
+          // Unbiased: against the density of the joining strategy (wis drawn from wi, here -w).
+          // Pbrt: pbrt-v4's exitInterface.PDF(-w, wi), the density of another strategy.
+          const float other = m_weights == CoatedWeights::Pbrt
+                                  ? top.pdf(-w, wi, Lobes::Transmission)
+                                  : top.pdf(wi, -w, Lobes::Transmission);
+          float wt2 = power_heuristic(d.z * kInvPi, other);
           f += beta * (layer_transmittance(d) * f_exit * wt2);
         }
       }
