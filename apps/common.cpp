@@ -127,14 +127,30 @@ void add_device_options(CLI::App* cmd, SessionSettings& s) {
 
 nlohmann::json session_stats(const RenderSession& session) {
   const IntegratorSettings& is = session.integrator();
-  return {{"scene", session.settings().scene},
-          {"resolution", {session.scene().width, session.scene().height}},
-          {"integrator",
-           {{"name", integrator_name(is.type)},
-            {"max_depth", is.max_depth},
-            {"strategy", strategy_name(is.strategy)}}},
-          {"renderer", session.renderer_name()},
-          {"points", point_set_name(session.points())}};
+  nlohmann::json j = {{"scene", session.settings().scene},
+                      {"resolution", {session.scene().width, session.scene().height}},
+                      {"integrator",
+                       {{"name", integrator_name(is.type)},
+                        {"max_depth", is.max_depth},
+                        {"strategy", strategy_name(is.strategy)}}},
+                      {"renderer", session.renderer_name()},
+                      {"points", point_set_name(session.points())}};
+  // The wavefront's path slots and what its device did, pass by pass (frame by frame in
+  // interactive): README "GPU".
+  if (session.settings().wavefront || session.gpu()) {
+    const WavefrontWork& w = session.wavefront_work();
+    j["path_slots"] = {
+        {"count", w.path_slots}, {"bytes", w.slot_bytes}, {"budget_bytes", w.budget_bytes}};
+    nlohmann::json passes = nlohmann::json::array();
+    for (const DeviceWork& d : w.passes)
+      passes.push_back({{"syncs", d.syncs},
+                        {"launches", d.launches},
+                        {"allocations", d.allocations},
+                        {"bytes_to_host", d.bytes_to_host},
+                        {"bytes_to_device", d.bytes_to_device}});
+    j["device_work"] = passes;
+  }
+  return j;
 }
 
 namespace {

@@ -106,6 +106,9 @@ void run(InteractiveOptions o) {
   auto sampler = make_sampler_for(session, o.sampler, "--sampler");
   session.check_params_used();
   const bool animated = bool(scene.animate);
+  // A static scene's frames accumulate in one film, which stays on the GPU between them (read
+  // back once, for -o); an animated scene's film is new each frame.
+  session.keep_film_on_device(!animated);
 
   RenderSettings rs;
   rs.spp = 1;
@@ -189,6 +192,7 @@ void run(InteractiveOptions o) {
                o.output);
   else if (!o.output.empty() && !frames.empty()) {
     set_activity(fmt::format("writing '{}'", o.output));
+    session.read_film(film);
     write_image(o.output, film.resolve(), o.exposure);
     fmt::print(stderr, "wrote {} ({})\n", o.output,
                animated ? "the last frame" : fmt::format("{} frames accumulated", frames.size()));

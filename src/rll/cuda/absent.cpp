@@ -61,6 +61,9 @@ const std::string& GpuRenderer::device_name() const {
   static const std::string none;
   return none;
 }
+void GpuRenderer::download_film(Film&) {
+  require_gpu();
+}
 RenderProgress GpuRenderer::render(const Scene&, LightSampler&, const IntegratorSettings&, Film&,
                                    const RenderSettings&, const std::atomic<bool>*,
                                    const std::function<void(const RenderProgress&, const Film&)>&,

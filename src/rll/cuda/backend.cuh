@@ -1,6 +1,8 @@
 // The GPU's side of core/backend.h (nvcc only): arrays in device memory, CUDA launches, and CUB
 // (part of the CUDA toolkit) for the sort, the scan and the sum. Everything runs on the default
-// stream in order; the scalar reads wait for the work before them.
+// stream in order; the scalar reads wait for the work before them. Each CUB call counts as one
+// launch, each read as one synchronisation (cuda::device_work); the arrays come from the
+// device's memory cache (launch.cuh), so that an end of pass like the last takes no cudaMalloc.
 #pragma once
 
 #include <cuda_runtime.h>
@@ -24,7 +26,10 @@ struct CudaBackend {
   template <typename T>
   Buffer<T> buffer(size_t n) const {
     Buffer<T> a(n);
-    if (n > 0) check(cudaMemset(a.view().data, 0, a.bytes()), "cudaMemset");
+    if (n > 0) {
+      check(cudaMemsetAsync(a.view().data, 0, a.bytes()), "cudaMemsetAsync");
+      count::launch();
+    }
     return a;
   }
   template <typename Body>
@@ -49,11 +54,13 @@ struct CudaBackend {
     check(cub::DeviceRadixSort::SortPairs(temp.view().data, bytes, keys.data, keys_out.view().data,
                                           values.data, values_out.view().data, keys.size),
           "cub::DeviceRadixSort::SortPairs");
-    check(cudaMemcpy(keys.data, keys_out.view().data, keys_out.bytes(), cudaMemcpyDeviceToDevice),
-          "cudaMemcpy");
-    check(cudaMemcpy(values.data, values_out.view().data, values_out.bytes(),
-                     cudaMemcpyDeviceToDevice),
-          "cudaMemcpy");
+    check(cudaMemcpyAsync(keys.data, keys_out.view().data, keys_out.bytes(),
+                          cudaMemcpyDeviceToDevice),
+          "cudaMemcpyAsync");
+    check(cudaMemcpyAsync(values.data, values_out.view().data, values_out.bytes(),
+                          cudaMemcpyDeviceToDevice),
+          "cudaMemcpyAsync");
+    count::launch(3);
   }
   // CUB's exclusive scan, summed in 64 bits (the initial value's type); the total read back.
   uint64_t exclusive_scan(View<const uint32_t> in, View<uint64_t> out) const {
@@ -67,6 +74,7 @@ struct CudaBackend {
     check(cub::DeviceScan::ExclusiveScan(temp.view().data, bytes, in.data, out.data, plus,
                                          uint64_t(0), in.size),
           "cub::DeviceScan::ExclusiveScan");
+    count::launch();
     return read(&out[in.size - 1]) + read(&in[in.size - 1]);
   }
   // CUB's reduction, in 64 bits.
@@ -82,12 +90,15 @@ struct CudaBackend {
     check(cub::DeviceReduce::Reduce(temp.view().data, bytes, in.data, total.view().data, in.size,
                                     plus, uint64_t(0)),
           "cub::DeviceReduce::Reduce");
+    count::launch();
     return read(total.view().data);
   }
   template <typename T>
   T read(const T* p) const {
     T v;
     check(cudaMemcpy(&v, p, sizeof(T), cudaMemcpyDeviceToHost), "cudaMemcpy");
+    count::sync();
+    count::to_host(sizeof(T));
     return v;
   }
 };

@@ -28,6 +28,7 @@ class DeviceMirror {
     if (v.size == 0) return {nullptr, 0};
     Plain* d = static_cast<Plain*>(allocate(v.size * sizeof(T)));
     check(cudaMemcpy(d, v.data, v.size * sizeof(T), cudaMemcpyHostToDevice), "upload");
+    count::to_device(v.size * sizeof(T));
     if constexpr (!std::is_const_v<T>) m_back.push_back({v.data, d, v.size * sizeof(T)});
     return {d, v.size};
   }
@@ -38,8 +39,11 @@ class DeviceMirror {
   }
   // Copies every writable array back to the host array it mirrors (waits for the kernels).
   void copy_back() const {
-    for (const Back& b : m_back)
+    for (const Back& b : m_back) {
       check(cudaMemcpy(b.host, b.device, b.bytes, cudaMemcpyDeviceToHost), "download");
+      count::sync();
+      count::to_host(b.bytes);
+    }
   }
   // Raw device memory, freed with the mirror.
   void* allocate(size_t bytes) {

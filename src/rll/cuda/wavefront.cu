@@ -1,13 +1,15 @@
-// The GPU's side of the wavefront renderer: the CUDA backend of wavefront/driver.h (device memory,
-// launches over queues, CUDA events), the scene, BVH, Sobol' tables and film in device memory, and
-// the light sampler's tables there: rll's learning state resident across passes and renders, its
-// end of pass run there (cuda/device_rll.cuh); the other samplers' tables, which do not learn,
-// mirrored around each (empty) end of pass as before.
+// The GPU's side of the wavefront renderer: the CUDA backend of wavefront/driver.h (slot memory
+// kept from render to render, launches over queues, CUDA events read once per pass), the scene,
+// BVH, Sobol' tables and film in device memory, and the light sampler's tables there: rll's
+// learning state resident across passes and renders, its end of pass run there
+// (cuda/device_rll.cuh); the other samplers' tables, which do not learn, uploaded once a render.
 #include <cuda_runtime.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <optional>
+#include <vector>
 
 #include "rll/bvh/bvh.h"
 #include "rll/core/error.h"
@@ -32,15 +34,54 @@ __global__ void queue_kernel(WavefrontQueue q, uint32_t upper, Body body) {
   if (k < upper && k < q.count()) body(q.slots[k]);
 }
 
-// The GPU's side of wavefront/driver.h.
+}  // namespace
+
+// (Outside the anonymous namespace: GpuRenderer::Impl holds them.)
+
+// Device memory for the path slots, kept from render to render (and frame to frame in
+// interactive): array k of a render reuses block k where it is large enough, without clearing it
+// (every stage writes a slot's state before it reads it); a new block starts zeroed.
+class SlotArena {
+ public:
+  void restart() { m_taken = 0; }
+  void* take(size_t bytes, bool& fresh) {
+    const size_t k = m_taken++;
+    if (k >= m_blocks.size()) m_blocks.resize(k + 1);
+    fresh = m_blocks[k].bytes() < bytes;
+    if (fresh) {
+      m_blocks[k] = DeviceArray<unsigned char>();  // (back to the cache first)
+      m_blocks[k] = DeviceArray<unsigned char>(bytes);
+    }
+    return m_blocks[k].view().data;
+  }
+  size_t bytes() const {
+    size_t n = 0;
+    for (const auto& b : m_blocks) n += b.bytes();
+    return n;
+  }
+
+ private:
+  std::vector<DeviceArray<unsigned char>> m_blocks;
+  size_t m_taken = 0;
+};
+
+// The GPU's side of wavefront/driver.h: nothing in it waits for the device but read(). The
+// stages' times come from CUDA events recorded around their launches without waiting, read
+// after the pass's one read.
 class CudaWavefrontBackend {
  public:
-  explicit CudaWavefrontBackend(WavefrontTimes* times) : m_times(times) {}
+  // A render's start: its arrays from the first block again, its times into `times`.
+  void begin(WavefrontTimes* times) {
+    m_arena.restart();
+    m_times = times;
+  }
 
   template <typename T>
   View<T> take(size_t n) {
-    void* p = m_memory.allocate(n * sizeof(T));
-    check(cudaMemset(p, 0, n * sizeof(T)), "cudaMemset");
+    const size_t bytes = std::max<size_t>(1, n * sizeof(T));
+    bool fresh = false;
+    void* p = m_arena.take(bytes, fresh);
+    if (fresh) zero(p, bytes);
     return {static_cast<T*>(p), n};
   }
   template <typename Body>
@@ -55,21 +96,26 @@ class CudaWavefrontBackend {
     const unsigned blocks = (upper + detail::kBlockSize - 1) / detail::kBlockSize;
     queue_kernel<<<blocks, detail::kBlockSize>>>(q, upper, body);
     check(cudaGetLastError(), "kernel launch");
+    count::launch();
   }
-  void zero(void* p, size_t bytes) { check(cudaMemsetAsync(p, 0, bytes), "cudaMemsetAsync"); }
-  void write(uint32_t* p, uint32_t v) {
-    check(cudaMemcpy(p, &v, sizeof v, cudaMemcpyHostToDevice), "cudaMemcpy");
+  void zero(void* p, size_t bytes) {
+    check(cudaMemsetAsync(p, 0, bytes), "cudaMemsetAsync");
+    count::launch();
   }
-  void copy(uint32_t* to, const uint32_t* from) {
-    check(cudaMemcpyAsync(to, from, sizeof(uint32_t), cudaMemcpyDeviceToDevice), "cudaMemcpy");
-  }
+  // A queue's size is on the device: every stage is launched.
+  bool may_hold(const uint32_t*) const { return true; }
+  // Waits for everything queued before it; the stages' times are read then.
   template <typename T>
   T read(const T* p) {
     T v;
     check(cudaMemcpy(&v, p, sizeof(T), cudaMemcpyDeviceToHost), "cudaMemcpy");
+    count::sync();
+    count::to_host(sizeof(T));
+    collect_times();
     return v;
   }
-  // The kernels' time by CUDA events; the end of a pass (host work and copies) by the wall clock.
+  // The kernels' time by CUDA events; the end of a pass (host work, copies, the end of pass's
+  // own reads) by the wall clock.
   template <typename Fn>
   void timed(WavefrontStage stage, const Fn& fn) {
     if (!m_times) return fn();
@@ -80,17 +126,61 @@ class CudaWavefrontBackend {
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       return;
     }
-    m_timer.start();
+    m_events.start(size_t(stage));
     fn();
-    (*m_times)[stage] += m_timer.stop_ms() * 1e-3;
+    m_events.stop();
   }
-  size_t bytes() const { return m_memory.bytes(); }
+  // The times of the events recorded so far (their work must be done).
+  void collect_times() {
+    if (m_times)
+      m_events.read(
+          [&](size_t stage, float ms) { (*m_times)[WavefrontStage(stage)] += double(ms) * 1e-3; });
+  }
+  DeviceWork work() const { return device_work(); }
+  size_t bytes() const { return m_arena.bytes(); }
 
  private:
-  DeviceMirror m_memory;
-  WavefrontTimes* m_times;
-  EventTimer m_timer;
+  SlotArena m_arena;
+  WavefrontTimes* m_times = nullptr;
+  EventPool m_events;
 };
+
+// Page-locked host memory, where copies of the film go to and come from at the full speed of the
+// bus and without the driver's own staging copy; kept and grown as needed.
+class PinnedBuffer {
+ public:
+  PinnedBuffer() = default;
+  PinnedBuffer(const PinnedBuffer&) = delete;
+  PinnedBuffer& operator=(const PinnedBuffer&) = delete;
+  ~PinnedBuffer() {
+    if (m_data) cudaFreeHost(m_data);
+  }
+  unsigned char* get(size_t bytes) {
+    if (bytes > m_bytes) {
+      if (m_data) cudaFreeHost(m_data);
+      m_data = nullptr;
+      m_bytes = 0;
+      check(cudaMallocHost(reinterpret_cast<void**>(&m_data), bytes), "cudaMallocHost");
+      count::allocation();
+      m_bytes = bytes;
+    }
+    return m_data;
+  }
+
+ private:
+  unsigned char* m_data = nullptr;
+  size_t m_bytes = 0;
+};
+
+namespace {
+
+// The share of the GPU's memory the path slots may take: a quarter (the scene, its BVH, the
+// film and the sampler's tables, rll's learning state among them, take the rest).
+size_t device_slot_budget() {
+  size_t free = 0, total = 0;
+  check(cudaMemGetInfo(&free, &total), "cudaMemGetInfo");
+  return total / 4;
+}
 
 ViewSampler view_sampler(const SamplerView& v, const LightSampler& s) {
   return {v, s.prepares(), s.learns()};
@@ -111,6 +201,59 @@ struct GpuRenderer::Impl {
   // rll's learning state, kept here from render to render while the sampler's state is this
   // (RllLightSampler::remote); a sampler whose host arrays changed since is uploaded anew.
   std::shared_ptr<DeviceRll> rll;
+  // Kept from render to render (interactive's frames take no new memory): the path slots and
+  // the stages' events, another sampler's tables (uploaded again each render into the memory
+  // the last one freed: the cache of launch.cuh), the film and its pinned host copy.
+  CudaWavefrontBackend backend;
+  DeviceSampler device_sampler;
+  DeviceArray<double> film_sum;
+  DeviceArray<uint32_t> film_count;
+  PinnedBuffer film_pinned;
+  // The film that stayed here after the last render (WavefrontSettings::film_stays_on_device),
+  // its host copy out of date, and its fewest samples per pixel.
+  const Film* resident = nullptr;
+  uint32_t resident_min = 0;
+
+  // The host film into the device's (the same size), through the pinned copy.
+  void upload_film(Film& film) {
+    const FilmView h = film.view();
+    const size_t sum_bytes = h.sum.size * sizeof(double), count_bytes = h.count.size * 4;
+    unsigned char* pinned = film_pinned.get(sum_bytes + count_bytes);
+    std::memcpy(pinned, h.sum.data, sum_bytes);
+    std::memcpy(pinned + sum_bytes, h.count.data, count_bytes);
+    check(cudaMemcpyAsync(film_sum.view().data, pinned, sum_bytes, cudaMemcpyHostToDevice),
+          "cudaMemcpyAsync");
+    check(cudaMemcpyAsync(film_count.view().data, pinned + sum_bytes, count_bytes,
+                          cudaMemcpyHostToDevice),
+          "cudaMemcpyAsync");
+    count::launch(2);
+    count::to_device(sum_bytes + count_bytes);
+  }
+  // Queues the device's film's copy into the pinned memory; film_arrived() after a wait.
+  void queue_film_download() {
+    const size_t sum_bytes = film_sum.bytes(), count_bytes = film_count.bytes();
+    unsigned char* pinned = film_pinned.get(sum_bytes + count_bytes);
+    check(cudaMemcpyAsync(pinned, film_sum.view().data, sum_bytes, cudaMemcpyDeviceToHost),
+          "cudaMemcpyAsync");
+    check(cudaMemcpyAsync(pinned + sum_bytes, film_count.view().data, count_bytes,
+                          cudaMemcpyDeviceToHost),
+          "cudaMemcpyAsync");
+    count::launch(2);
+    count::to_host(sum_bytes + count_bytes);
+  }
+  void film_arrived(Film& film) {
+    const FilmView h = film.view();
+    const size_t sum_bytes = h.sum.size * sizeof(double), count_bytes = h.count.size * 4;
+    const unsigned char* pinned = film_pinned.get(sum_bytes + count_bytes);
+    std::memcpy(h.sum.data, pinned, sum_bytes);
+    std::memcpy(h.count.data, pinned + sum_bytes, count_bytes);
+  }
+  void download_film(Film& film) {
+    queue_film_download();
+    check(cudaStreamSynchronize(0), "cudaStreamSynchronize");
+    count::sync();
+    film_arrived(film);
+  }
 
   // The scene and the BVH (again after a frame's refit).
   void upload(const Scene& s) {
@@ -155,6 +298,10 @@ const std::string& GpuRenderer::device_name() const {
   return m_impl->name;
 }
 
+void GpuRenderer::download_film(Film& film) {
+  if (m_impl->resident == &film) m_impl->download_film(film);
+}
+
 RenderProgress GpuRenderer::render(
     const Scene& scene, LightSampler& sampler, const IntegratorSettings& integrator, Film& film,
     const RenderSettings& settings, const std::atomic<bool>* cancel,
@@ -162,12 +309,13 @@ RenderProgress GpuRenderer::render(
     const WavefrontSettings& wavefront) {
   require_device_version(sampler, sampler.name());
   const auto t_start = std::chrono::steady_clock::now();
+  const DeviceWork work_start = device_work();
   Impl& m = *m_impl;
   // A learning rll or fermat: its state resident here (uploaded only where the host's arrays are
   // newer); every other sampler's tables uploaded for this render.
   auto* rll = dynamic_cast<RllLightSampler*>(&sampler);
   if (rll && !rll->learns()) rll = nullptr;
-  DeviceSampler device_sampler;
+  DeviceSampler& device_sampler = m.device_sampler;
   if (rll) {
     if (!m.rll || rll->remote() != m.rll.get()) {
       rll->sync();
@@ -180,41 +328,88 @@ RenderProgress GpuRenderer::render(
   }
   auto sampler_view = [&] { return rll ? m.rll->sampler_view() : device_sampler.view(); };
 
-  // The film's sums and counts on the device, starting from the host film's.
-  FilmView host_film = film.view();
-  DeviceMirror film_memory;
-  const FilmView device_film = {film_memory.mirror(host_film.sum),
-                                film_memory.mirror(host_film.count), film.width()};
+  // The film's sums and counts on the device: where the film stayed here after the last render,
+  // continued; else uploaded from the host's.
+  const size_t pixels = size_t(film.width()) * film.height();
+  const bool continues =
+      wavefront.film_stays_on_device && m.resident == &film && m.film_count.size() == pixels;
+  m.resident = nullptr;  // (again where this render ends with the film kept here)
+  uint32_t start_min = m.resident_min;
+  if (!continues) {
+    if (m.film_count.size() != pixels) {
+      m.film_sum = DeviceArray<double>();
+      m.film_count = DeviceArray<uint32_t>();
+      m.film_sum = DeviceArray<double>(3 * pixels);
+      m.film_count = DeviceArray<uint32_t>(pixels);
+    }
+    m.upload_film(film);
+    start_min = film.min_count();
+  }
+  const FilmView device_film = {m.film_sum.view(), m.film_count.view(), film.width()};
   const auto k = wavefront_kernels(scene, m.scene->view(), integrator, device_film, m.sobol,
                                    BvhTracer{m.bvh_view}, view_sampler(sampler_view(), sampler));
 
-  CudaWavefrontBackend backend(wavefront.times);
-  WavefrontDriver<CudaWavefrontBackend, BvhTracer, ViewSampler> driver(
-      backend, k, wavefront_slot_count(wavefront.path_slots, film, settings.spp));
+  CudaWavefrontBackend& backend = m.backend;
+  backend.begin(wavefront.times);
+  const size_t budget = device_slot_budget();
+  const size_t slots = wavefront_slot_count(wavefront.path_slots, film, settings, budget);
+  WavefrontDriver<CudaWavefrontBackend, BvhTracer, ViewSampler> driver(backend, k, slots);
+  if (wavefront.work) {
+    wavefront.work->path_slots = slots;
+    wavefront.work->slot_bytes = slots * wavefront_slot_bytes();
+    wavefront.work->budget_bytes = budget;
+  }
   m.render_bytes = 0;
   auto note_bytes = [&] {
     m.render_bytes = std::max(m.render_bytes, backend.bytes() + device_sampler.bytes() +
-                                                  (rll ? m.rll->bytes() : 0) + film_memory.bytes());
+                                                  (rll ? m.rll->bytes() : 0) + m.film_sum.bytes() +
+                                                  m.film_count.bytes());
   };
   note_bytes();
-  // rll's end of pass on the device: only its counters come back. (Other samplers learn nothing
-  // on the device: their end_pass is the host's, as before.)
+  // rll's end of pass on the device: only its counters come back. Another sampler learns
+  // nothing within a pass (its tables are what was uploaded: nothing to copy either way) and its
+  // end of pass is the host's.
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] {
       if (rll) {
         m.rll->end_pass(*rll);
-      } else {
+      } else if (sampler.learns()) {
         device_sampler.copy_back();
         sampler.end_pass();
         device_sampler.upload(sampler.sampler_view());
+      } else {
+        sampler.end_pass();
       }
     });
     note_bytes();
     driver.set_sampler(view_sampler(sampler_view(), sampler));
   };
+  // The film comes back only where the host reads it: before an after_pass that reads it, after
+  // a stopped pass, and after the last pass unless it stays here; in the pass's one wait.
+  bool host_film_current = !continues;
+  WavefrontFilmHooks hooks;
+  hooks.start_min_count = start_min;
+  hooks.copy_film = [&](bool last, bool complete) {
+    host_film_current = false;
+    const bool wanted = (wavefront.after_pass_reads_film && after_pass) || !complete ||
+                        (last && !wavefront.film_stays_on_device);
+    if (wanted) m.queue_film_download();
+    return wanted;
+  };
+  hooks.film_arrived = [&] {
+    m.film_arrived(film);
+    host_film_current = true;
+  };
   const RenderProgress progress = run_wavefront_passes(
-      scene, driver, end_pass, [&] { film_memory.copy_back(); }, film, settings, cancel,
-      after_pass);
+      scene, driver, end_pass, hooks, film, settings, cancel, after_pass,
+      [] { return device_work(); }, work_start, wavefront.work ? &wavefront.work->passes : nullptr);
+  backend.collect_times();
+  if (wavefront.film_stays_on_device) {
+    m.resident = &film;
+    m.resident_min = uint32_t(progress.spp_done);
+  } else if (!host_film_current) {
+    m.download_film(film);  // (the last pass brings it; this only where none ran to its end)
+  }
   // What the last pass learnt, for a state saved after the render (rll's: pulled when the host
   // reads it).
   if (!rll) device_sampler.copy_back();

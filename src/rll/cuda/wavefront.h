@@ -51,16 +51,25 @@ class GpuRenderer {
   const std::string& device_name() const;
 
   // As render_wavefront (wavefront/wavefront.h) on the GPU; throws rll::Error for a sampler
-  // without a device version (require_device_version). The
-  // sampler's view is uploaded at the start and after each end of pass; what the kernels learnt is
-  // copied back before each end of pass (which runs on the host) and at the end. `wavefront.tracer`
-  // is ignored (the GPU traces with rll's BVH); `wavefront.times` receives the stages' times by
-  // CUDA events.
+  // without a device version (require_device_version). rll's and fermat's learning state stays
+  // on the device, its end of pass runs there; another sampler's tables are uploaded at the start
+  // (it learns nothing within a pass). One host synchronisation per pass (the read of its
+  // counts); the film comes back to the host, through pinned memory, in that wait, only where the
+  // host reads it: after the last pass, and before each after_pass where
+  // `wavefront.after_pass_reads_film` (unless `wavefront.film_stays_on_device`: see there). The
+  // path slots, the film and the events are kept from render to render. `wavefront.tracer` is
+  // ignored (the GPU traces with rll's BVH); `wavefront.times` receives the stages' times by CUDA
+  // events, read once per pass; `wavefront.work` the slots and the device work per pass.
   RenderProgress render(
       const Scene& scene, LightSampler& sampler, const IntegratorSettings& integrator, Film& film,
       const RenderSettings& settings, const std::atomic<bool>* cancel = nullptr,
       const std::function<void(const RenderProgress&, const Film&)>& after_pass = {},
       const WavefrontSettings& wavefront = {});
+
+  // Brings `film` up to date from the device where the last render left it there
+  // (WavefrontSettings::film_stays_on_device); else nothing. A film left there must be read
+  // (or rendered into again with film_stays_on_device) before the host changes it.
+  void download_film(Film& film);
 
   struct Impl;
 

@@ -38,7 +38,7 @@ Ray camera_ray(const Scene& scene, int x, int y, SampleStream& stream) {
 RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_pass, Film& film,
                           const RenderSettings& settings, const std::atomic<bool>* cancel,
                           const std::function<void(const RenderProgress&, const Film&)>& after_pass,
-                          const PassWork& work) {
+                          const PassWork& work, const std::function<uint32_t()>& min_count) {
   if (settings.spp < 1) fail("--spp must be at least 1 (got {})", settings.spp);
   if (settings.pass_spp < 1) fail("pass size must be at least 1 sample per pixel");
   if (settings.first_sample + uint64_t(settings.spp) > (uint64_t(1) << 32) &&
@@ -54,7 +54,8 @@ RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_p
   RenderProgress progress;
   progress.spp_target = settings.spp;
   progress.time_limit = settings.time_limit;
-  progress.spp_done = int(film.min_count());
+  auto spp_done = [&] { return int(min_count ? min_count() : film.min_count()); };
+  progress.spp_done = spp_done();
   auto t0 = Clock::now();
   const PassStop stop(cancel, settings.time_limit, t0);
 
@@ -68,7 +69,7 @@ RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_p
     // pass's (the learning weighs rewards by their counts, never by the pass's size), and a state
     // saved or returned after a Ctrl-C then holds everything the render saw.
     progress.passes += 1;
-    progress.spp_done = int(film.min_count());
+    progress.spp_done = spp_done();
     progress.samples = progress.rays.camera;
     progress.seconds = seconds_since(t0);
     end_pass();

@@ -78,11 +78,12 @@ using PassWork = std::function<void(int first, int count, uint64_t frame_seed, c
 // the spp and time budgets, cancel, `end_pass` (the sampler's) between passes, `after_pass` and
 // progress. A pass stopped by cancel or the time budget still gets its `end_pass` (its rewards
 // are learnt; the state after an interrupted render holds all it saw) and `after_pass`, then the
-// loop ends.
+// loop ends. `min_count`, where given, says the film's fewest samples per pixel in place of
+// film.min_count(): a renderer whose film lives on a device knows it without copying the film.
 RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_pass, Film& film,
                           const RenderSettings& settings, const std::atomic<bool>* cancel,
                           const std::function<void(const RenderProgress&, const Film&)>& after_pass,
-                          const PassWork& work);
+                          const PassWork& work, const std::function<uint32_t()>& min_count = {});
 
 // The camera ray of a sample whose stream is at its start (it draws the camera's dimensions).
 Ray camera_ray(const Scene& scene, int x, int y, SampleStream& stream);

@@ -207,6 +207,10 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   rs.points = m_points;
   WavefrontSettings wavefront;
   wavefront.times = times;
+  wavefront.work = &m_wavefront_work;
+  wavefront.memory = &m_wavefront_memory;
+  wavefront.after_pass_reads_film = bool(after_pass);  // (the progress bar reads no film)
+  wavefront.film_stays_on_device = m_film_on_device;
   wavefront.tracer = m_settings.tracer == "bvh" ? WavefrontTracer::Bvh : WavefrontTracer::Embree;
   auto run = [&](const RenderSettings& r, const AfterPass& after) {
     if (m_gpu)
@@ -244,6 +248,10 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   }
   bar.finish();
   return p;
+}
+
+void RenderSession::read_film(Film& film) const {
+  if (m_gpu) m_gpu->download_film(film);
 }
 
 }  // namespace rll

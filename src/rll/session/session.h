@@ -95,6 +95,14 @@ class RenderSession {
                         WavefrontTimes* times = nullptr,
                         const IntegratorSettings* integrator = nullptr) const;
 
+  // What the wavefront renderer's device did in the session's renders so far (--stats'
+  // device_work): its path slots and one entry per pass.
+  const WavefrontWork& wavefront_work() const { return m_wavefront_work; }
+  // `rll interactive`'s frames: the GPU's film stays on the device from render to render (see
+  // WavefrontSettings::film_stays_on_device) until read_film() brings the host's up to date.
+  void keep_film_on_device(bool keep) { m_film_on_device = keep; }
+  void read_film(Film& film) const;
+
  private:
   std::unique_ptr<LightSampler> make_sampler_on_host(const std::string& spec) const;
   // --set's parameters with a variant's keys ("name:key=value:...") set; `name` the sampler's
@@ -110,6 +118,10 @@ class RenderSession {
   std::unique_ptr<Accel> m_accel;
   std::unique_ptr<cuda::GpuRenderer> m_gpu;
   mutable std::vector<std::string> m_made;  // the samplers made, by name (for messages)
+  // The CPU wavefront's path slots, kept from render to render, and what its renders did.
+  mutable WavefrontMemory m_wavefront_memory;
+  mutable WavefrontWork m_wavefront_work;
+  bool m_film_on_device = false;
 };
 
 }  // namespace rll

@@ -1,15 +1,19 @@
 // The wavefront renderer's loop over a batch of paths, written once for every device: the stages
 // of wavefront/kernels.h launched over their queues, bounce after bounce, then the accumulation.
-// A backend says how memory is taken and how a stage is launched: the host backend
-// (wavefront.cpp) with host_parallel_for, the CUDA backend (cuda/wavefront.cu) with CUDA launches.
+// As pbrt-v4's wavefront, nothing is read back between stages: the queues' sizes live on the
+// device, every stage is launched over its queue's capacity (the threads past the size return at
+// once), the bounces are launched up to the integrator's maximum depth (Russian roulette empties
+// the queues; the kernels see it), and the counts of the pass (the tally) are summed on the device
+// over its batches and read once, at its end: one host synchronisation per pass.
 //
 // A backend provides:
-//   template <class T> View<T> take(size_t n)         memory for n elements (zeroed), kept with it
+//   template <class T> View<T> take(size_t n)         memory for n elements, kept with it
 //   template <class Body> void launch(size_t n, const Body& body)      body(i) for i in [0, n)
 //   template <class Body> void launch_queue(const WavefrontQueue& q, uint32_t upper,
 //                                           const Body& body)   body(q.slots[k]) for k < q.count()
-//   void zero(void* p, size_t bytes), void write(uint32_t* p, uint32_t v),
-//   void copy(uint32_t* to, const uint32_t* from)       one word, in order with the launches
+//   void zero(void* p, size_t bytes)                   in order with the launches, no wait
+//   bool may_hold(const uint32_t* size)   false only where the queue is known to be empty without
+//                                         waiting (the host reads its memory; a GPU says true)
 //   template <class T> T read(const T* p)               one value (waits for the launches)
 //   template <class Fn> void timed(WavefrontStage s, const Fn& fn)   times what fn launches
 #pragma once
@@ -23,6 +27,18 @@
 
 namespace rll {
 
+// The bytes of one path slot: its state (PathSlots) and its place in each queue. What the slot
+// count is chosen from (wavefront_slot_count, wavefront/passes.h).
+inline size_t wavefront_slot_bytes() {
+  size_t bytes = 0;
+  auto count = [&]<typename T>(size_t n) {
+    bytes += n * sizeof(T);
+    return View<T>{};
+  };
+  PathSlots::make(count, 1);
+  return bytes + kWavefrontQueues * sizeof(uint32_t);
+}
+
 template <typename Backend, typename Tracer, typename Sampler>
 class WavefrontDriver {
  public:
@@ -35,7 +51,7 @@ class WavefrontDriver {
     auto take = [&]<typename T>(size_t n) { return m_backend.template take<T>(n); };
     m_k.p = PathSlots::make(take, n_slots);
     for (View<uint32_t>& q : m_k.queue_slots) q = m_backend.template take<uint32_t>(n_slots);
-    m_k.queue_sizes = m_backend.template take<uint32_t>(kWavefrontQueues).data;
+    m_sizes = m_backend.template take<uint32_t>(2 * kWavefrontQueues).data;
     m_k.tally = m_backend.template take<WavefrontTally>(1).data;
   }
 
@@ -44,28 +60,40 @@ class WavefrontDriver {
   void set_sampler(const Sampler& s) { m_k.sampler = s; }
   const Kernels& kernels() const { return m_k; }
 
-  // Runs every path of the batch to its end and adds them to the film; returns the batch's counts.
-  WavefrontTally run_batch(const WavefrontBatch& b) {
-    m_backend.zero(m_k.tally, sizeof(WavefrontTally));
+  // Starts a pass: its counts from zero.
+  void begin_pass() { m_backend.zero(m_k.tally, sizeof(WavefrontTally)); }
+
+  // Runs every path of the batch to its end and adds them to the film and their counts to the
+  // pass's; reads nothing back.
+  void run_batch(const WavefrontBatch& b) {
+    m_k.queue_sizes = m_sizes;
+    m_k.next_queue_sizes = m_sizes + kWavefrontQueues;
+    m_backend.zero(m_sizes, 2 * kWavefrontQueues * sizeof(uint32_t));
     m_backend.timed(WavefrontStage::Camera, [&] {
       const Kernels k = m_k;
       const WavefrontBatch batch = b;
       m_backend.launch(b.n, [k, batch] RLL_HD(size_t i) { k.camera_stage(batch, uint32_t(i)); });
     });
-    m_backend.write(&m_k.queue_sizes[kRays], b.n);
-    for (uint32_t rays = b.n; rays > 0; rays = m_backend.read(&m_k.queue_sizes[kRays])) {
-      m_backend.zero(&m_k.queue_sizes[kNextRays],
-                     sizeof(uint32_t) * (kWavefrontQueues - kNextRays));
+    // Bounce d traces the rays of depth d; the last (d = max_depth) only finds the emission they
+    // hit (the emission stage ends every path there).
+    const int max_depth = m_k.c.max_depth;
+    for (int depth = 0; depth <= max_depth; ++depth) {
+      if (depth > 0) {
+        // The next bounce's rays become this one's; the block the last bounce used is cleared
+        // for the next.
+        std::swap(m_k.queue_slots[kRays], m_k.queue_slots[kNextRays]);
+        std::swap(m_k.queue_sizes, m_k.next_queue_sizes);
+        if (!m_backend.may_hold(&m_k.queue_sizes[kRays])) break;
+        m_backend.zero(m_k.next_queue_sizes, kWavefrontQueues * sizeof(uint32_t));
+      }
       stage<WavefrontStage::ClosestHit>(kRays, b.n);
       stage<WavefrontStage::Emission>(kHits, b.n);
+      if (depth == max_depth) break;
       stage<WavefrontStage::NeeSample>(kNee, b.n);
       stage<WavefrontStage::Shadow>(kShadows, b.n);
       stage<WavefrontStage::NeeFinish>(kNee, b.n);
       if (m_k.sampler.learns) stage<WavefrontStage::Rewards>(kNee, b.n);
       stage<WavefrontStage::BsdfSample>(kBounces, b.n);
-      // The next bounce's rays become this one's.
-      std::swap(m_k.queue_slots[kRays], m_k.queue_slots[kNextRays]);
-      m_backend.copy(&m_k.queue_sizes[kRays], &m_k.queue_sizes[kNextRays]);
     }
     m_backend.timed(WavefrontStage::Accumulate, [&] {
       const Kernels k = m_k;
@@ -73,13 +101,16 @@ class WavefrontDriver {
       m_backend.launch(b.pixels(),
                        [k, batch] RLL_HD(size_t j) { k.accumulate_stage(batch, uint64_t(j)); });
     });
-    return m_backend.read(m_k.tally);
   }
+
+  // The pass's counts: the pass's one read that waits for the device.
+  WavefrontTally end_pass() { return m_backend.read(m_k.tally); }
 
   // Launches stage S over the slots of queue `q` (at most `upper` of them). (Public: CUDA's
   // extended lambdas may not live in private member functions.)
   template <WavefrontStage S>
   void stage(WavefrontQueueId q, uint32_t upper) {
+    if (!m_backend.may_hold(m_k.queue(q).size)) return;
     m_backend.timed(S, [&] {
       const Kernels k = m_k;
       m_backend.launch_queue(k.queue(q), upper, [k] RLL_HD(uint32_t i) { k.template run<S>(i); });
@@ -90,6 +121,7 @@ class WavefrontDriver {
   Backend& m_backend;
   Kernels m_k;
   size_t m_slots;
+  uint32_t* m_sizes = nullptr;  // the two blocks of queue sizes
 };
 
 }  // namespace rll

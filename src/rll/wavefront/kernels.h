@@ -28,8 +28,11 @@ struct WavefrontQueue {
   RLL_HD uint32_t count() const { return atomic_load(size); }
 };
 
-// The queues of a bounce, their sizes in one array (kWavefrontQueues words) so that a device
-// clears or reads them with one copy.
+// The queues of a bounce. Their sizes live in device memory, in two blocks of kWavefrontQueues
+// words: the bounce's (its kNextRays word unused) and the next bounce's, whose kRays word is this
+// bounce's kNextRays. The blocks change places every bounce, so that no size is copied or read
+// between bounces: each bounce only clears the next one's block, and each stage is launched over
+// the queue's capacity, its threads past the size returning at once.
 enum WavefrontQueueId : uint32_t {
   kRays,
   kNextRays,
@@ -171,16 +174,19 @@ struct WavefrontKernels {
   Sampler sampler;
   PathSlots p;
   View<uint32_t> queue_slots[kWavefrontQueues];
-  uint32_t* queue_sizes = nullptr;  // kWavefrontQueues words
-  WavefrontTally* tally = nullptr;
+  uint32_t* queue_sizes = nullptr;       // this bounce's block (kWavefrontQueues words)
+  uint32_t* next_queue_sizes = nullptr;  // the next bounce's
+  WavefrontTally* tally = nullptr;       // the pass's counts, summed over its batches
   FilmView film;
 
   RLL_HD WavefrontQueue queue(WavefrontQueueId q) const {
-    return {queue_slots[q], &queue_sizes[q]};
+    return {queue_slots[q], q == kNextRays ? &next_queue_sizes[kRays] : &queue_sizes[q]};
   }
 
-  // Camera rays: slot i starts item first_item + i and joins the ray queue.
+  // Camera rays: slot i starts item first_item + i and joins the ray queue (in slot order; the
+  // queue's size is the batch's, written by the first slot so that the host writes nothing).
   RLL_HD void camera_stage(const WavefrontBatch& b, uint32_t i) const {
+    if (i == 0) queue_sizes[kRays] = b.n;
     const uint64_t item = b.first_item + i, pixel = item / uint64_t(b.count);
     const int s = b.first + int(item % uint64_t(b.count));
     SampleStream stream(sobol, b.frame_seed, pixel, b.first_sample + uint64_t(s), b.points);

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 
 namespace rll {
 
@@ -39,6 +40,30 @@ struct WavefrontTimes {
 
   double& operator[](WavefrontStage s) { return stage_seconds[size_t(s)]; }
   double stages_sum() const;
+};
+
+// What a render asked of its device in one pass (per frame in `rll interactive`), as --stats
+// reports it (`device_work`): the host synchronisations (reads that wait for the device's work),
+// the launches (kernels, and fills or copies queued on the device), the allocations of device or
+// pinned memory, and the bytes copied to the host and to the device. The CPU's wavefront counts
+// the same things of its host backend (its memory is the host's: no bytes are copied), so that a
+// CPU test holds the driver to one synchronisation per pass and no allocation after the first.
+struct DeviceWork {
+  uint64_t syncs = 0, launches = 0, allocations = 0, bytes_to_host = 0, bytes_to_device = 0;
+
+  DeviceWork& operator+=(const DeviceWork& o) {
+    syncs += o.syncs;
+    launches += o.launches;
+    allocations += o.allocations;
+    bytes_to_host += o.bytes_to_host;
+    bytes_to_device += o.bytes_to_device;
+    return *this;
+  }
+  // What happened between two readings of a counter (`*this` the later).
+  DeviceWork since(const DeviceWork& earlier) const {
+    return {syncs - earlier.syncs, launches - earlier.launches, allocations - earlier.allocations,
+            bytes_to_host - earlier.bytes_to_host, bytes_to_device - earlier.bytes_to_device};
+  }
 };
 
 }  // namespace rll

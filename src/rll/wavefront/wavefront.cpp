@@ -10,6 +10,7 @@
 #include "rll/bvh/bvh.h"
 #include "rll/core/device.h"
 #include "rll/core/error.h"
+#include "rll/core/memory_budget.h"
 #include "rll/scene/scene_view.h"
 #include "rll/wavefront/driver.h"
 #include "rll/wavefront/light_sampler_adapter.h"
@@ -20,64 +21,66 @@ namespace rll {
 
 namespace {
 
-// The memory of the path slots: one block per array, taken once per render and freed with it.
-class SlotMemory {
- public:
-  SlotMemory() = default;
-  SlotMemory(const SlotMemory&) = delete;
-  SlotMemory& operator=(const SlotMemory&) = delete;
-  ~SlotMemory() {
-    for (const Block& b : m_blocks) ::operator delete(b.data, std::align_val_t(b.align));
-  }
-  // An array of n elements; default-constructed where T has a default constructor (a Bsdf has
-  // none: its slot is constructed in place by the stage that builds it).
-  template <typename T>
-  View<T> take(size_t n) {
-    static_assert(std::is_trivially_destructible_v<T>);
-    void* p = ::operator new(n * sizeof(T), std::align_val_t(alignof(T)));
-    m_blocks.push_back({p, alignof(T)});
-    T* t = static_cast<T*>(p);
-    if constexpr (std::is_default_constructible_v<T>)
-      for (size_t i = 0; i < n; ++i) new (t + i) T();
-    return {t, n};
-  }
-
- private:
-  struct Block {
-    void* data;
-    size_t align;
-  };
-  std::vector<Block> m_blocks;
-};
-
 double seconds_between(std::chrono::steady_clock::time_point a,
                        std::chrono::steady_clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-// The CPU's side of wavefront/driver.h: slot memory, host_parallel_for, the wall clock.
+// The CPU's side of wavefront/driver.h: slot memory (kept in a WavefrontMemory from render to
+// render where one is given), host_parallel_for, the wall clock, and the counts of DeviceWork
+// (its memory is the host's: it copies nothing).
 class HostBackend {
  public:
-  explicit HostBackend(WavefrontTimes* times) : m_times(times) {}
+  HostBackend(WavefrontTimes* times, WavefrontMemory* memory)
+      : m_memory(memory ? memory : &m_own), m_times(times) {}
 
+  // Array k of the render reuses the memory's block k where it is large enough (its contents are
+  // what the last render left: every stage writes a slot's state before it reads it); a new
+  // block is default-constructed where T has a default constructor (a Bsdf has none: its slot is
+  // constructed in place by the stage that builds it).
   template <typename T>
   View<T> take(size_t n) {
-    return m_memory.take<T>(n);
+    static_assert(std::is_trivially_destructible_v<T>);
+    const size_t bytes = std::max<size_t>(1, n * sizeof(T)), k = m_taken++;
+    std::vector<WavefrontMemory::Block>& blocks = m_memory->blocks;
+    if (k < blocks.size() && blocks[k].bytes >= bytes && blocks[k].align >= alignof(T))
+      return {static_cast<T*>(blocks[k].data), n};
+    if (k >= blocks.size()) blocks.resize(k + 1);
+    WavefrontMemory::Block& b = blocks[k];
+    if (b.data) ::operator delete(b.data, std::align_val_t(b.align));
+    b = {};
+    b.data = ::operator new(bytes, std::align_val_t(alignof(T)));
+    b.bytes = bytes;
+    b.align = alignof(T);
+    ++m_work.allocations;
+    T* t = static_cast<T*>(b.data);
+    if constexpr (std::is_default_constructible_v<T>)
+      for (size_t i = 0; i < n; ++i) new (t + i) T();
+    return {t, n};
   }
   template <typename Body>
   void launch(size_t n, const Body& body) {
+    if (n == 0) return;
+    ++m_work.launches;
     host_parallel_for(n, body);
   }
   template <typename Body>
   void launch_queue(const WavefrontQueue& q, uint32_t, const Body& body) {
     const View<uint32_t> slots = q.slots;
-    host_parallel_for(q.count(), [&](size_t k) { body(slots[k]); });
+    const uint32_t n = q.count();
+    if (n == 0) return;
+    ++m_work.launches;
+    host_parallel_for(n, [&](size_t k) { body(slots[k]); });
   }
-  void zero(void* p, size_t bytes) { std::memset(p, 0, bytes); }
-  void write(uint32_t* p, uint32_t v) { *p = v; }
-  void copy(uint32_t* to, const uint32_t* from) { *to = *from; }
+  void zero(void* p, size_t bytes) {
+    ++m_work.launches;
+    std::memset(p, 0, bytes);
+  }
+  // The host reads its own memory without waiting: an empty queue is skipped.
+  bool may_hold(const uint32_t* size) const { return *size != 0; }
   template <typename T>
   T read(const T* p) {
+    ++m_work.syncs;  // (nothing to wait for here; counted as the GPU's read, which waits)
     return *p;
   }
   // Runs `fn`, adding its wall time to `stage` when there is a record to fill; without one it
@@ -89,10 +92,14 @@ class HostBackend {
     fn();
     (*m_times)[stage] += seconds_between(t0, std::chrono::steady_clock::now());
   }
+  const DeviceWork& work() const { return m_work; }
 
  private:
-  SlotMemory m_memory;
+  WavefrontMemory m_own;  // where the caller keeps none
+  WavefrontMemory* m_memory;
+  size_t m_taken = 0;
   WavefrontTimes* m_times;
+  DeviceWork m_work;
 };
 
 // Tracing by Embree, through the accel (the CPU's tracer).
@@ -112,18 +119,39 @@ RenderProgress render_with(
   const SceneData data(scene);
   const auto k = wavefront_kernels(scene, data.view(), integrator, film.view(), host_sobol_view(),
                                    tracer, HostLightSampler::of(light_sampler));
-  HostBackend backend(wavefront.times);
-  WavefrontDriver<HostBackend, Tracer, HostLightSampler> driver(
-      backend, k, wavefront_slot_count(wavefront.path_slots, film, settings.spp));
+  HostBackend backend(wavefront.times, wavefront.memory);
+  // A quarter of the memory budget for the path slots (the scene, its accel and the sampler's
+  // tables take the rest).
+  const size_t budget = memory_budget_bytes() / 4;
+  const size_t slots = wavefront_slot_count(wavefront.path_slots, film, settings, budget);
+  WavefrontDriver<HostBackend, Tracer, HostLightSampler> driver(backend, k, slots);
+  if (wavefront.work) {
+    wavefront.work->path_slots = slots;
+    wavefront.work->slot_bytes = slots * wavefront_slot_bytes();
+    wavefront.work->budget_bytes = budget;
+  }
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] { light_sampler.end_pass(); });
     driver.set_sampler(HostLightSampler::of(light_sampler));
   };
   return run_wavefront_passes(
-      scene, driver, end_pass, [] {}, film, settings, cancel, after_pass);
+      scene, driver, end_pass, {}, film, settings, cancel, after_pass,
+      [&] { return backend.work(); }, DeviceWork{},
+      wavefront.work ? &wavefront.work->passes : nullptr);
 }
 
 }  // namespace
+
+WavefrontMemory::~WavefrontMemory() {
+  for (const Block& b : blocks)
+    if (b.data) ::operator delete(b.data, std::align_val_t(b.align));
+}
+
+size_t WavefrontMemory::bytes() const {
+  size_t n = 0;
+  for (const Block& b : blocks) n += b.bytes;
+  return n;
+}
 
 double WavefrontTimes::stages_sum() const {
   double sum = 0;

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "rll/accel/accel.h"
 #include "rll/lights/light_sampler.h"
@@ -25,12 +26,54 @@ namespace rll {
 // code does.
 enum class WavefrontTracer { Embree, Bvh };
 
+// The memory of the path slots, kept from render to render by whoever holds it (a session, for
+// `rll interactive`'s frames): a render given it takes its arrays from it and allocates nothing
+// where the last render's arrays fit.
+class WavefrontMemory {
+ public:
+  WavefrontMemory() = default;
+  WavefrontMemory(const WavefrontMemory&) = delete;
+  WavefrontMemory& operator=(const WavefrontMemory&) = delete;
+  ~WavefrontMemory();
+  size_t bytes() const;
+
+  // The arrays, in the order a render takes them (wavefront.cpp's host backend).
+  struct Block {
+    void* data = nullptr;
+    size_t bytes = 0, align = 0;
+  };
+  std::vector<Block> blocks;
+};
+
+// What a render's device did (--stats): its path slots and what they take, and one DeviceWork
+// per pass (per frame in `rll interactive`), added to `passes` render after render.
+struct WavefrontWork {
+  size_t path_slots = 0;
+  size_t slot_bytes = 0;    // the path slots' memory: their state and their places in the queues
+  size_t budget_bytes = 0;  // what they could take (the share of the memory budget)
+  std::vector<DeviceWork> passes;
+};
+
 struct WavefrontSettings {
-  // Paths in flight at once: the state of each slot takes under 1 KB, allocated once per render.
-  uint32_t path_slots = 1u << 15;
+  // Paths in flight at once, at most; 0 (the default) sizes them to the work: as many as the
+  // largest pass has paths, up to a 1080p frame at 1 spp (about 2M), within a quarter of the
+  // memory budget (a slot takes under 1 KB). Taken once per render; a pass takes its paths in
+  // batches of this many.
+  uint32_t path_slots = 0;
   WavefrontTracer tracer = WavefrontTracer::Embree;
   // When set, the times of the render are added to it (the clock is read only then).
   WavefrontTimes* times = nullptr;
+  // When set, the render's path slots and device work are recorded there.
+  WavefrontWork* work = nullptr;
+  // When set, the path slots' memory is taken from it and left there for the next render.
+  WavefrontMemory* memory = nullptr;
+  // The GPU's film (cuda/wavefront.h): whether the caller's after_pass reads the film (it is then
+  // copied to the host before each after_pass; otherwise only at the end of the render).
+  bool after_pass_reads_film = true;
+  // The GPU's film: it stays on the device after the render, the host's film not brought up to
+  // date, and the next render into the same film continues from the device's (interactive's
+  // frames); GpuRenderer::download_film brings the host's up to date.
+  bool film_stays_on_device = false;
 };
 
 // As render() (render/render.h), with the wavefront renderer: the same pass loop, the same
