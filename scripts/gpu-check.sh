@@ -26,7 +26,7 @@ repeats=3
 no_build=0
 dry_run=0
 table_from=""
-usage() { sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --cpu-tests) cpu_tests=1 ;;
@@ -61,7 +61,8 @@ failed=0
 t_all=$SECONDS
 note() { summary+=("$1"); echo "rll: $1"; }
 # Runs a command, or prints it with --dry-run.
-run() { if [ "$dry_run" = 1 ]; then echo "+ $*"; else "$@"; fi; }
+exec 3>&1  # (the terminal, for --dry-run inside redirections)
+run() { if [ "$dry_run" = 1 ]; then echo "+ $*" >&3; else "$@"; fi; }
 
 # --- build: only the program and the GPU tests (the CPU suite's programs with --cpu-tests) ---
 if [ "$no_build" = 0 ]; then
@@ -138,6 +139,13 @@ run_ctest() {
 }
 run_ctest gpu-tests -L gpu
 [ "$cpu_tests" = 1 ] && run_ctest cpu-tests -L 'unit|cli|render|stat'
+if [ "$dry_run" = 0 ] && grep -q "^no GPU" "$logs/devices.log"; then
+  note "no usable GPU here ($(grep '^no GPU' "$logs/devices.log" | head -1)): no frame times"
+  echo
+  echo "== rll GPU check: summary ($((SECONDS - t_all)) s in all)"
+  printf '%s\n' "${summary[@]}"
+  exit 1
+fi
 
 # --- frame times: render at 64 and 256 spp, --repeats times each, interleaved ---
 timings="$logs/timings.tsv"

@@ -72,12 +72,21 @@ def device_work(stats_path):
     return str(max(w["syncs"] for w in work)), str(sum(w["allocations"] for w in work[1:]))
 
 
+def order(key):
+    """Scenes and samplers in the issue's order (others after, by name), then depth."""
+    scene, sampler, depth = key
+    scenes = ["cornell-boxes-room", "arch-interior"]
+    samplers = ["power", "tree", "rll"]
+    return (scenes.index(scene) if scene in scenes else len(scenes), scene,
+            samplers.index(sampler) if sampler in samplers else len(samplers), sampler, depth)
+
+
 def frame_rows(runs):
     out = ["| scene | sampler | depth | ms per 1080p spp | s at 64 spp | s at 256 spp | "
            "pbrt-v4 ms (bvh / power) | goal | syncs per pass | allocations after pass 1 |",
            "|---|---|---|---|---|---|---|---|---|---|"]
     ms_of = {}
-    for (scene, sampler, depth), by_spp in sorted(runs.items()):
+    for (scene, sampler, depth), by_spp in sorted(runs.items(), key=lambda kv: order(kv[0])):
         if 64 not in by_spp or 256 not in by_spp:
             out.append(f"| {scene} | {sampler} | {depth} | (missing 64 or 256 spp) | | | | | | |")
             continue
@@ -104,7 +113,7 @@ def frame_rows(runs):
     out.append("")
     out.append("| scene | depth | rll minus power, ms per 1080p spp | goal (depth 5: at most 1.5) |")
     out.append("|---|---|---|---|")
-    for (scene, sampler, depth), ms in sorted(ms_of.items()):
+    for (scene, sampler, depth), ms in sorted(ms_of.items(), key=lambda kv: order(kv[0])):
         if sampler != "rll" or (scene, "power", depth) not in ms_of:
             continue
         over = ms - ms_of[(scene, "power", depth)]

@@ -138,9 +138,9 @@ TEST(WavefrontDeviceWork, KeptMemoryTakesNothingNewAndChangesNoBit) {
               0);
 }
 
-// The slots: as many as the largest pass has paths, a 1080p frame at 1 spp at most, within the
-// budget given, at most path_slots where set; a budget without room for one slot is refused with
-// the sizes named.
+// The slots: as many as the largest pass has paths, a 1080p frame at 1 spp at most (32,768 on
+// the CPU), within the budget given, at most path_slots where set; a budget without room for one
+// slot is refused with the sizes named.
 TEST(WavefrontDeviceWork, SlotsSizedToTheWorkWithinTheBudget) {
   const size_t slot = wavefront_slot_bytes();
   EXPECT_GT(slot, 200u);
@@ -150,6 +150,8 @@ TEST(WavefrontDeviceWork, SlotsSizedToTheWorkWithinTheBudget) {
   rs.spp = 64;
   const Film small(64, 48), hd(1920, 1080), k4(3840, 2160);
   EXPECT_EQ(wavefront_slot_count(0, small, rs, big), 64u * 48u * 8u);
+  EXPECT_EQ(wavefront_slot_count(0, small, rs, big, kHostMaxPathSlots), 64u * 48u * 8u);
+  EXPECT_EQ(wavefront_slot_count(0, hd, rs, big, kHostMaxPathSlots), kHostMaxPathSlots);
   EXPECT_EQ(wavefront_slot_count(0, hd, rs, big), kMaxPathSlots);
   EXPECT_EQ(wavefront_slot_count(0, k4, rs, big), kMaxPathSlots);
   EXPECT_EQ(kMaxPathSlots, 1920u * 1080u);

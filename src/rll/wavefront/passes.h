@@ -21,9 +21,14 @@
 
 namespace rll {
 
-// The most path slots a render takes: a 1080p frame at one sample per pixel, in one batch (what
-// pbrt-v4's wavefront keeps in flight), about 2M slots.
+// The most path slots a render takes on the GPU: a 1080p frame at one sample per pixel, in one
+// batch (what pbrt-v4's wavefront keeps in flight), about 2M slots.
 inline constexpr size_t kMaxPathSlots = size_t(1920) * 1080;
+// On the CPU: 32,768. A stop (Ctrl-C, the time budget) is seen between batches, which stay a
+// fraction of a second long this way, and the CPU renders no faster with larger ones (a 640x480
+// pass in one batch of 614,400 slots took the CPU time of 19 batches: bench/RESULTS.md) while a
+// 1080p batch would hold 1.2 GB.
+inline constexpr size_t kHostMaxPathSlots = size_t(1) << 15;
 
 // The samples per pixel of a render's largest pass: run_passes' pass sizes (render/render.cpp)
 // from the first sample on (a film that holds samples already only has smaller passes left).
@@ -41,13 +46,15 @@ inline int largest_pass_spp(const RenderSettings& s) {
   return int(largest);
 }
 
-// The path slots of a render: as many as its largest pass has paths (a 1080p frame at 1 spp at
-// most, kMaxPathSlots), at most `path_slots` where that is not 0, and as many as `budget_bytes`
-// hold at wavefront_slot_bytes() each. Throws rll::Error if not one slot fits.
+// The path slots of a render: as many as its largest pass has paths, at most `max_slots` (the
+// device's: kMaxPathSlots on the GPU, kHostMaxPathSlots on the CPU), at most `path_slots` where
+// that is not 0, and as many as `budget_bytes` hold at wavefront_slot_bytes() each. Throws
+// rll::Error if not one slot fits.
 inline size_t wavefront_slot_count(uint32_t path_slots, const Film& film,
-                                   const RenderSettings& settings, size_t budget_bytes) {
+                                   const RenderSettings& settings, size_t budget_bytes,
+                                   size_t max_slots = kMaxPathSlots) {
   const size_t pixels = size_t(film.width()) * film.height();
-  size_t n = std::min(kMaxPathSlots, pixels * size_t(largest_pass_spp(settings)));
+  size_t n = std::min(max_slots, pixels * size_t(largest_pass_spp(settings)));
   if (path_slots > 0) n = std::min<size_t>(n, path_slots);
   const size_t fit = budget_bytes / wavefront_slot_bytes();
   if (fit < 1)

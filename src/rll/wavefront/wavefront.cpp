@@ -123,7 +123,8 @@ RenderProgress render_with(
   // A quarter of the memory budget for the path slots (the scene, its accel and the sampler's
   // tables take the rest).
   const size_t budget = memory_budget_bytes() / 4;
-  const size_t slots = wavefront_slot_count(wavefront.path_slots, film, settings, budget);
+  const size_t slots =
+      wavefront_slot_count(wavefront.path_slots, film, settings, budget, kHostMaxPathSlots);
   WavefrontDriver<HostBackend, Tracer, HostLightSampler> driver(backend, k, slots);
   if (wavefront.work) {
     wavefront.work->path_slots = slots;

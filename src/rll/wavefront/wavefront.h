@@ -56,9 +56,9 @@ struct WavefrontWork {
 
 struct WavefrontSettings {
   // Paths in flight at once, at most; 0 (the default) sizes them to the work: as many as the
-  // largest pass has paths, up to a 1080p frame at 1 spp (about 2M), within a quarter of the
-  // memory budget (a slot takes under 1 KB). Taken once per render; a pass takes its paths in
-  // batches of this many.
+  // largest pass has paths, up to a 1080p frame at 1 spp (about 2M) on the GPU and 32,768 on the
+  // CPU (kHostMaxPathSlots), within a quarter of the memory budget (a slot takes under 1 KB).
+  // Taken once per render; a pass takes its paths in batches of this many.
   uint32_t path_slots = 0;
   WavefrontTracer tracer = WavefrontTracer::Embree;
   // When set, the times of the render are added to it (the clock is read only then).
