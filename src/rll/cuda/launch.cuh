@@ -167,6 +167,8 @@ class EventPool {
 
   void start(size_t key, cudaStream_t s = 0);
   void stop(cudaStream_t s = 0);
+  // Forgets the pairs recorded since the last read (a render that ended early left them).
+  void discard() { m_used = 0; }
   // Calls add(key, ms) for every pair recorded since the last read (their work must be done).
   template <typename Add>
   void read(const Add& add) {

@@ -73,6 +73,7 @@ class CudaWavefrontBackend {
   // A render's start: its arrays from the first block again, its times into `times`.
   void begin(WavefrontTimes* times) {
     m_arena.restart();
+    m_events.discard();
     m_times = times;
   }
 
@@ -212,6 +213,7 @@ struct GpuRenderer::Impl {
   // The film that stayed here after the last render (WavefrontSettings::film_stays_on_device),
   // its host copy out of date, and its fewest samples per pixel.
   const Film* resident = nullptr;
+  int resident_width = 0;
   uint32_t resident_min = 0;
 
   // The host film into the device's (the same size), through the pinned copy.
@@ -331,8 +333,8 @@ RenderProgress GpuRenderer::render(
   // The film's sums and counts on the device: where the film stayed here after the last render,
   // continued; else uploaded from the host's.
   const size_t pixels = size_t(film.width()) * film.height();
-  const bool continues =
-      wavefront.film_stays_on_device && m.resident == &film && m.film_count.size() == pixels;
+  const bool continues = wavefront.film_stays_on_device && m.resident == &film &&
+                         m.resident_width == film.width() && m.film_count.size() == pixels;
   m.resident = nullptr;  // (again where this render ends with the film kept here)
   uint32_t start_min = m.resident_min;
   if (!continues) {
@@ -406,6 +408,7 @@ RenderProgress GpuRenderer::render(
   backend.collect_times();
   if (wavefront.film_stays_on_device) {
     m.resident = &film;
+    m.resident_width = film.width();
     m.resident_min = uint32_t(progress.spp_done);
   } else if (!host_film_current) {
     m.download_film(film);  // (the last pass brings it; this only where none ran to its end)

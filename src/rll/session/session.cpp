@@ -207,8 +207,11 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   rs.points = m_points;
   WavefrontSettings wavefront;
   wavefront.times = times;
-  wavefront.work = &m_wavefront_work;
-  wavefront.memory = &m_wavefront_memory;
+  std::unique_lock lock(m_wavefront_mutex, std::try_to_lock);
+  if (lock.owns_lock()) {
+    wavefront.work = &m_wavefront_work;
+    wavefront.memory = &m_wavefront_memory;
+  }
   wavefront.after_pass_reads_film = bool(after_pass);  // (the progress bar reads no film)
   wavefront.film_stays_on_device = m_film_on_device;
   wavefront.tracer = m_settings.tracer == "bvh" ? WavefrontTracer::Bvh : WavefrontTracer::Embree;

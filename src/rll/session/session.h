@@ -6,6 +6,7 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -118,7 +119,9 @@ class RenderSession {
   std::unique_ptr<Accel> m_accel;
   std::unique_ptr<cuda::GpuRenderer> m_gpu;
   mutable std::vector<std::string> m_made;  // the samplers made, by name (for messages)
-  // The CPU wavefront's path slots, kept from render to render, and what its renders did.
+  // The CPU wavefront's path slots, kept from render to render, and what its renders did; a
+  // render on another thread at the same time (Python) takes neither.
+  mutable std::mutex m_wavefront_mutex;
   mutable WavefrontMemory m_wavefront_memory;
   mutable WavefrontWork m_wavefront_work;
   bool m_film_on_device = false;
