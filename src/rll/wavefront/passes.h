@@ -159,7 +159,7 @@ RenderProgress run_wavefront_passes(
       run_passes(scene, end_pass, film, settings, cancel, after_pass, pass,
                  film_elsewhere ? std::function<uint32_t()>([&] { return min_count; })
                                 : std::function<uint32_t()>());
-  close_entry();
+  if (!first_pass) close_entry();  // (a render with no pass to run has no entry)
   return progress;
 }
 
