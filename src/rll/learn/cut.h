@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "rll/core/device.h"
+#include "rll/lighttree/descent.h"
 #include "rll/lighttree/light_tree.h"
 
 namespace rll {
@@ -28,29 +29,7 @@ std::vector<uint32_t> refine_cut(const LightTree& tree, int size,
 // The shared initial cut: refine_cut by light count.
 std::vector<uint32_t> initial_cut(const LightTree& tree, int size);
 
-// Guided descent: for an inner node above a cut whose clusters [k0, k1) lie under it (`ends` the
-// cut's range ends), the cluster j after which its two children meet: ends[j] is the first
-// child's end, so clusters [k0, j] lie under the first child and [j + 1, k1) under the second.
-RLL_HD inline uint32_t children_boundary(const LightTreeView& tree, const LightTreeNode& node,
-                                         const uint32_t* ends, uint32_t k0, uint32_t k1) {
-  // The first of ends[k0, k1) not below the first child's end (std::lower_bound, on either device).
-  const uint32_t target = tree.node(node.child).end;
-  uint32_t lo = k0, n = k1 - k0;
-  while (n > 0) {
-    const uint32_t half = n / 2;
-    if (ends[lo + half] < target) {
-      lo += half + 1;
-      n -= half + 1;
-    } else {
-      n = half;
-    }
-  }
-  return lo;
-}
-inline uint32_t children_boundary(const LightTree& tree, const LightTreeNode& node,
-                                  const uint32_t* ends, uint32_t k0, uint32_t k1) {
-  return children_boundary(tree.view(), node, ends, k0, k1);
-}
+// children_boundary (the cluster after which an inner node's children meet): lighttree/descent.h.
 
 // True if the nodes partition [0, light_count) into contiguous ranges in order.
 bool is_valid_cut(const LightTree& tree, const std::vector<uint32_t>& nodes);

@@ -331,12 +331,14 @@ SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
   if (!has_cut(e)) {
     // The entry's first pass: sample like the tree; the reward goes to the node of the global
     // cut that holds the light, whose P(l | node) is the descent's product below that node.
-    DescentPath path;
-    SampledLight s = sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &path));
+    DescentSplit split;
+    split.ends = m_initial_ends.data();
+    split.nodes = m_initial.data();
+    split.size = uint32_t(m_initial.size());
+    SampledLight s = sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &split));
     if (!(s.pmf > 0)) return {};
     s.cluster = uint32_t(std::upper_bound(m_initial_ends.begin(), m_initial_ends.end(), s.light) - m_initial_ends.begin());
-    const int at = path.index_of(m_initial[s.cluster]);
-    const float within = at >= 0 ? path.product(at, path.length - 1) : 0.0f;
+    const float within = split.cluster == s.cluster ? split.below : 0.0f;
     s.cluster_pmf = within > 0 ? s.pmf / within : 0.0f;
     return s;
   }

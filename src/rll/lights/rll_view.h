@@ -164,10 +164,12 @@ RLL_HD inline float rll_pmf_within(const RllView& v, const LightContext& ctx, ui
 }
 
 // The full pmf of light l in cluster k (which contains it), and the cluster's probability.
-// `within` is pmf_within(l), already known to the caller; `path`: a descent from the root that
-// reached l, if the caller has one (saves the reach).
+// `within` is pmf_within(l), already known to the caller; `descent`: a descent from the root that
+// reached l split at this cut, with `descent_pmf` its probability, if the caller has one (saves
+// the reach).
 RLL_HD inline float rll_mixture_pmf(const RllView& v, const LightContext& ctx, const RllCut& c,
-                                    uint32_t k, uint32_t l, float within, const DescentPath* path,
+                                    uint32_t k, uint32_t l, float within,
+                                    const DescentSplit* descent, float descent_pmf,
                                     float* cluster_pmf) {
   const float q = rll_cdf_width(c, k);  // the cell's CDF: learnt, or with the prior
   if (v.defensive == Defensive::Cell) {
@@ -176,16 +178,16 @@ RLL_HD inline float rll_mixture_pmf(const RllView& v, const LightContext& ctx, c
   }
   // P(l|x) = [(1 - eps) Q(s)/sum Q + eps reach(s|x)] P(l|s): the defensive prior of DESIGN 2 is
   // the tree's probability of the cluster at x. Before the cell has learnt anything, the tree
-  // alone. A descent from the root that went through the cluster (`path`) already holds reach.
+  // alone. A descent from the root that went through the cluster (`descent`) already holds reach.
   const float eps = v.cuts.eps[ctx.cell];
-  const uint32_t node = c.nodes[k];
-  int at = path ? path->index_of(node) : -1;
-  float reach = at >= 0 ? path->product(0, at) : tree_reach_pmf(v.tree, node, ctx.p, ctx.n);
+  const float reach = descent && descent->cluster == k
+                          ? descent->reach
+                          : tree_reach_pmf(v.tree, c.nodes[k], ctx.p, ctx.n);
   *cluster_pmf = (1 - eps) * q + eps * reach;
   if (rll_descends(v, rll_begin(c, k), c.ends[k])) return *cluster_pmf * within;
   // Another within-cluster rule: mix the two distributions over lights.
-  float tree = path ? path->product(0, path->length - 1)
-                    : tree_descend_pmf(v.tree, LightTree::kRoot, l, ctx.p, ctx.n);
+  const float tree =
+      descent ? descent_pmf : tree_descend_pmf(v.tree, LightTree::kRoot, l, ctx.p, ctx.n);
   return (1 - eps) * q * within + eps * tree;
 }
 
@@ -328,7 +330,11 @@ RLL_HD inline void rll_prepare(const RllView& v, LightContext& ctx, float u) {
 RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx, double u) {
   using namespace detail;
   const RllCut c = rll_cut(v, ctx.cell);
-  DescentPath path;
+  // A descent of the whole tree split at this cell's cut (the initial one before it has its own).
+  DescentSplit split;
+  split.ends = c.ends;
+  split.nodes = c.nodes;
+  split.size = c.size;
   const bool has_cut = rll_has_cut(v, ctx.cell);
   if (!has_cut && v.cold_uniform) {
     // Every cluster of the initial cut alike (Fermat: every Q starts equal).
@@ -346,11 +352,11 @@ RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx,
     // A point without a learnt cut (a cell new in this pass, or none: table full) samples
     // like the light tree. Its reward still goes to its cluster of the initial cut: given the
     // cluster, the tree chose the light with the probability of the path below the cluster.
-    SampledLight s = sampled_light(tree_descend(v.tree, LightTree::kRoot, ctx.p, ctx.n, u, &path));
+    SampledLight s = sampled_light(tree_descend(v.tree, LightTree::kRoot, ctx.p, ctx.n, u, &split));
     if (!(s.pmf > 0)) return {};
     s.cluster = rll_cluster_of(c, s.light);
-    int at = path.index_of(c.nodes[s.cluster]);
-    float within = path.product(at, path.length - 1);
+    // (A cluster the path did not pass: the whole path's product, as the earlier record gave.)
+    const float within = split.cluster == s.cluster ? split.below : s.pmf;
     s.cluster_pmf = within > 0 ? s.pmf / within : s.pmf;
     if (v.guided) s.cluster_importance = tree_importance(v.tree, c.nodes[s.cluster], ctx.p, ctx.n);
     return s;
@@ -358,20 +364,21 @@ RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx,
   if (v.guided) return rll_sample_guided(v, ctx, c, u);
   const float eps = v.defensive == Defensive::Tree ? v.cuts.eps[ctx.cell] : 0.0f;
   uint32_t k, l;
-  float within;
-  const DescentPath* descent = nullptr;
+  float within, descent_pmf = 0;
+  const DescentSplit* descent = nullptr;
   if (u < eps) {
     // The defensive branch: a descent of the whole tree, then its cluster in this cut.
-    const TreeSample t = tree_descend(v.tree, LightTree::kRoot, ctx.p, ctx.n, u / eps, &path);
+    const TreeSample t = tree_descend(v.tree, LightTree::kRoot, ctx.p, ctx.n, u / eps, &split);
     if (!(t.pmf > 0)) return {};
     l = t.light;
     k = rll_cluster_of(c, l);
     const uint32_t begin = rll_begin(c, k);
     if (rll_descends(v, begin, c.ends[k]))
-      within = path.product(path.index_of(c.nodes[k]), path.length - 1);
+      within = split.cluster == k ? split.below : t.pmf;
     else
       within = rll_pmf_within(v, ctx, c.nodes[k], begin, c.ends[k], l);
-    descent = &path;
+    descent = &split;
+    descent_pmf = t.pmf;
   } else {
     // The learnt branch: a cluster from the cell's CDF (first entry above u; zero-width
     // entries are never returned), then a light inside it. Compared and differenced in
@@ -402,7 +409,7 @@ RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx,
   SampledLight s;
   s.light = l;
   s.cluster = k;
-  s.pmf = rll_mixture_pmf(v, ctx, c, k, l, within, descent, &s.cluster_pmf);
+  s.pmf = rll_mixture_pmf(v, ctx, c, k, l, within, descent, descent_pmf, &s.cluster_pmf);
   s.target = v.cuts.vis[size_t(ctx.cell) * v.cuts.m + k];
   return s.pmf > 0 ? s : SampledLight{};
 }
@@ -420,7 +427,7 @@ RLL_HD inline float rll_pmf(const RllView& v, const LightContext& ctx, uint32_t 
   if (v.guided) return rll_pmf_guided(v, ctx, c, light);
   float within = rll_pmf_within(v, ctx, c.nodes[k], rll_begin(c, k), c.ends[k], light);
   float cluster_pmf;
-  return rll_mixture_pmf(v, ctx, c, k, light, within, nullptr, &cluster_pmf);
+  return rll_mixture_pmf(v, ctx, c, k, light, within, nullptr, 0.0f, &cluster_pmf);
 }
 
 // Rewards the cluster of a next-event sample (RewardKind); thread-safe, and exact whatever the

@@ -18,26 +18,45 @@ struct TreeSample {
   float pmf = 0;
 };
 
-// The nodes a descent went through and the probability of each step, so that callers can
-// form the probability of any part of the path without evaluating importances again. The
-// products are formed top-down from 1, exactly as tree_descend_pmf and tree_reach_pmf do, so
-// they agree with them to the bit.
-struct DescentPath {
-  uint32_t node[kMaxTreeDepth];
-  float step[kMaxTreeDepth];  // step[i]: probability of going from node[i-1] to node[i]
-  int length = 0;             // node[0] is the start (step[0] = 1), node[length-1] the leaf
-  RLL_HD int index_of(uint32_t n) const {
-    for (int i = 0; i < length; ++i)
-      if (node[i] == n) return i;
-    return -1;
-  }
-  // Product of the steps after index `a` up to and including `b`.
-  RLL_HD float product(int a, int b) const {
-    float p = 1;
-    for (int i = a + 1; i <= b; ++i) p *= step[i];
-    return p;
-  }
+// What a descent from the top of a cut records for the pmfs of the cut's clusters (rll and ltc:
+// the reward of a sample drawn by the tree goes to its cluster, whose probabilities it needs):
+// the cluster whose node the descent went through, the probability of reaching that node and of
+// the rest of the path below it. Both products are formed top-down from 1, exactly as
+// tree_reach_pmf and tree_descend_pmf form them, so that they agree with them to the bit. It
+// replaces a record of the whole path (a node and a step per level, 2 KB of every GPU thread's
+// stack): 32 bytes, and no importance evaluated again.
+struct DescentSplit {
+  static constexpr uint32_t kNone = ~0u;
+  // In: the cut, its clusters' nodes and range ends (ascending) under the descent's start.
+  const uint32_t* ends = nullptr;
+  const uint32_t* nodes = nullptr;
+  uint32_t size = 0;
+  // Out: the cluster whose node the path passed (kNone: none of them), the product of the steps
+  // from the start to that node (1 if it is the start) and of those after it down to the leaf.
+  uint32_t cluster = kNone;
+  float reach = 0;
+  float below = 0;
 };
+
+// The cluster j of a cut after which the two children of an inner node above it meet, for the
+// cut's clusters [k0, k1) under the node (`ends` the cut's range ends): ends[j] is the first
+// child's end, so clusters [k0, j] lie under the first child and [j + 1, k1) under the second.
+RLL_HD inline uint32_t children_boundary(const LightTreeView& tree, const LightTreeNode& node,
+                                         const uint32_t* ends, uint32_t k0, uint32_t k1) {
+  // The first of ends[k0, k1) not below the first child's end (std::lower_bound, on either device).
+  const uint32_t target = tree.node(node.child).end;
+  uint32_t lo = k0, n = k1 - k0;
+  while (n > 0) {
+    const uint32_t half = n / 2;
+    if (ends[lo + half] < target) {
+      lo += half + 1;
+      n -= half + 1;
+    } else {
+      n = half;
+    }
+  }
+  return lo;
+}
 
 namespace detail {
 // The smallest probability of a step towards a child with positive importance: i0 / (i0 + i1)
@@ -97,54 +116,81 @@ RLL_HD inline float first_child_probability(const LightTreeView& tree, const Lig
 // Descends the subtree under `from`, returning a light under it and the probability of that
 // choice given that the descent starts at `from`. A child with zero importance is never chosen
 // over a sibling with positive importance, and one with positive importance always keeps a
-// positive probability; the pmfs of the lights under `from` sum to one.
+// positive probability; the pmfs of the lights under `from` sum to one. With `split`, the cut's
+// clusters under `from` are followed down to the one the path enters, as the guided descent
+// follows them (a cut is a union of tree nodes: the first node on the path whose range lies in
+// one cluster is that cluster's node).
 RLL_HD inline TreeSample tree_descend(const LightTreeView& tree, uint32_t from, const Vec3& p,
-                                      const Vec3& n, double u, DescentPath* path = nullptr) {
+                                      const Vec3& n, double u, DescentSplit* split = nullptr) {
   uint32_t index = from;
   float pmf = 1;
-  if (path) {
-    path->length = 1;
-    path->node[0] = from;
-    path->step[0] = 1;
+  // The clusters [k0, k1) under the current node; `found` once the path is at or below one's node.
+  uint32_t k0 = 0, k1 = 0;
+  bool found = false;
+  if (split) {
+    split->cluster = DescentSplit::kNone;
+    k1 = split->size;
+    if (k1 - k0 == 1 && split->nodes[k0] == index) {
+      found = true;
+      split->cluster = k0;
+      split->reach = pmf;
+      split->below = 1;
+    }
   }
   for (;;) {
     const LightTreeNode& node = tree.node(index);
     if (node.is_leaf()) return {node.begin, pmf};
     float p0 = first_child_probability(tree, node, p, n, 1.0f, 1.0f, nullptr, nullptr);
     float step;
-    if (u < p0) {
+    const bool first = u < p0;
+    if (first) {
       u = std::min(u / p0, double(detail::kBelowOne));
       step = p0;
-      index = node.child;
     } else {
       u = std::min((u - p0) / (1 - p0), double(detail::kBelowOne));
       step = 1 - p0;
-      index = node.child + 1;
     }
     pmf *= step;
-    if (path) {
-      path->node[path->length] = index;
-      path->step[path->length++] = step;
+    if (split) {
+      if (found) {
+        split->below *= step;
+      } else {
+        if (k1 - k0 > 1) {
+          const uint32_t j = children_boundary(tree, node, split->ends, k0, k1);
+          if (first)
+            k1 = j + 1;
+          else
+            k0 = j + 1;
+        }
+        if (k1 - k0 == 1 && split->nodes[k0] == node.child + (first ? 0 : 1)) {
+          found = true;
+          split->cluster = k0;
+          split->reach = pmf;
+          split->below = 1;
+        }
+      }
     }
+    index = first ? node.child : node.child + 1;
   }
 }
 
 namespace detail {
-// Probability that a descent from `from` reaches `to`, a node under it: the steps' products
-// top-down from 1, exactly as tree_descend multiplies them.
+// Probability that a descent from `from` reaches `to`, a node under it (0 if it is not under it):
+// the steps' products top-down from 1, exactly as tree_descend multiplies them. The path is found
+// going down by the light ranges (a child holds `to` where its range holds to's first light; no
+// node's range is empty), so that no record of it is kept.
 RLL_HD inline float path_pmf(const LightTreeView& tree, uint32_t from, uint32_t to, const Vec3& p,
                              const Vec3& n) {
-  uint32_t path[kMaxTreeDepth];
-  int k = 0;
-  for (uint32_t i = to; i != from; i = tree.node(i).parent) path[k++] = i;
+  const uint32_t first_light = tree.node(to).begin;
   float pmf = 1;
-  uint32_t parent = from;
-  while (k-- > 0) {
-    const LightTreeNode& node = tree.node(parent);
+  for (uint32_t index = from; index != to;) {
+    const LightTreeNode& node = tree.node(index);
+    if (node.is_leaf()) return 0;
     float p0 = first_child_probability(tree, node, p, n, 1.0f, 1.0f, nullptr, nullptr);
-    pmf *= path[k] == node.child ? p0 : 1 - p0;
+    const bool first = first_light < tree.node(node.child).end;
+    pmf *= first ? p0 : 1 - p0;
     if (pmf == 0) return 0;
-    parent = path[k];
+    index = first ? node.child : node.child + 1;
   }
   return pmf;
 }
@@ -173,8 +219,12 @@ inline float first_child_probability(const LightTree& tree, const LightTreeNode&
   return first_child_probability(tree.view(), node, p, n, g0, g1, importance0, importance1);
 }
 inline TreeSample tree_descend(const LightTree& tree, uint32_t from, const Vec3& p, const Vec3& n,
-                               double u, DescentPath* path = nullptr) {
-  return tree_descend(tree.view(), from, p, n, u, path);
+                               double u, DescentSplit* split = nullptr) {
+  return tree_descend(tree.view(), from, p, n, u, split);
+}
+inline uint32_t children_boundary(const LightTree& tree, const LightTreeNode& node,
+                                  const uint32_t* ends, uint32_t k0, uint32_t k1) {
+  return children_boundary(tree.view(), node, ends, k0, k1);
 }
 inline float tree_descend_pmf(const LightTree& tree, uint32_t from, uint32_t light, const Vec3& p,
                               const Vec3& n) {
