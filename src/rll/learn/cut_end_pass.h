@@ -66,8 +66,8 @@ RLL_HD inline uint32_t cut_scratch_room(const CutStoreEndView& v, uint32_t cell)
 // offset[i] (an exclusive scan of the rooms) and holds room clusters.
 struct CutScratchArena {
   static constexpr size_t kDoubles = 2, kFloats = 3;  // per cluster of room
-  View<double> d;  // kDoubles per cluster of room in all
-  View<float> f;   // kFloats per cluster of room in all
+  View<double> d;                                     // kDoubles per cluster of room in all
+  View<float> f;                                      // kFloats per cluster of room in all
 
   RLL_HD CutScratch slice(uint64_t offset, uint32_t room) const {
     // Pointer arithmetic, not &d[i]: an empty arena (room 0) has no element to bind to.
@@ -213,47 +213,83 @@ RLL_HD inline void guide_factors(size_t K, const double* pri, const float* val, 
 
 // Guided descent: bakes the cell's guide_left/right from its values and prior (CutStore's
 // guide_left says what they are). The inner nodes above the cut are visited from the root as a
-// recursion would (children's sums first, left then right), on a stack as deep as the tree.
-// Scratch: g.
+// recursion would (children's sums first, left then right, added in the same order), without a
+// stack (a frame per level was 14 KB of every GPU thread's stack): up through the tree's parent
+// links, each node's clusters found again from its range (a cut is a union of tree nodes), and
+// the sums of a finished first child kept in the factors of its clusters, which are read once,
+// at the cluster, and not needed again (cut_bake_target overwrites them). Scratch: g.
 RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint32_t K,
                                   const double* pri, const float* val, double eps,
                                   const CutScratch& scratch) {
   const size_t b = v.base(cell);
   double* g = scratch.g;
   guide_factors(K, pri, val, eps, g);
+  if (K < 2) return;
   // Every inner node above the cut: its children's factors are the prior-weighted means of
   // their clusters' g (the unweighted mean where no cluster has prior).
-  struct Frame {
-    uint32_t node, k0, k1, j;
-    int stage;  // 0: not begun, 1: first child done (its sums in a), 2: both done
-    detail::GuideSums a;
-  };
-  Frame stack[kMaxTreeDepth + 1];
   const uint32_t* ends = &v.end[b];
-  detail::GuideSums done;  // the sums of the frame last finished
-  int top = 0;
-  stack[0] = {LightTree::kRoot, 0u, K, 0u, 0, {}};
-  while (top >= 0) {
-    Frame& f = stack[top];
-    if (f.stage == 0 && f.k1 - f.k0 == 1) {
-      done = {pri[f.k0], pri[f.k0] * g[f.k0], g[f.k0], 1};
-      --top;
-    } else if (f.stage == 0) {
-      const LightTreeNode& nd = v.tree.node(f.node);
-      f.j = children_boundary(v.tree, nd, ends, f.k0, f.k1);
-      f.stage = 1;
-      stack[top + 1] = {nd.child, f.k0, f.j + 1, 0u, 0, {}};
-      ++top;
-    } else if (f.stage == 1) {
-      f.a = done;
-      f.stage = 2;
-      stack[top + 1] = {v.tree.node(f.node).child + 1, f.j + 1, f.k1, 0u, 0, {}};
-      ++top;
-    } else {
-      v.gl[b + f.j] = float(f.a.factor());
-      v.gr[b + f.j] = float(done.factor());
-      done = {f.a.w + done.w, f.a.wg + done.wg, f.a.g + done.g, f.a.count + done.count};
-      --top;
+  auto leaf = [&](uint32_t k) { return detail::GuideSums{pri[k], pri[k] * g[k], g[k], 1}; };
+  // The sums of a first child over clusters [k0, j], parked in g[k0, j] while its sibling is
+  // visited: one cluster's are its own (g[k0] untouched); two clusters' weight is the sum of
+  // their priors, which stay.
+  auto park = [&](const detail::GuideSums& s, uint32_t k0, uint32_t j) {
+    if (j - k0 >= 2) g[k0 + 2] = s.w;
+    if (j - k0 >= 1) {
+      g[k0] = s.wg;
+      g[k0 + 1] = s.g;
+    }
+  };
+  auto unpark = [&](uint32_t k0, uint32_t j) -> detail::GuideSums {
+    if (j == k0) return leaf(k0);
+    const double w = j - k0 >= 2 ? g[k0 + 2] : pri[k0] + pri[k0 + 1];
+    return {w, g[k0], g[k0 + 1], double(j - k0 + 1)};
+  };
+  // The first of ends[lo, hi) for which `past` holds (std::lower_bound / upper_bound).
+  auto first_end = [&](uint32_t lo, uint32_t hi, auto past) {
+    uint32_t n = hi - lo;
+    while (n > 0) {
+      const uint32_t half = n / 2;
+      if (!past(ends[lo + half])) {
+        lo += half + 1;
+        n -= half + 1;
+      } else {
+        n = half;
+      }
+    }
+    return lo;
+  };
+  uint32_t node = LightTree::kRoot, k0 = 0, k1 = K;  // a subtree and its clusters [k0, k1)
+  for (;;) {
+    // Down the first children to the subtree's first cluster.
+    while (k1 - k0 > 1) {
+      const LightTreeNode& nd = v.tree.node(node);
+      k1 = children_boundary(v.tree, nd, ends, k0, k1) + 1;
+      node = nd.child;
+    }
+    detail::GuideSums done = leaf(k0);  // the sums of the subtree last finished
+    // Up while the finished subtree is a second child: its parent is finished too.
+    for (;;) {
+      if (node == LightTree::kRoot) return;
+      const uint32_t parent = v.tree.node(node).parent;
+      const LightTreeNode& pn = v.tree.node(parent);
+      if (node == pn.child) {
+        // A first child: park its sums, then visit its sibling, whose clusters end with the
+        // parent's range.
+        park(done, k0, k1 - 1);
+        const uint32_t end = pn.end;
+        k0 = k1;
+        k1 = first_end(k1, K, [=](uint32_t e) { return e >= end; }) + 1;
+        node = pn.child + 1;
+        break;
+      }
+      // A second child: the first child's clusters start with the parent's range.
+      const uint32_t begin = pn.begin, j = k0 - 1;
+      k0 = first_end(0, k0, [=](uint32_t e) { return e > begin; });
+      const detail::GuideSums a = unpark(k0, j);
+      v.gl[b + j] = float(a.factor());
+      v.gr[b + j] = float(done.factor());
+      done = {a.w + done.w, a.wg + done.wg, a.g + done.g, a.count + done.count};
+      node = parent;
     }
   }
 }
@@ -464,4 +500,3 @@ RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell,
 }
 
 }  // namespace rll
-
