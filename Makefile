@@ -5,7 +5,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps test-deps build demo test test-asan bench fuzz clean format install
+.PHONY: all deps test-deps build demo test test-asan test-tsan bench fuzz clean format install
 
 all: build
 
@@ -43,6 +43,11 @@ test-asan: deps
 	cmake --build build-asan -j $(JOBS)
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 		ctest --output-on-failure -j $(JOBS) -L 'unit|cli|render'
+
+# ThreadSanitizer on the cell table's lock-free insert: its race test compiled alone against the
+# header-only table (no second build of the tree).
+test-tsan: deps
+	scripts/tsan-cell-table.sh $(BUILD)/tsan
 
 bench: build
 	@scripts/bench.sh $(BUILD)

@@ -35,14 +35,14 @@ std::vector<double> exact_values(size_t n, int64_t* exact_sum_1024) {
 }
 
 uint64_t gpu_fixed_sum(const std::vector<double>& values) {
-  cuda::DeviceArray<double> in(values.size());
+  rll::cuda::DeviceArray<double> in(values.size());
   in.upload(values);
-  cuda::DeviceArray<uint64_t> sum(1);
+  rll::cuda::DeviceArray<uint64_t> sum(1);
   sum.upload(std::vector<uint64_t>{0});
   const View<const double> x = in.view();
   uint64_t* total = sum.view().data;
-  cuda::parallel_for(values.size(),
-                     [=] RLL_HD(size_t i) { atomic_add(total, to_fixed_point(x[i])); });
+  rll::cuda::parallel_for(values.size(),
+                          [=] RLL_HD(size_t i) { atomic_add(total, to_fixed_point(x[i])); });
   return sum.download()[0];
 }
 
@@ -62,9 +62,9 @@ RLL_HD inline float shade(size_t i) {
 }
 
 std::vector<float> gpu_shade(size_t n) {
-  cuda::DeviceArray<float> out(n);
+  rll::cuda::DeviceArray<float> out(n);
   const View<float> o = out.view();
-  cuda::parallel_for(n, [=] RLL_HD(size_t i) { o[i] = shade(i); });
+  rll::cuda::parallel_for(n, [=] RLL_HD(size_t i) { o[i] = shade(i); });
   return out.download();
 }
 
@@ -76,10 +76,10 @@ std::vector<float> cpu_shade(size_t n) {
 }
 
 std::vector<uint32_t> gpu_visits(size_t n) {
-  cuda::DeviceArray<uint32_t> count(n);
+  rll::cuda::DeviceArray<uint32_t> count(n);
   count.upload(std::vector<uint32_t>(n, 0));
   const View<uint32_t> c = count.view();
-  cuda::parallel_for(n, [=] RLL_HD(size_t i) { atomic_add(&c[i], 1u); });
+  rll::cuda::parallel_for(n, [=] RLL_HD(size_t i) { atomic_add(&c[i], 1u); });
   return count.download();
 }
 
@@ -90,20 +90,20 @@ RLL_HD inline uint32_t scramble(size_t i) {
 }
 
 uint32_t gpu_max(size_t n) {
-  cuda::DeviceArray<uint32_t> m(1);
+  rll::cuda::DeviceArray<uint32_t> m(1);
   m.upload(std::vector<uint32_t>{0});
   uint32_t* p = m.view().data;
-  cuda::parallel_for(n, [=] RLL_HD(size_t i) { atomic_max(p, scramble(i)); });
+  rll::cuda::parallel_for(n, [=] RLL_HD(size_t i) { atomic_max(p, scramble(i)); });
   return m.download()[0];
 }
 
 // Index n - 1 stores 1 into each of `slots` with atomic_cas only where it still holds 0; all
 // other indices try to store 2 where it holds 5, which never matches.
 std::vector<uint64_t> gpu_cas(size_t n) {
-  cuda::DeviceArray<uint64_t> slots(1);
+  rll::cuda::DeviceArray<uint64_t> slots(1);
   slots.upload(std::vector<uint64_t>{0});
   uint64_t* p = slots.view().data;
-  cuda::parallel_for(n, [=] RLL_HD(size_t i) {
+  rll::cuda::parallel_for(n, [=] RLL_HD(size_t i) {
     if (i + 1 == n)
       atomic_cas(p, uint64_t(0), uint64_t(1));
     else
@@ -115,9 +115,9 @@ std::vector<uint64_t> gpu_cas(size_t n) {
 // A kernel that traps at one index: the error is sticky (the CUDA context is lost for the rest of
 // the process), so the test runs it in a child process (KernelErrorChild below).
 void trapping_kernel() {
-  cuda::DeviceArray<int> out(1000);
+  rll::cuda::DeviceArray<int> out(1000);
   const View<int> o = out.view();
-  cuda::parallel_for(1000, [=] RLL_HD(size_t i) {
+  rll::cuda::parallel_for(1000, [=] RLL_HD(size_t i) {
 #if RLL_DEVICE_CODE
     if (i == 500) __trap();
 #endif
@@ -127,7 +127,7 @@ void trapping_kernel() {
 }
 
 void spin_kernel(size_t n, uint64_t* sink) {
-  cuda::parallel_for(n, [=] RLL_HD(size_t i) {
+  rll::cuda::parallel_for(n, [=] RLL_HD(size_t i) {
     uint64_t h = i;
     for (int k = 0; k < 4096; ++k) h = h * 6364136223846793005ull + 1442695040888963407ull;
     if (h == 0) atomic_add(sink, uint64_t(1));  // keeps the loop from being optimised away
@@ -185,7 +185,7 @@ TEST(CudaLaunch, AtomicMaxAndCas) {
 TEST(CudaDeviceArray, RoundTrips) {
   std::vector<Vec3> v(1001);
   for (size_t i = 0; i < v.size(); ++i) v[i] = Vec3(float(i), -float(i), 0.5f * float(i));
-  cuda::DeviceArray<Vec3> a(v.size());
+  rll::cuda::DeviceArray<Vec3> a(v.size());
   EXPECT_EQ(a.size(), v.size());
   EXPECT_EQ(a.bytes(), v.size() * sizeof(Vec3));
   a.upload(v);
@@ -195,21 +195,21 @@ TEST(CudaDeviceArray, RoundTrips) {
   EXPECT_EQ(back, v);
   a.upload(v.data() + 0, v.size());
 
-  cuda::DeviceArray<Vec3> b = std::move(a);
+  rll::cuda::DeviceArray<Vec3> b = std::move(a);
   EXPECT_EQ(a.size(), 0u);
   EXPECT_EQ(a.view().data, nullptr);
   EXPECT_EQ(b.download(), v);
-  const cuda::DeviceArray<Vec3>& cb = b;
+  const rll::cuda::DeviceArray<Vec3>& cb = b;
   const View<const Vec3> cv = cb.view();
   EXPECT_EQ(cv.size, v.size());
 
-  cuda::DeviceArray<int> empty;
+  rll::cuda::DeviceArray<int> empty;
   EXPECT_TRUE(empty.download().empty());
   EXPECT_TRUE(empty.view().empty());
 }
 
 TEST(CudaDeviceArray, SizeMismatchIsAnError) {
-  cuda::DeviceArray<int> a(10);
+  rll::cuda::DeviceArray<int> a(10);
   try {
     a.upload(std::vector<int>(11));
     FAIL() << "expected an rll::Error";
@@ -223,7 +223,7 @@ TEST(CudaDeviceArray, SizeMismatchIsAnError) {
 
 TEST(CudaDeviceArray, OutOfMemoryIsAnError) {
   try {
-    cuda::DeviceArray<double> huge(size_t(1) << 50);  // 8 PiB
+    rll::cuda::DeviceArray<double> huge(size_t(1) << 50);  // 8 PiB
     FAIL() << "expected an rll::Error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("CUDA: cudaMalloc"), std::string::npos) << e.what();
@@ -231,11 +231,11 @@ TEST(CudaDeviceArray, OutOfMemoryIsAnError) {
 }
 
 TEST(CudaEventTimer, MeasuresWithinTheWallTime) {
-  cuda::DeviceArray<uint64_t> sink(1);
+  rll::cuda::DeviceArray<uint64_t> sink(1);
   sink.upload(std::vector<uint64_t>{0});
   spin_kernel(1 << 16, sink.view().data);  // warm up
   sink.download();
-  cuda::EventTimer timer;
+  rll::cuda::EventTimer timer;
   const auto t0 = std::chrono::steady_clock::now();
   timer.start();
   spin_kernel(1 << 22, sink.view().data);

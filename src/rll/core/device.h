@@ -25,6 +25,9 @@
 #define RLL_DEVICE_CODE 0
 #endif
 
+#if defined(__CUDACC__)
+#include <cuda/atomic>  // libcu++, shipped with the toolkit
+#endif
 #if !RLL_DEVICE_CODE
 #include <atomic>
 #endif
@@ -57,13 +60,24 @@ View<const T> view_of(const std::vector<T>& v) {
   return {v.data(), v.size()};
 }
 
-// Atomics on plain memory: std::atomic_ref on the CPU, CUDA's atomics on the GPU. Integer adds
-// are exact and commutative, which is why sums that must not depend on the order of threads
-// (rewards, DESIGN 6) are kept in 64-bit fixed point and added with atomic_add.
+// Atomics on plain memory: std::atomic_ref on the CPU, libcu++'s cuda::atomic_ref (device scope)
+// on the GPU, with the same memory orders on both. Adds and max are relaxed: integer adds are
+// exact and commutative, which is why sums that must not depend on the order of threads (rewards,
+// DESIGN 6) are kept in 64-bit fixed point and added with atomic_add. A value that publishes
+// other data (a cell table's slot word, which makes the cell's full key and id visible) is written
+// by a release (atomic_store, atomic_cas) and read by an acquire (atomic_load, atomic_cas), so
+// that the reader's later loads see what the writer wrote before: on the GPU a plain or volatile
+// load after a relaxed one may come from another SM's stale L1 line.
+#if RLL_DEVICE_CODE
+namespace detail {
+template <typename T>
+using DeviceAtomicRef = ::cuda::atomic_ref<T, ::cuda::thread_scope_device>;
+}  // namespace detail
+#endif
+
 RLL_HD inline uint64_t atomic_add(uint64_t* p, uint64_t v) {
 #if RLL_DEVICE_CODE
-  static_assert(sizeof(unsigned long long) == sizeof(uint64_t));
-  return atomicAdd(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(v));
+  return detail::DeviceAtomicRef<uint64_t>(*p).fetch_add(v, ::cuda::memory_order_relaxed);
 #else
   return std::atomic_ref<uint64_t>(*p).fetch_add(v, std::memory_order_relaxed);
 #endif
@@ -71,39 +85,38 @@ RLL_HD inline uint64_t atomic_add(uint64_t* p, uint64_t v) {
 
 RLL_HD inline uint32_t atomic_add(uint32_t* p, uint32_t v) {
 #if RLL_DEVICE_CODE
-  return atomicAdd(reinterpret_cast<unsigned int*>(p), static_cast<unsigned int>(v));
+  return detail::DeviceAtomicRef<uint32_t>(*p).fetch_add(v, ::cuda::memory_order_relaxed);
 #else
   return std::atomic_ref<uint32_t>(*p).fetch_add(v, std::memory_order_relaxed);
 #endif
 }
 
-// Stores `desired` if *p equals `expected`; returns the value *p held before.
-RLL_HD inline uint64_t atomic_cas(uint64_t* p, uint64_t expected, uint64_t desired) {
+// Stores `desired` if *p equals `expected` (a release: it publishes the thread's earlier writes);
+// returns the value *p held before (an acquire also where it differed: the caller reads what the
+// winner published).
+namespace detail {
+template <typename T>
+RLL_HD inline T atomic_cas(T* p, T expected, T desired) {
 #if RLL_DEVICE_CODE
-  return atomicCAS(reinterpret_cast<unsigned long long*>(p),
-                   static_cast<unsigned long long>(expected),
-                   static_cast<unsigned long long>(desired));
+  detail::DeviceAtomicRef<T>(*p).compare_exchange_strong(
+      expected, desired, ::cuda::memory_order_acq_rel, ::cuda::memory_order_acquire);
 #else
-  std::atomic_ref<uint64_t>(*p).compare_exchange_strong(expected, desired,
-                                                        std::memory_order_acq_rel);
-  return expected;
+  std::atomic_ref<T>(*p).compare_exchange_strong(expected, desired, std::memory_order_acq_rel,
+                                                 std::memory_order_acquire);
 #endif
+  return expected;
 }
-
+}  // namespace detail
+RLL_HD inline uint64_t atomic_cas(uint64_t* p, uint64_t expected, uint64_t desired) {
+  return detail::atomic_cas(p, expected, desired);
+}
 RLL_HD inline uint32_t atomic_cas(uint32_t* p, uint32_t expected, uint32_t desired) {
-#if RLL_DEVICE_CODE
-  return atomicCAS(reinterpret_cast<unsigned int*>(p), static_cast<unsigned int>(expected),
-                   static_cast<unsigned int>(desired));
-#else
-  std::atomic_ref<uint32_t>(*p).compare_exchange_strong(expected, desired,
-                                                        std::memory_order_acq_rel);
-  return expected;
-#endif
+  return detail::atomic_cas(p, expected, desired);
 }
 
 RLL_HD inline uint32_t atomic_max(uint32_t* p, uint32_t v) {
 #if RLL_DEVICE_CODE
-  return atomicMax(reinterpret_cast<unsigned int*>(p), static_cast<unsigned int>(v));
+  return detail::DeviceAtomicRef<uint32_t>(*p).fetch_max(v, ::cuda::memory_order_relaxed);
 #else
   std::atomic_ref<uint32_t> a(*p);
   uint32_t old = a.load(std::memory_order_relaxed);
@@ -113,9 +126,12 @@ RLL_HD inline uint32_t atomic_max(uint32_t* p, uint32_t v) {
 #endif
 }
 
+// An acquire load: what the thread that stored the value (by a release) wrote before it is
+// visible to this thread's later loads.
 RLL_HD inline uint64_t atomic_load(const uint64_t* p) {
 #if RLL_DEVICE_CODE
-  return *reinterpret_cast<const volatile unsigned long long*>(p);
+  return detail::DeviceAtomicRef<uint64_t>(*const_cast<uint64_t*>(p))
+      .load(::cuda::memory_order_acquire);
 #else
   return std::atomic_ref<uint64_t>(*const_cast<uint64_t*>(p)).load(std::memory_order_acquire);
 #endif
@@ -123,25 +139,19 @@ RLL_HD inline uint64_t atomic_load(const uint64_t* p) {
 
 RLL_HD inline uint32_t atomic_load(const uint32_t* p) {
 #if RLL_DEVICE_CODE
-  return *reinterpret_cast<const volatile unsigned int*>(p);
+  return detail::DeviceAtomicRef<uint32_t>(*const_cast<uint32_t*>(p))
+      .load(::cuda::memory_order_acquire);
 #else
   return std::atomic_ref<uint32_t>(*const_cast<uint32_t*>(p)).load(std::memory_order_acquire);
 #endif
 }
 
+// A release store (the counterpart of atomic_load).
 RLL_HD inline void atomic_store(uint32_t* p, uint32_t v) {
 #if RLL_DEVICE_CODE
-  *reinterpret_cast<volatile unsigned int*>(p) = v;
+  detail::DeviceAtomicRef<uint32_t>(*p).store(v, ::cuda::memory_order_release);
 #else
-  std::atomic_ref<uint32_t>(*p).store(v, std::memory_order_relaxed);
-#endif
-}
-
-// Orders this thread's plain writes before its following atomics as other threads see them: a
-// value published by an atomic_cas (the CPU's is acq_rel and needs nothing; CUDA's is relaxed).
-RLL_HD inline void publish_fence() {
-#if RLL_DEVICE_CODE
-  __threadfence();
+  std::atomic_ref<uint32_t>(*p).store(v, std::memory_order_release);
 #endif
 }
 

@@ -206,10 +206,12 @@ RLL_HD inline uint32_t cell_find(const CellTableView& t, uint64_t key) {
   const uint32_t mask = uint32_t(t.slots.size - 1);
   uint32_t slot = uint32_t(key >> 32) & mask;
   for (int probe = 0; probe < CellTableView::kMaxProbes; ++probe, slot = (slot + 1) & mask) {
+    // Acquire loads, of the slot word and then of the key it published (cell_find_or_insert).
     uint64_t w = atomic_load(&t.slots[slot]);
     if (w == 0) return CellTableView::kNone;
     uint32_t id = uint32_t(w & CellTableView::kIdMask);
-    if (detail::cell_tag(w) == detail::cell_tag(key) && t.key_of[id] == key) return id;
+    if (detail::cell_tag(w) == detail::cell_tag(key) && atomic_load(&t.key_of[id]) == key)
+      return id;
   }
   return CellTableView::kNone;
 }
@@ -227,8 +229,10 @@ RLL_HD inline uint32_t cell_find_or_insert(const CellTableView& t, uint64_t key,
     for (;;) {
       if (w != 0) {
         uint32_t id = uint32_t(w & CellTableView::kIdMask);
-        // The full key is published before the slot word (release below), so it is valid here.
-        if (cell_tag(w) == cell_tag(key) && t.key_of[id] == key) {
+        // The full key was written before the slot word was published (a release, below), and
+        // the word was read by an acquire: the key is read after it, atomically, so that it
+        // cannot be an earlier value (the device's L1 keeps no stale copy of it either).
+        if (cell_tag(w) == cell_tag(key) && atomic_load(&t.key_of[id]) == key) {
           if (mine != CellTableView::kNone) t.key_of[mine] = 0;  // back at the next rebuild
           return id;
         }
@@ -241,9 +245,9 @@ RLL_HD inline uint32_t cell_find_or_insert(const CellTableView& t, uint64_t key,
           return CellTableView::kNone;
         }
         mine = t.free[i];
-        t.key_of[mine] = key;
-        publish_fence();
+        t.key_of[mine] = key;  // published by the compare-and-swap's release
       }
+      // On failure an acquire of the competing word, whose key is read next.
       const uint64_t seen = atomic_cas(&t.slots[slot], w, cell_tag(key) | mine);
       if (seen == w) {
         *created = true;
@@ -276,7 +280,8 @@ template <typename B>
 uint32_t cell_table_rebuild(const B& b, const CellTableView& t, View<uint32_t> free_room) {
   const View<uint64_t> slots = t.slots, key_of = t.key_of;
   b.parallel_for(slots.size, [=] RLL_HD(size_t i) { slots[i] = 0; });
-  select_into(b, key_of.size, [=] RLL_HD(size_t c) { return key_of[c] == 0; }, free_room);
+  select_into(
+      b, key_of.size, [=] RLL_HD(size_t c) { return key_of[c] == 0; }, free_room);
   const auto used = select_indices(b, key_of.size, [=] RLL_HD(size_t c) { return key_of[c] != 0; });
   const View<const uint32_t> u = used.view();
   b.ordered_for(u.size, [=] RLL_HD(size_t i) { cell_place(slots, key_of[u[i]], u[i]); });
@@ -306,8 +311,11 @@ class CellTable {
   uint32_t find(uint64_t key) const { return cell_find(const_cast<CellTable*>(this)->view(), key); }
   // The arrays for cell_find / cell_find_or_insert; valid while the table lives.
   CellTableView view() {
-    return {view_of(m_slots), view_of(m_key_of), {m_free.data(), m_capacity - m_used},
-            &m_next_free, &m_failed};
+    return {view_of(m_slots),
+            view_of(m_key_of),
+            {m_free.data(), m_capacity - m_used},
+            &m_next_free,
+            &m_failed};
   }
   // What cell_table_rebuild writes the free list into (capacity long); after a rebuild elsewhere
   // (a device's, copied back), `rebuilt` takes the count of cells it found in use.
