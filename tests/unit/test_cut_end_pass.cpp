@@ -1,6 +1,6 @@
 // RLL's end of pass as host-and-device functions (learn/cut_end_pass.h, lights/rll_end_pass.h):
 // cut_end_pass run over many cells at once by host_parallel_for leaves every array as the
-// class's end_pass does cell by cell; the guided factors baked on an explicit stack equal a
+// class's end_pass does cell by cell; the guided factors baked without a stack equal a
 // recursive bake; pooling's sorted coarse cells are found by binary search and fold a coarse
 // cell's rewards in the order of its cells' keys, as a map of sums does.
 #include <gtest/gtest.h>
@@ -143,7 +143,7 @@ TEST(CutEndPass, ParallelLoopOverCellsEqualsTheClassCellByCell) {
   }
 }
 
-// The guided factors baked on an explicit stack (cut_bake_guide) equal those of the recursion
+// The guided factors baked without a stack (cut_bake_guide) equal those of the recursion
 // they replace: each inner node's children's prior-weighted mean of g, sums added child by child.
 TEST(CutEndPass, GuidedFactorsEqualARecursiveBake) {
   Scene scene = test::small_builtin_scene("many-lights-open", 16, 12);
