@@ -28,8 +28,11 @@ namespace rll::cuda {
 
 namespace {
 
+// The body (a lambda holding the whole WavefrontKernels, about 1 KB) is read in place from the
+// parameter space: without __grid_constant__ the call through `this` copies it to each thread's
+// local memory (a 1 KB stack frame for emission; tests/unit/kernel_budgets.h).
 template <typename Body>
-__global__ void queue_kernel(WavefrontQueue q, uint32_t upper, Body body) {
+__global__ void queue_kernel(WavefrontQueue q, uint32_t upper, const __grid_constant__ Body body) {
   const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
   if (k < upper && k < q.count()) body(q.slots[k]);
 }
