@@ -136,7 +136,7 @@ nlohmann::json session_stats(const RenderSession& session) {
                       {"renderer", session.renderer_name()},
                       {"points", point_set_name(session.points())}};
   // The wavefront's path slots and what its device did, pass by pass (frame by frame in
-  // interactive): README "GPU".
+  // interactive): docs/gpu.md.
   if (session.settings().wavefront || session.gpu()) {
     const WavefrontWork& w = session.wavefront_work();
     j["path_slots"] = {

@@ -380,7 +380,7 @@ new_rows = [(sc, ig, s) for sc, ig, s in new_rows if s]
 if not new_rows:
     keep_previous("The new scenes at equal time")
 else:
-    P("The built-in scenes of issue 32 (README, \"Built-in scenes\"): `spot-hall`, 102,400 spot lights in 16x16 "
+    P("The built-in scenes of issue 32 (docs/scenes.md): `spot-hall`, 102,400 spot lights in 16x16 "
       "occluded rooms, and `screen-hall`, three large textured emitters (split into 8,333 lights of nearly "
       "equal power) beside 12 small lamps; equal time as above, path.\n")
     for scene, integ, s in new_rows:

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Renders the small pictures of the built-in scenes that the README shows (docs/images/).
+# Renders the small pictures of the built-in scenes that docs/scenes.md shows (docs/images/).
 set -euo pipefail
 build=${1:-build}
 mkdir -p docs/images

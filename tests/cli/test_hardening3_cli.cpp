@@ -199,7 +199,7 @@ TEST(Hardening3Cli, ALinkToAnotherKindOfFileIsNotWrittenThrough) {
   EXPECT_EQ(read_text(notes), "my notes");
   EXPECT_EQ(read_text(picture), "png bytes");
   EXPECT_FALSE(fs::exists(dir / "ok.png"));
-  // A link to a file of its own kind is still written through (README "Safety").
+  // A link to a file of its own kind is still written through (docs/safety.md).
   const fs::path real = dir.write("real.exr", "old");
   fs::create_symlink(real, dir / "same.exr");
   const Child ok = run_child({"render", kScene, "--res", "8x8", "--spp", "1", "--quiet", "-o",

@@ -1,4 +1,4 @@
-// What rll refuses to do to the files around it (README "Safety"): replace a FIFO, a device, a
+// What rll refuses to do to the files around it (docs/safety.md): replace a FIFO, a device, a
 // folder, a link or a read-only file with an output; read a FIFO, a device or a folder as an
 // input; use one file as both an input and an output; find an output location unusable only
 // after the work; and messages that speak of what the user gave. (Interrupted merges and
