@@ -210,18 +210,18 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
   rs.max_pass_spp = o.max_pass_spp;
   const std::string label =
       o.repeats > 1 ? fmt::format("{} ({}/{})", name, repeat + 1, o.repeats) : name;
-  MeasuredRun m = measure_run(session, name, repeat, rs, o.frames, reference.image,
-                              reference.variance.pixel_count() ? &reference.variance : nullptr,
-                              label, !o.quiet, interrupt_flag(), {},
-                              aovs && !o.aov.empty() ? parse_aovs(o.aov, "--aov")
-                                                     : std::vector<Aov>());
+  MeasuredRun m =
+      measure_run(session, name, repeat, rs, o.frames, reference.image,
+                  reference.variance.pixel_count() ? &reference.variance : nullptr, label, !o.quiet,
+                  interrupt_flag(), {},
+                  aovs && !o.aov.empty() ? parse_aovs(o.aov, "--aov") : std::vector<Aov>());
   if (m.cancelled || interrupted()) throw Interrupted(interrupted_text(o, name));
   image = std::move(m.image);
   if (kept) *kept = std::move(m.sampler);
   if (aovs) *aovs = std::move(m.aovs);
   const RunResult& run = m.result;
   if (!o.quiet)
-    fmt::print(stderr, "{}: {} spp in {}, relMSE {:.4e}\n", label, run.spp,
+    fmt::print(stderr, "{}: {:.4g} spp in {}, relMSE {:.4e}\n", label, run.mean_spp,
                format_duration(run.seconds), run.relmse);
   return run;
 }
@@ -441,13 +441,13 @@ void run(const CompareOptions& o) {
   for (size_t i = 0; i < summaries.size(); ++i) {
     const auto& s = summaries[i];
     const RunResult& first = *s.runs.front();
-    report.entries.push_back({s.name,
-                              fmt::format("relMSE {:.3e}, {} spp, {}, visible-sample ratio {:.3f}",
-                                          first.relmse, first.spp, format_duration(first.seconds),
-                                          first.visible_ratio),
-                              series_colour(i), &first_images.at(s.name), &errors.at(s.name),
-                              fmt::format("repeat 1 of {}, seed {}", o.repeats, o.seed),
-                              first_aovs.contains(s.name) ? &first_aovs.at(s.name) : nullptr});
+    report.entries.push_back(
+        {s.name,
+         fmt::format("relMSE {:.3e}, {} spp, {}, visible-sample ratio {:.3f}", first.relmse,
+                     first.spp, format_duration(first.seconds), first.visible_ratio),
+         series_colour(i), &first_images.at(s.name), &errors.at(s.name),
+         fmt::format("repeat 1 of {}, seed {}", o.repeats, o.seed),
+         first_aovs.contains(s.name) ? &first_aovs.at(s.name) : nullptr});
     report.samplers.push_back({s.name,
                                s.describe.is_object() && s.describe.contains("parameters")
                                    ? s.describe["parameters"].dump(2)
@@ -502,6 +502,7 @@ void run(const CompareOptions& o) {
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 
   fmt::print("{}", format_table(summaries));
+  for (const auto& w : budget_warnings(summaries)) fmt::print(stderr, "rll: warning: {}\n", w);
   fmt::print("report: {}\n", (out / "report.html").string());
 }
 
@@ -524,7 +525,9 @@ void add_compare_command(CLI::App& app) {
       ->capture_default_str();
   auto* time = cmd->add_option("--time", o->time,
                                "Equal time: seconds per run (positive; every run takes at least "
-                               "one sample per pixel)");
+                               "one sample per pixel; the last passes are sized from the "
+                               "measured rate to end at the budget, and a run more than 3% off "
+                               "it is warned about)");
   auto* spp = cmd->add_option("--spp", o->spp, "Equal samples: samples per pixel per run");
   time->excludes(spp);
   cmd->add_option(

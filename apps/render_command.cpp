@@ -278,7 +278,8 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--time", o->time,
                   "Time budget in seconds (positive; leave it out for no limit); stops at "
                   "whichever of --spp and --time comes first, but always after at least one "
-                  "sample per pixel")
+                  "sample per pixel; the last passes are sized from the measured rate to end "
+                  "at the budget")
       ->check(number_in(0, kMaxSeconds, true));
   cmd->add_option("--seed", o->seed,
                   "Random seed; the same seed gives the same image with any --threads")

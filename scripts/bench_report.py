@@ -65,8 +65,14 @@ def pixels(summary):
     return w * h
 
 
+def spp_taken(s):
+    # The mean samples per pixel taken (a pass cut at the time budget counts); older summaries
+    # have only the complete samples per pixel.
+    return med(s, "mean_spp") if s.get("mean_spp") else med(s, "spp")
+
+
 def rate(summary, s):
-    return med(s, "spp") * pixels(summary) / med(s, "seconds")
+    return spp_taken(s) * pixels(summary) / med(s, "seconds")
 
 
 def visible(s):
@@ -305,8 +311,8 @@ for scene, integ, s, b, r in goal_rows:
     P(f"{budget}, {s['repeats']} repeat(s), {s['resolution'][0]}x{s['resolution'][1]}, "
       f"reference {s['reference'].get('spp', '?')} spp ({s['reference'].get('sampler', '?')})"
       + (f", {s.get('frames', 1)} frames (the last measured)" if s.get("frames", 1) > 1 else "") + ".\n")
-    P("| sampler | spp | samples/s | relMSE median [min, max] | trimmed relMSE | / power | / tree | / ltc | / rht | / oracle | visible | memory |")
-    P("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    P("| sampler | spp | seconds | samples/s | relMSE median [min, max] | trimmed relMSE | / power | / tree | / ltc | / rht | / oracle | visible | memory |")
+    P("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     v1 = v1_tree(scene, integ)
     rows = [(n, b[n]) for n in order if n in b]
     if v1:
@@ -315,7 +321,7 @@ for scene, integ, s, b, r in goal_rows:
         rel = x["relmse"]
         def ratio(other):
             return fmt(rel["median"] / r[other]) if r.get(other) else "—"
-        P(f"| {n} | {med(x, 'spp'):.0f} | {rate(s, x) / 1e6:.2f} M | {fmt(rel['median'])} [{fmt(rel['min'])}, "
+        P(f"| {n} | {spp_taken(x):.0f} | {med(x, 'seconds'):.2f} | {rate(s, x) / 1e6:.2f} M | {fmt(rel['median'])} [{fmt(rel['min'])}, "
           f"{fmt(rel['max'])}] | {fmt(trimmed(x))} | {ratio('power')} | {ratio('tree')} | {ratio('ltc')} | {ratio('rht')} | "
           f"{ratio('oracle')} | {fmt(visible(x))} | {x['memory']['peak_rss_bytes'] / 2**20:.0f} MiB |")
     P("")
@@ -369,7 +375,7 @@ else:
                 continue
             x = b[n]
             rel = med(x, "relmse")
-            P(f"| {scene} | {s['budget']['time']:g} | {n} | {med(x, 'spp'):.0f} | {fmt(rel)} | {fmt(trimmed(x))} | "
+            P(f"| {scene} | {s['budget']['time']:g} | {n} | {spp_taken(x):.0f} | {fmt(rel)} | {fmt(trimmed(x))} | "
               f"{fmt(rel / med(b['tree'], 'relmse')) if 'tree' in b else '—'} | "
               f"{fmt(rel / med(b['rht'], 'relmse')) if 'rht' in b else '—'} | {fmt(visible(x))} |")
     P("")
@@ -392,7 +398,7 @@ else:
         P("|---|---|---|---|---|---|---|")
         for x in s["samplers"]:
             rel = x["relmse"]
-            P(f"| {x['name']} | {med(x, 'spp'):.0f} | {fmt(rel['median'])} [{fmt(rel['min'])}, {fmt(rel['max'])}] | "
+            P(f"| {x['name']} | {spp_taken(x):.0f} | {fmt(rel['median'])} [{fmt(rel['min'])}, {fmt(rel['max'])}] | "
               f"{fmt(trimmed(x))} | {fmt(rel['median'] / med(b['tree'], 'relmse')) if 'tree' in b else '—'} | "
               f"{fmt(visible(x))} | {x['memory']['peak_rss_bytes'] / 2**20:.0f} MiB |")
         P("")
@@ -450,10 +456,10 @@ for scene in ["cornell-boxes-room", "arch-interior"]:
     P(f"### {scene}\n")
     P("| settings | spp | relMSE | trimmed relMSE | / tree (relMSE; trimmed) |")
     P("|---|---|---|---|---|")
-    P(f"| tree (reference point) | {med(b[0], 'spp'):.0f} | {fmt(tree)} | {fmt(tree_t)} | 1 |")
+    P(f"| tree (reference point) | {spp_taken(b[0]):.0f} | {fmt(tree)} | {fmt(tree_t)} | 1 |")
     for x in b[1:]:
         t = trimmed(x)
-        P(f"| {ablation_label(x['name'])} | {med(x, 'spp'):.0f} | {fmt(med(x, 'relmse'))} | {fmt(t)} | "
+        P(f"| {ablation_label(x['name'])} | {spp_taken(x):.0f} | {fmt(med(x, 'relmse'))} | {fmt(t)} | "
           f"{fmt(med(x, 'relmse') / tree)}; {fmt(t / tree_t) if t and tree_t else '—'} |")
     P("")
 

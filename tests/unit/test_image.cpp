@@ -423,6 +423,17 @@ TEST(ImageFiles, ExrAttributeValuesMustFillTheirSizeFields) {
   patch_ints_after(list, attribute_marker("channels", "chlist"), 0, {19});
   expect_mentions(error_of([&] { read_image(list); }),
                   {"list.exr", "attribute 'channels' of type chlist", "its 19 bytes"});
+  // Names are shown as UTF-8 (OpenEXR's names are UTF-8), other bytes escaped, not as '?'.
+  const fs::path named = dir / "named.exr";
+  write_exr_channels(named, {"R", "G", "B"}, [](Imf::Header& h) {
+    h.insert("caf\xc3\xa9", Imf::StringAttribute("x"));
+    h.insert("bad\xff", Imf::StringAttribute("y"));
+  });
+  patch_ints_after(named, attribute_marker("caf\xc3\xa9", "string"), 0, {1 << 30});
+  expect_mentions(error_of([&] { read_image(named); }), {"named.exr", "'caf\xc3\xa9'"});
+  patch_ints_after(named, attribute_marker("caf\xc3\xa9", "string"), 0, {1});
+  patch_ints_after(named, attribute_marker("bad\xff", "string"), 0, {1 << 30});
+  expect_mentions(error_of([&] { read_image(named); }), {"named.exr", "'bad\\xff'"});
   // A value of a type OpenEXR does not know is read by its size, as the walk reads it.
   const fs::path opaque = dir / "opaque.exr";
   write_exr_channels(opaque, {"R", "G", "B"},

@@ -2,9 +2,10 @@
 
 #include <fstream>
 
+#include "rll/core/error.h"
 #include "rll/eval/reference.h"
-#include "rll/session/session.h"
 #include "rll/io/load.h"
+#include "rll/session/session.h"
 #include "support/test_support.h"
 
 using namespace rll;
@@ -134,4 +135,32 @@ TEST(ReferenceCache, ObtainRendersOnceThenReuses) {
     ASSERT_EQ(first.image[i].y, second.image[i].y);
   req.force = true;
   EXPECT_FALSE(obtain_reference(session, cache, req, false).from_cache);
+}
+
+// A cache folder reached through a link to nothing (or with a file in its place) is refused by
+// name, before any render: not "File exists", and nothing is made at the link's target.
+TEST(ReferenceCache, FolderThroughADanglingLinkIsRefusedByName) {
+  test::TempDir tmp;
+  fs::create_symlink(tmp / "nowhere", tmp / "link");
+  ReferenceCache through_link(tmp / "link" / "refs");
+  try {
+    through_link.check_writable();
+    FAIL() << "a cache folder under a dangling link was accepted";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("reference cache folder"), std::string::npos) << m;
+    EXPECT_NE(m.find("symbolic link"), std::string::npos) << m;
+    EXPECT_EQ(m.find("File exists"), std::string::npos) << m;
+  }
+  EXPECT_THROW(through_link.store(ReferenceKey{1, 2}, Image(2, 2), ReferenceInfo{}), Error);
+  EXPECT_FALSE(fs::exists(tmp / "nowhere"));
+
+  std::ofstream(tmp / "file") << "x";
+  ReferenceCache under_file(tmp / "file");
+  try {
+    under_file.check_writable();
+    FAIL() << "a cache folder that is a file was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("in the way"), std::string::npos) << e.what();
+  }
 }

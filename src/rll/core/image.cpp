@@ -31,6 +31,7 @@
 #include "rll/core/error.h"
 #include "rll/core/file_checks.h"
 #include "rll/core/memory_budget.h"
+#include "rll/core/params.h"
 #include "rll/core/paths.h"
 
 namespace rll {
@@ -265,11 +266,10 @@ Image decode_stb(const unsigned char* bytes, size_t size, bool srgb, bool as_flo
   return from_8bit(data, w, h, srgb, name);
 }
 
-// An attribute name or type as a message can show it: printable ASCII, at most 64 bytes.
+// An attribute name or type as a message can show it: UTF-8 as it is (OpenEXR names are
+// UTF-8), other bytes and control characters as \xNN, at most 64 bytes (shown_text).
 std::string shown(const std::string& text) {
-  std::string out;
-  for (char c : text.substr(0, 64)) out += c >= 32 && c < 127 ? c : '?';
-  return text.size() > 64 ? out + "..." : out;
+  return shown_text(text, 64, true);
 }
 
 // One attribute's value as OpenEXR's reader for its type sees it: exactly the `size` bytes the

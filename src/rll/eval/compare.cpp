@@ -74,12 +74,13 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
   ConvergenceRecorder recorder(reference, reference_variance);
   Film film(scene.width, scene.height);
   if (!aovs.empty()) film.track_camera_vertex();
-  const RenderProgress p = session.render(*sampler, film, rs, label, show_progress, cancel,
-                                          [&](const RenderProgress& pr, const Film& f) {
-                                            recorder.after_pass(pr, f);
-                                            if (after_pass) after_pass(pr, f);
-                                          },
-                                          nullptr, &integrator);
+  const RenderProgress p = session.render(
+      *sampler, film, rs, label, show_progress, cancel,
+      [&](const RenderProgress& pr, const Film& f) {
+        recorder.after_pass(pr, f);
+        if (after_pass) after_pass(pr, f);
+      },
+      nullptr, &integrator);
   if (p.cancelled) {
     out.cancelled = true;
     return out;
@@ -93,7 +94,9 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
   run.repeat = repeat;
   run.seed = rs.seed;
   run.spp = p.spp_done;
+  run.mean_spp = double(p.samples) / (double(scene.width) * double(scene.height));
   run.seconds = p.seconds;
+  run.budget = rs.time_limit;
   run.setup_seconds = setup_seconds;
   run.checkpoints = recorder.checkpoints();
   const Checkpoint& last = run.checkpoints.back();
@@ -150,11 +153,13 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
       fail("sampler '{}' was not run for the same repeats as '{}'", name, samplers[0]);
     SamplerSummary s;
     s.name = name;
-    std::vector<double> spp, seconds, setup, rel, trimmed, mrse_v, mse_v, eff, eff_setup, ratio,
-        trimmed_ratio, visible;
+    std::vector<double> spp, mean_spp, budget_ratio, seconds, setup, rel, trimmed, mrse_v, mse_v,
+        eff, eff_setup, ratio, trimmed_ratio, visible;
     for (const auto& [repeat, run] : mine) {
       s.runs.push_back(run);
       spp.push_back(run->spp);
+      mean_spp.push_back(run->mean_spp);
+      if (run->budget > 0) budget_ratio.push_back(run->seconds / run->budget);
       seconds.push_back(run->seconds);
       setup.push_back(run->setup_seconds);
       rel.push_back(run->relmse);
@@ -175,6 +180,8 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
       if (s.describe.is_null()) s.describe = run->describe;
     }
     s.spp = spread_of(spp);
+    s.mean_spp = spread_of(mean_spp);
+    s.budget_ratio = spread_of(budget_ratio);
     s.seconds = spread_of(seconds);
     s.setup_seconds = spread_of(setup);
     s.relmse = spread_of(rel);
@@ -215,7 +222,9 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
   j["name"] = s.name;
   j["sampler"] = s.describe;
   j["spp"] = spread_json(s.spp);
+  j["mean_spp"] = spread_json(s.mean_spp);
   j["seconds"] = spread_json(s.seconds);
+  j["seconds_per_budget"] = spread_json(s.budget_ratio);
   j["setup_seconds"] = spread_json(s.setup_seconds);
   j["relmse"] = spread_json(s.relmse);
   j["trimmed_relmse"] = spread_json(s.trimmed_relmse);
@@ -237,7 +246,9 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
     runs.push_back({{"repeat", r->repeat},
                     {"seed", r->seed},
                     {"spp", r->spp},
+                    {"mean_spp", r->mean_spp},
                     {"seconds", r->seconds},
+                    {"budget", r->budget > 0 ? nlohmann::json(r->budget) : nlohmann::json()},
                     {"setup_seconds", r->setup_seconds},
                     {"relmse", r->relmse},
                     {"trimmed_relmse", r->trimmed_relmse},
@@ -251,6 +262,19 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
   return j;
 }
 
+std::vector<std::string> budget_warnings(const std::vector<SamplerSummary>& summaries) {
+  std::vector<std::string> out;
+  for (const auto& s : summaries)
+    for (const RunResult* r : s.runs)
+      if (r->budget > 0 && std::abs(r->seconds / r->budget - 1) > kBudgetTolerance)
+        out.push_back(fmt::format(
+            "{} (repeat {}) took {:.3f} s of a {:g} s budget ({:+.1f}%, more than {:g}% off): its "
+            "equal-time figures compare unequal times",
+            s.name, r->repeat + 1, r->seconds, r->budget, 100 * (r->seconds / r->budget - 1),
+            100 * kBudgetTolerance));
+  return out;
+}
+
 std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSummary>& summaries) {
   std::vector<std::vector<std::string>> rows;
   rows.push_back({"sampler", "spp", "seconds", "setup s", "relMSE median [min, max]",
@@ -260,7 +284,7 @@ std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSumma
     return s.values.empty() ? std::string("-") : fmt::format(fmt::runtime(format), s.median);
   };
   for (const auto& s : summaries) {
-    rows.push_back({s.name, median(s.spp, "{:g}"), median(s.seconds, "{:.2f}"),
+    rows.push_back({s.name, median(s.mean_spp, "{:.4g}"), median(s.seconds, "{:.2f}"),
                     median(s.setup_seconds, "{:.2f}"), with_range(s.relmse, sci),
                     median(s.trimmed_relmse, "{:.3e}"), median(s.mrse, "{:.3e}"),
                     median(s.relmse_ratio, "{:.3f}"), median(s.trimmed_ratio, "{:.3f}"),

@@ -21,7 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
 std::string entry_stem(const ReferenceKey& key, int spp, uint64_t seed) {
   return fmt::format("{}-{}spp-seed{}", key.hex(), spp, seed);
 }
@@ -160,21 +159,17 @@ int ReferenceCache::remove_stale_temporaries() const {
   return remove_stale_temporaries_in(m_dir);
 }
 
+// The cache folder is made as outputs' folders are: a link to nothing on the way is refused by
+// name (create_directories would say only "File exists"), a file in the way named.
 void ReferenceCache::check_writable() const {
-  std::error_code ec;
-  fs::create_directories(m_dir, ec);
-  if (!fs::is_directory(m_dir))
-    fail("cannot create the reference cache folder '{}': {}", m_dir.string(),
-         ec ? ec.message() : "a file of that name is in the way");
+  create_output_folder(m_dir, "the reference cache folder");
   check_folder_writable(m_dir, "the reference cache");
 }
 
-ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image,
-                                    ReferenceInfo info, const Image* first_half) const {
+ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image, ReferenceInfo info,
+                                    const Image* first_half) const {
+  create_output_folder(m_dir, "the reference cache folder");
   std::error_code ec;
-  fs::create_directories(m_dir, ec);
-  if (!fs::is_directory(m_dir))
-    fail("cannot create the reference cache folder '{}': {}", m_dir.string(), ec.message());
   info.width = image.width();
   info.height = image.height();
   const std::string stem = entry_stem(key, info.spp, info.seed);
@@ -284,7 +279,8 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
     if (half) {
       // The second half is 2 x mean - first half.
       Image second(width, height);
-      for (size_t i = 0; i < second.pixel_count(); ++i) second[i] = out.image[i] * 2.0f - (*half)[i];
+      for (size_t i = 0; i < second.pixel_count(); ++i)
+        second[i] = out.image[i] * 2.0f - (*half)[i];
       out.variance = variance_of_mean_of_halves(*half, second);
     }
     out.info = *hit;
@@ -307,8 +303,8 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
     rs.seed = request.seed + uint64_t(h);
     rs.pass_spp = request.pass_spp;
     rs.max_pass_spp = request.max_pass_spp;
-    const RenderProgress p = session.render(*sampler, film, rs, fmt::format("reference {}/2", h + 1),
-                                            show_progress, cancel);
+    const RenderProgress p = session.render(
+        *sampler, film, rs, fmt::format("reference {}/2", h + 1), show_progress, cancel);
     halves[h] = film.resolve();
     counts[h] = film.counts();
     out.info.spp += p.spp_done;

@@ -1,6 +1,8 @@
 #include "rll/render/render.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <mutex>
 
 #include "rll/core/error.h"
@@ -24,11 +26,17 @@ constexpr int kSamplesPerStopCheck = 64;
 bool PassStop::operator()() const {
   if (m_stop.load(std::memory_order_relaxed)) return true;
   if ((m_cancel && m_cancel->load(std::memory_order_relaxed)) ||
-      (m_time_limit > 0 && seconds_since(m_t0) >= m_time_limit)) {
+      (m_time_limit > 0 &&
+       seconds_since(m_t0) >= m_time_limit - m_reserve.load(std::memory_order_relaxed))) {
     m_stop.store(true);
     return true;
   }
   return false;
+}
+
+int pass_size_for_budget(int size, double left, double seconds_per_spp) {
+  if (!(seconds_per_spp > 0) || !(left < double(size) * seconds_per_spp)) return size;
+  return std::max(1, int(std::floor(left / seconds_per_spp)));
 }
 
 Ray camera_ray(const Scene& scene, int x, int y, SampleStream& stream) {
@@ -59,11 +67,24 @@ RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_p
   auto t0 = Clock::now();
   const PassStop stop(cancel, settings.time_limit, t0);
 
+  // The last pass's rate (seconds of work per sample per pixel) and its end of pass's seconds,
+  // which size the next pass under a time budget.
+  const double pixels = double(film.width()) * double(film.height());
+  double seconds_per_spp = 0, end_pass_seconds = 0;
   while (progress.spp_done < settings.spp && !stop.stopped()) {
     const int first = progress.spp_done;
     const int size = std::min(max_pass, settings.pass_spp << std::min(20, progress.passes / 2));
-    const int count = std::min(size, settings.spp - first);
+    int count = std::min(size, settings.spp - first);
+    if (settings.time_limit > 0) {
+      stop.reserve(end_pass_seconds);
+      count = pass_size_for_budget(
+          count, settings.time_limit - seconds_since(t0) - end_pass_seconds, seconds_per_spp);
+    }
+    const auto w0 = Clock::now();
+    const uint64_t camera0 = progress.rays.camera;
     work(first, count, frame_seed, stop, progress.rays, progress.nonfinite);
+    if (progress.rays.camera > camera0)
+      seconds_per_spp = seconds_since(w0) * pixels / double(progress.rays.camera - camera0);
     // A stopped pass leaves some pixels with fewer samples; the film's counts keep it unbiased.
     // The sampler's end of pass still runs on it: the rewards it gathered are as valid as a whole
     // pass's (the learning weighs rewards by their counts, never by the pass's size), and a state
@@ -72,7 +93,9 @@ RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_p
     progress.spp_done = spp_done();
     progress.samples = progress.rays.camera;
     progress.seconds = seconds_since(t0);
+    const auto e0 = Clock::now();
     end_pass();
+    end_pass_seconds = seconds_since(e0);
     if (stop.stopped()) {
       progress.cancelled = cancel && cancel->load();
       progress.out_of_time = !progress.cancelled;

@@ -56,14 +56,26 @@ class PassStop {
       : m_cancel(cancel), m_time_limit(time_limit), m_t0(t0) {}
   bool operator()() const;
   bool stopped() const { return m_stop.load(); }
+  // Seconds kept back from the time budget for the end of pass that follows a stopped pass, so
+  // that the render, that end of pass included, ends at the budget. Set between passes.
+  void reserve(double seconds) const { m_reserve.store(seconds, std::memory_order_relaxed); }
 
  private:
   const std::atomic<bool>* m_cancel;
   double m_time_limit;
+  mutable std::atomic<double> m_reserve{0};
   const std::chrono::steady_clock::time_point&
       m_t0;  // moves on while the caller's time is excluded
   mutable std::atomic<bool> m_stop{false};
 };
+
+// The samples per pixel of the next pass under a time budget: the pass schedule's `size`, fewer
+// where `left` seconds of the budget (its end of pass's expected time taken off) hold fewer at
+// the last pass's `seconds_per_spp`; at least 1 (a pass that then runs into the budget is cut
+// there). Sized so, a time-budgeted render ends at its budget on a pass boundary instead of
+// cutting a large pass part way, which leaves the pixels the cut did not reach a pass's samples
+// fewer than the rest (issue 45: equal time that is equal).
+int pass_size_for_budget(int size, double left, double seconds_per_spp);
 
 // What one pass of a renderer does: takes samples [first, first + count) of every pixel into the
 // film, each as the seeded stream of (frame_seed, pixel, settings.first_sample + sample) gives
