@@ -476,6 +476,11 @@ PyRender py_render(const Arg<PyScene>& scene_arg, const Arg<std::string>& sample
     lock.lock();
   }
   const std::shared_ptr<RenderSession> session = session_for(scene, settings);
+  // The diagnostics of `aov` are kept beside the film: checked with it, as `rll render --aov`.
+  if (!aovs.empty())
+    session->check_film_memory(
+        kRenderBytesPerPixel + kCameraVertexBytesPerPixel + 4.0 * double(aovs.size()),
+        fmt::format("{}, and the aov diagnostics", kRenderPixelText));
   const std::shared_ptr<LightSampler> sampler = named_sampler(*session, sampler_spec);
 
   RenderSettings rs;

@@ -992,6 +992,35 @@ def test_huge_broadcast_arrays_are_refused_before_they_are_copied(tmp_path):
     assert not (tmp_path / "x.exr").exists()
 
 
+AOV_MEMORY_SCRIPT = r"""
+import resource, sys
+resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+import rll
+scene = rll.load("builtin:cornell-box")
+try:
+    rll.render(scene, sampler="power", spp=1, res=(8000, 5000), aov=["visible"])
+    print("accepted", flush=True)
+except rll.Error as e:
+    print("refused", str(e).replace("\n", " "), flush=True)
+peak = [l.split()[1] for l in open("/proc/self/status") if l.startswith("VmHWM:")]
+print("peak_kib", peak[0] if peak else 0, flush=True)
+"""
+
+
+def test_render_aov_memory_is_checked_with_the_film(tmp_path):
+    # 8000x5000: the film alone (48 bytes a pixel, 1.8 GiB) is within the child's 2.4 GiB
+    # budget, with the aov diagnostics (76 bytes a pixel, 2.8 GiB) it is not: refused by name
+    # before anything is allocated, as `rll render --aov` refuses it (the binding checked the
+    # film alone and then took the diagnostics' memory).
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    r = run_python(AOV_MEMORY_SCRIPT, env=env)
+    assert r.returncode == 0, r.stderr
+    lines = dict(line.split(" ", 1) for line in r.stdout.splitlines())
+    assert "refused" in lines, r.stdout
+    assert "aov diagnostics" in lines["refused"], lines["refused"]
+    assert 0 < int(lines["peak_kib"]) < 1024 * 1024, "the film was allocated before the check"
+
+
 def test_paths_as_bytes_and_pathlike(tmp_path, monkeypatch):
     # A bytes path was written as str(bytes): rll.write_exr(b"x.exr", ...) made "b'x.exr'".
     monkeypatch.chdir(tmp_path)
