@@ -12,6 +12,7 @@
 #include <cstdint>
 
 #include "rll/core/device.h"
+#include "rll/core/search.h"
 #include "rll/learn/cut_store.h"
 #include "rll/learn/moments.h"
 #include "rll/learn/split_collapse.h"
@@ -244,20 +245,6 @@ RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint3
     const double w = j - k0 >= 2 ? g[k0 + 2] : pri[k0] + pri[k0 + 1];
     return {w, g[k0], g[k0 + 1], double(j - k0 + 1)};
   };
-  // The first of ends[lo, hi) for which `past` holds (std::lower_bound / upper_bound).
-  auto first_end = [&](uint32_t lo, uint32_t hi, auto past) {
-    uint32_t n = hi - lo;
-    while (n > 0) {
-      const uint32_t half = n / 2;
-      if (!past(ends[lo + half])) {
-        lo += half + 1;
-        n -= half + 1;
-      } else {
-        n = half;
-      }
-    }
-    return lo;
-  };
   uint32_t node = LightTree::kRoot, k0 = 0, k1 = K;  // a subtree and its clusters [k0, k1)
   for (;;) {
     // Down the first children to the subtree's first cluster.
@@ -278,13 +265,13 @@ RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint3
         park(done, k0, k1 - 1);
         const uint32_t end = pn.end;
         k0 = k1;
-        k1 = first_end(k1, K, [=](uint32_t e) { return e >= end; }) + 1;
+        k1 = lower_bound_index(ends, k1, K, end) + 1;
         node = pn.child + 1;
         break;
       }
       // A second child: the first child's clusters start with the parent's range.
       const uint32_t begin = pn.begin, j = k0 - 1;
-      k0 = first_end(0, k0, [=](uint32_t e) { return e > begin; });
+      k0 = upper_bound_index(ends, 0u, k0, begin);
       const detail::GuideSums a = unpark(k0, j);
       v.gl[b + j] = float(a.factor());
       v.gr[b + j] = float(done.factor());
