@@ -169,15 +169,12 @@ RLL_HD inline void cut_values(const CutStoreEndView& v, uint32_t cell, size_t K,
   const float* q = &v.q[b];
   const float* m2 = &v.m2[b];
   const bool moment = v.s.target == LearnTarget::Moment;
-  // What the visited clusters say the cell's total is: their values over their prior share (a
-  // share below a quarter is taken as a quarter, so that one bright, rarely chosen cluster
-  // does not inflate every unvisited one).
-  double v_sum = 0, p_sum = 0;
+  // What the visited clusters say the cell's total is.
+  VisitedTotal sums;
   for (size_t k = 0; k < K; ++k) {
     if (q[k] < 0) continue;
-    out[k] = moment ? std::sqrt(std::max(m2[k], 0.0f)) : q[k];
-    v_sum += out[k];
-    p_sum += pri[k];
+    out[k] = target_value(moment, q[k], m2[k]);
+    sums.add(out[k], pri[k]);
   }
   if (v.s.guided) {
     // Ratios to the tree's importance: a cluster never visited gets the visited clusters' mean
@@ -185,12 +182,12 @@ RLL_HD inline void cut_values(const CutStoreEndView& v, uint32_t cell, size_t K,
     double wv = 0;
     for (size_t k = 0; k < K; ++k)
       if (q[k] >= 0) wv += pri[k] * out[k];
-    const float mean = p_sum > 0 ? float(wv / p_sum) : 0.0f;
+    const float mean = sums.shares > 0 ? float(wv / sums.shares) : 0.0f;
     for (size_t k = 0; k < K; ++k)
       if (q[k] < 0) out[k] = mean;
     return;
   }
-  const double total = v_sum / std::max(p_sum, 0.25);
+  const double total = sums.total();
   for (size_t k = 0; k < K; ++k)
     if (q[k] < 0) out[k] = v.s.q_init >= 0 ? v.s.q_init : float(total * pri[k]);
   if (v.has_pool.empty() || !v.has_pool[cell]) return;
@@ -353,9 +350,7 @@ RLL_HD inline void cut_refresh(const CutStoreEndView& v, uint32_t cell, const Cu
 RLL_HD inline void cut_forget(const CutStoreEndView& v, uint32_t cell) {
   if (v.s.forget != Forgetting::Changes || v.s.rule != LearningRule::Shrinkage || !v.active(cell))
     return;
-  const size_t b = v.base(cell);
-  const float cap = float(1.0 / v.s.alpha);
-  for (size_t k = 0; k < v.size[cell]; ++k) v.n[b + k] = std::min(v.n[b + k], cap);
+  forget_to_window(&v.n[v.base(cell)], v.size[cell], v.s.alpha);
 }
 
 // Forgets a cell (eviction).

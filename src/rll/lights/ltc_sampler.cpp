@@ -13,6 +13,7 @@
 #include "rll/core/rng.h"
 #include "rll/core/sampling.h"
 #include "rll/core/search.h"
+#include "rll/learn/moments.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/scene/scene.h"
 
@@ -456,13 +457,10 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
       bsum = 0;
       for (uint32_t k = 0; k < K; ++k) bsum += b[k] = m_tree.node(m_initial[k]).bounds.power;
     }
-    double vsum = 0, share = 0;
+    VisitedTotal sums;
     for (uint32_t k = 0; k < K; ++k)
-      if (cnt[k] > 0) {
-        vsum += mean_r[k];
-        share += bsum > 0 ? b[k] / bsum : 0.0;
-      }
-    const double total = vsum / std::max(share, 0.25);
+      if (cnt[k] > 0) sums.add(mean_r[k], bsum > 0 ? b[k] / bsum : 0.0);
+    const double total = sums.total();
     m_prior_scale[e] = bsum > 0 ? float(total / bsum) : 0.0f;
     for (uint32_t k = 0; k < K; ++k) {
       const double prior = double(m_prior_scale[e]) * b[k];

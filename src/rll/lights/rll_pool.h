@@ -79,8 +79,7 @@ RLL_HD inline uint32_t pool_fold(const CutStoreEndView& v, const PoolEntry* entr
 // back to the last 1/alpha rewards, as cut_forget does for a cell's.
 RLL_HD inline void pool_forget(const CutStoreEndView& v, const RllPoolView& p, size_t slot) {
   if (v.s.forget != Forgetting::Changes) return;
-  const float cap = float(1.0 / v.s.alpha);
-  for (size_t k = 0; k < p.k; ++k) p.n[slot * p.k + k] = std::min(p.n[slot * p.k + k], cap);
+  forget_to_window(&p.n[slot * p.k], p.k, v.s.alpha);
 }
 
 // A coarse cell's values into out (zero where it has none), normalized if `normalize`; false if
@@ -92,7 +91,7 @@ RLL_HD inline bool pool_values(const RllPoolView& p, size_t slot, bool moment, f
   const float* m2 = &p.m2[slot * K];
   double total = 0;
   for (size_t k = 0; k < K; ++k) {
-    out[k] = q[k] < 0 ? 0.0f : moment ? std::sqrt(std::max(m2[k], 0.0f)) : q[k];
+    out[k] = q[k] < 0 ? 0.0f : target_value(moment, q[k], m2[k]);
     total += out[k];
   }
   if (normalize && total > 0)
