@@ -14,7 +14,8 @@ using namespace rll;
 
 namespace {
 
-void expect_cell_invariants(const LightTree& tree, const CutStore& store, uint32_t cell, int max_size) {
+void expect_cell_invariants(const LightTree& tree, const CutStore& store, uint32_t cell,
+                            int max_size) {
   ASSERT_TRUE(store.active(cell));
   const uint32_t K = store.size(cell);
   ASSERT_GE(K, 1u);
@@ -58,7 +59,8 @@ TEST(SplitCollapse, InvariantsAfterManyRandomPasses) {
   CutStore store(tree, cells, cs, 1.0);
   Pcg32 rng(2024);
   for (uint32_t c = 0; c < cells; ++c)
-    store.set_anchor(c, {Vec3(rng.next_float() * 20 - 10, 0, rng.next_float() * 20 - 10), Vec3(0, 1, 0), -4});
+    store.set_anchor(
+        c, {Vec3(rng.next_float() * 20 - 10, 0, rng.next_float() * 20 - 10), Vec3(0, 1, 0), -4});
   uint64_t splits = 0, collapses = 0;
   for (int pass = 0; pass < 300; ++pass) {
     for (uint32_t c = 0; c < cells; ++c) {
@@ -66,7 +68,8 @@ TEST(SplitCollapse, InvariantsAfterManyRandomPasses) {
       // Rewards concentrated on a few clusters that change over time, zeros included.
       for (int i = 0; i < 40; ++i) {
         uint32_t k = rng.next_bounded(K);
-        float r = (k + pass / 50) % 5 == 0 ? 10 * rng.next_float() : (rng.next_float() < 0.7f ? 0.0f : rng.next_float());
+        float r = (k + pass / 50) % 5 == 0 ? 10 * rng.next_float()
+                                           : (rng.next_float() < 0.7f ? 0.0f : rng.next_float());
         store.record(c, k, r);
       }
       CutStore::PassStats st = store.end_pass(c);
@@ -103,7 +106,15 @@ TEST(SplitCollapse, SplitsTheLargestAndCollapsesTheSmallest) {
   const uint32_t parent = tree.node(cut.nodes[pair]).parent, split = cut.nodes[big];
   std::vector<float> qe = cut.q, score = cut.q;
   SplitCollapse sc(tree, int(K), 2.0f);
-  EXPECT_EQ(sc.step(cut, qe, score, [](uint32_t) { return 1.0f; }, [](uint32_t) { return 1.0f; }), 1);
+  long at = -1;  // where the split's children are (the oracle estimates them there)
+  EXPECT_EQ(sc.step(
+                cut, qe, score, [](uint32_t) { return 1.0f; }, [](uint32_t) { return 1.0f; }, &at),
+            1);
+  ASSERT_GE(at, 0);
+  ASSERT_LT(size_t(at) + 1, cut.nodes.size());
+  EXPECT_EQ(cut.nodes[at], tree.node(split).child);
+  EXPECT_EQ(cut.nodes[at + 1], tree.node(split).child + 1);
+  EXPECT_EQ(at, long(big) - (big > pair ? 1 : 0));  // one fewer where the collapse came before
   EXPECT_EQ(cut.m2.size(), K);
   EXPECT_EQ(score.size(), K);
   EXPECT_TRUE(is_valid_cut(tree, cut.nodes));
@@ -119,7 +130,11 @@ TEST(SplitCollapse, SplitsTheLargestAndCollapsesTheSmallest) {
   flat.weight.assign(flat.nodes.size(), 1.0f);
   flat.n.assign(flat.nodes.size(), 1.0f);
   std::vector<float> qf = flat.q, sf = flat.q;
-  EXPECT_EQ(sc.step(flat, qf, sf, [](uint32_t) { return 1.0f; }, [](uint32_t) { return 1.0f; }), 0);
+  long none = -1;
+  EXPECT_EQ(sc.step(
+                flat, qf, sf, [](uint32_t) { return 1.0f; }, [](uint32_t) { return 1.0f; }, &none),
+            0);
+  EXPECT_EQ(none, -1);
 }
 
 // Defect of the first version: rewards were fixed point with 2^-24 of the brightest light's
@@ -173,7 +188,8 @@ TEST(CutStore, SaturatedRewardsNeverWrapAround) {
 TEST(ExactSum, OrderDoesNotMatterAndTheRangeIsWide) {
   std::vector<double> xs;
   Pcg32 rng(7);
-  for (int i = 0; i < 10000; ++i) xs.push_back(std::ldexp(double(rng.next_float()), int(rng.next_bounded(70)) - 40));
+  for (int i = 0; i < 10000; ++i)
+    xs.push_back(std::ldexp(double(rng.next_float()), int(rng.next_bounded(70)) - 40));
   ExactSum a, b;
   for (double x : xs) a.add(x);
   for (size_t i = xs.size(); i-- > 0;) b.add(xs[i]);
@@ -190,7 +206,8 @@ namespace {
 // One cell of a cut of the three root-level clusters' rewards after 30 passes: cluster 0 always
 // 1 (fully visible), cluster 1 alternately 2 and 0 (half its lights hidden: the same mean, twice
 // the second moment), cluster 2 always 0 (fully hidden).
-std::vector<double> shares_after(LearnTarget target, const LightTree& tree, std::vector<float>* cdf) {
+std::vector<double> shares_after(LearnTarget target, const LightTree& tree,
+                                 std::vector<float>* cdf) {
   CutSettings cs;
   cs.cut_size = 3;
   cs.initial_size = 3;
@@ -245,8 +262,8 @@ TEST(CutStore, TargetFactorIsTheTableOverThePrior) {
   CutStore store(tree, cells, cs, 1.0);
   Pcg32 rng(99);
   for (uint32_t c = 0; c < cells; ++c)
-    store.set_anchor(c, {Vec3(rng.next_float() * 20 - 10, 0, rng.next_float() * 20 - 10),
-                         Vec3(0, 1, 0), -4});
+    store.set_anchor(
+        c, {Vec3(rng.next_float() * 20 - 10, 0, rng.next_float() * 20 - 10), Vec3(0, 1, 0), -4});
   for (int pass = 0; pass < 6; ++pass) {
     for (uint32_t c = 0; c + 1 < cells; ++c) {  // the last cell never gets a reward
       const uint32_t K = store.active(c) ? store.size(c) : store.initial_size();

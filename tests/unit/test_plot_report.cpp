@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "rll/core/error.h"
-#include "rll/eval/encode.h"
 #include "rll/eval/plot.h"
 #include "rll/eval/raster.h"
 #include "rll/eval/report.h"
@@ -142,21 +141,6 @@ TEST(Plot, EmptyPlotStillDraws) {
   EXPECT_FALSE(plot_png(p).empty());
 }
 
-TEST(Report, Base64TestVectors) {  // RFC 4648, section 10
-  EXPECT_EQ(base64(""), "");
-  EXPECT_EQ(base64("f"), "Zg==");
-  EXPECT_EQ(base64("fo"), "Zm8=");
-  EXPECT_EQ(base64("foo"), "Zm9v");
-  EXPECT_EQ(base64("foob"), "Zm9vYg==");
-  EXPECT_EQ(base64("fooba"), "Zm9vYmE=");
-  EXPECT_EQ(base64("foobar"), "Zm9vYmFy");
-  EXPECT_EQ(base64(std::string("\xff\x00\xfe", 3)), "/wD+");
-}
-
-TEST(Report, MarkupEscaping) {
-  EXPECT_EQ(escape_markup("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&#39;");
-}
-
 TEST(Report, RgbeRoundTripsWithinItsPrecision) {
   Image img(6, 1);
   img[0] = Rgb(1.0f, 0.5f, 0.25f);
@@ -190,7 +174,8 @@ TEST(Report, HtmlIsSelfContainedAndHasTheTable) {
   r.facts = {{"budget", "1 s"}};
   r.warnings = {"a warning"};
   r.reference = &ref;
-  r.entries = {{"power", "relMSE 1", 0x1f77b4, &a, &ea, ""}, {"r<l>l", "relMSE 2", 0xd62728, &b, &eb, ""}};
+  r.entries = {{"power", "relMSE 1", 0x1f77b4, &a, &ea, ""},
+               {"r<l>l", "relMSE 2", 0xd62728, &b, &eb, ""}};
   r.table = {{"sampler", "relMSE"}, {"power", "1"}, {"r<l>l", "2"}};
   r.plot_svg = "<svg id=\"plot\"></svg>";
   const std::string html = report_html(r);

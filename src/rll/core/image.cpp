@@ -16,7 +16,6 @@
 #include <ImfTileDescriptionAttribute.h>
 #include <fmt/ranges.h>
 #include <stb/stb_image.h>
-#include <stb/stb_image_write.h>
 #include <unistd.h>
 
 #include <array>
@@ -28,6 +27,7 @@
 #include <memory>
 #include <optional>
 
+#include "rll/core/encode.h"
 #include "rll/core/error.h"
 #include "rll/core/file_checks.h"
 #include "rll/core/memory_budget.h"
@@ -698,14 +698,7 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
     for (size_t i = 0; i < image.pixel_count(); ++i)
       for (int c = 0; c < 3; ++c) px[3 * i + c] = to_srgb8(image[i][c], scale);
     // Encoded in memory: stbi_write_png ignores errors of its own file writes.
-    std::string png;
-    auto append = [](void* context, void* data, int size) {
-      static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
-    };
-    if (!stbi_write_png_to_func(append, &png, image.width(), image.height(), 3, px.data(),
-                                image.width() * 3))
-      fail("cannot write '{}': PNG encoding failed", path.string());
-    write_file_atomic(path, png);
+    write_file_atomic(path, png_bytes(px, image.width(), image.height(), 3));
     return;
   } else {
     fail("cannot write '{}': unknown image extension '{}' (use .exr or .png)", path.string(), ext);

@@ -8,7 +8,7 @@
 
 #include "rll/core/error.h"
 #include "rll/core/image.h"
-#include "rll/eval/encode.h"
+#include "rll/core/encode.h"
 #include "rll/eval/raster.h"
 
 namespace rll {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "rll/core/error.h"
-#include "rll/eval/encode.h"
+#include "rll/core/encode.h"
 
 namespace rll {
 

@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rll/core/error.h"
-#include "rll/eval/encode.h"
+#include "rll/core/encode.h"
 #include "rll/eval/metrics.h"
 #include "rll/eval/plot.h"
 #include "rll/render/aov.h"

@@ -6,9 +6,10 @@
 #include <algorithm>
 #include <cstring>
 #include <map>
-#include <set>
 #include <nlohmann/json.hpp>
+#include <set>
 
+#include "rll/core/encode.h"
 #include "rll/core/error.h"
 #include "rll/core/file_checks.h"
 #include "rll/io/save.h"
@@ -18,22 +19,6 @@ namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
 
 namespace {
-
-std::string base64(const std::string& bytes) {
-  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  for (size_t i = 0; i < bytes.size(); i += 3) {
-    uint32_t v = uint32_t(uint8_t(bytes[i])) << 16;
-    if (i + 1 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 1])) << 8;
-    if (i + 2 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 2]));
-    out += k[(v >> 18) & 63];
-    out += k[(v >> 12) & 63];
-    out += i + 1 < bytes.size() ? k[(v >> 6) & 63] : '=';
-    out += i + 2 < bytes.size() ? k[v & 63] : '=';
-  }
-  return out;
-}
 
 json vec(const Vec3& v) {
   return json::array({v.x, v.y, v.z});
@@ -64,9 +49,10 @@ class GltfWriter {
     for (const Light& l : m_scene.lights) {
       if (l.type == LightType::Triangle) continue;
       if (l.has_image()) {
-        m_warnings.push_back(fmt::format(
-            "glTF has no {} light: light {} is not written",
-            l.type == LightType::Goniometric ? "goniometric" : "projection", &l - m_scene.lights.data()));
+        m_warnings.push_back(
+            fmt::format("glTF has no {} light: light {} is not written",
+                        l.type == LightType::Goniometric ? "goniometric" : "projection",
+                        &l - m_scene.lights.data()));
         continue;
       }
       json light;

@@ -12,6 +12,7 @@
 #include <cstdint>
 
 #include "rll/core/device.h"
+#include "rll/core/search.h"
 #include "rll/learn/cut_store.h"
 #include "rll/learn/moments.h"
 #include "rll/learn/split_collapse.h"
@@ -168,15 +169,12 @@ RLL_HD inline void cut_values(const CutStoreEndView& v, uint32_t cell, size_t K,
   const float* q = &v.q[b];
   const float* m2 = &v.m2[b];
   const bool moment = v.s.target == LearnTarget::Moment;
-  // What the visited clusters say the cell's total is: their values over their prior share (a
-  // share below a quarter is taken as a quarter, so that one bright, rarely chosen cluster
-  // does not inflate every unvisited one).
-  double v_sum = 0, p_sum = 0;
+  // What the visited clusters say the cell's total is.
+  VisitedTotal sums;
   for (size_t k = 0; k < K; ++k) {
     if (q[k] < 0) continue;
-    out[k] = moment ? std::sqrt(std::max(m2[k], 0.0f)) : q[k];
-    v_sum += out[k];
-    p_sum += pri[k];
+    out[k] = target_value(moment, q[k], m2[k]);
+    sums.add(out[k], pri[k]);
   }
   if (v.s.guided) {
     // Ratios to the tree's importance: a cluster never visited gets the visited clusters' mean
@@ -184,12 +182,12 @@ RLL_HD inline void cut_values(const CutStoreEndView& v, uint32_t cell, size_t K,
     double wv = 0;
     for (size_t k = 0; k < K; ++k)
       if (q[k] >= 0) wv += pri[k] * out[k];
-    const float mean = p_sum > 0 ? float(wv / p_sum) : 0.0f;
+    const float mean = sums.shares > 0 ? float(wv / sums.shares) : 0.0f;
     for (size_t k = 0; k < K; ++k)
       if (q[k] < 0) out[k] = mean;
     return;
   }
-  const double total = v_sum / std::max(p_sum, 0.25);
+  const double total = sums.total();
   for (size_t k = 0; k < K; ++k)
     if (q[k] < 0) out[k] = v.s.q_init >= 0 ? v.s.q_init : float(total * pri[k]);
   if (v.has_pool.empty() || !v.has_pool[cell]) return;
@@ -244,20 +242,6 @@ RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint3
     const double w = j - k0 >= 2 ? g[k0 + 2] : pri[k0] + pri[k0 + 1];
     return {w, g[k0], g[k0 + 1], double(j - k0 + 1)};
   };
-  // The first of ends[lo, hi) for which `past` holds (std::lower_bound / upper_bound).
-  auto first_end = [&](uint32_t lo, uint32_t hi, auto past) {
-    uint32_t n = hi - lo;
-    while (n > 0) {
-      const uint32_t half = n / 2;
-      if (!past(ends[lo + half])) {
-        lo += half + 1;
-        n -= half + 1;
-      } else {
-        n = half;
-      }
-    }
-    return lo;
-  };
   uint32_t node = LightTree::kRoot, k0 = 0, k1 = K;  // a subtree and its clusters [k0, k1)
   for (;;) {
     // Down the first children to the subtree's first cluster.
@@ -278,13 +262,13 @@ RLL_HD inline void cut_bake_guide(const CutStoreEndView& v, uint32_t cell, uint3
         park(done, k0, k1 - 1);
         const uint32_t end = pn.end;
         k0 = k1;
-        k1 = first_end(k1, K, [=](uint32_t e) { return e >= end; }) + 1;
+        k1 = lower_bound_index(ends, k1, K, end) + 1;
         node = pn.child + 1;
         break;
       }
       // A second child: the first child's clusters start with the parent's range.
       const uint32_t begin = pn.begin, j = k0 - 1;
-      k0 = first_end(0, k0, [=](uint32_t e) { return e > begin; });
+      k0 = upper_bound_index(ends, 0u, k0, begin);
       const detail::GuideSums a = unpark(k0, j);
       v.gl[b + j] = float(a.factor());
       v.gr[b + j] = float(done.factor());
@@ -366,9 +350,7 @@ RLL_HD inline void cut_refresh(const CutStoreEndView& v, uint32_t cell, const Cu
 RLL_HD inline void cut_forget(const CutStoreEndView& v, uint32_t cell) {
   if (v.s.forget != Forgetting::Changes || v.s.rule != LearningRule::Shrinkage || !v.active(cell))
     return;
-  const size_t b = v.base(cell);
-  const float cap = float(1.0 / v.s.alpha);
-  for (size_t k = 0; k < v.size[cell]; ++k) v.n[b + k] = std::min(v.n[b + k], cap);
+  forget_to_window(&v.n[v.base(cell)], v.size[cell], v.s.alpha);
 }
 
 // Forgets a cell (eviction).

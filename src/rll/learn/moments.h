@@ -84,6 +84,31 @@ RLL_HD inline bool shrinkage_update(const CutSettings& s, float& q, float& m2, f
   return changed;
 }
 
+// A cluster's effective value from what it learnt: sqrt(M2) under target=moment, else its mean Q
+// (for a visited cluster; one never visited has q < 0 and gets a prior estimate instead).
+RLL_HD inline float target_value(bool moment, float q, float m2) {
+  return moment ? std::sqrt(std::max(m2, 0.0f)) : q;
+}
+
+// What the visited clusters of a cell say its total is: their values over their prior shares,
+// both summed in double in the order they are added, the shares' sum taken as at least a quarter
+// so that one bright, rarely chosen cluster does not inflate every unvisited one.
+struct VisitedTotal {
+  double values = 0, shares = 0;
+  RLL_HD void add(double value, double share) {
+    values += value;
+    shares += share;
+  }
+  RLL_HD double total() const { return values / std::max(shares, 0.25); }
+};
+
+// forget=changes when the lights changed: every cluster's memory (n, the weight of the rewards
+// behind its values) cut back to the last 1/alpha rewards, as if each had failed the change test.
+RLL_HD inline void forget_to_window(float* n, size_t count, double alpha) {
+  const float cap = float(1.0 / alpha);
+  for (size_t k = 0; k < count; ++k) n[k] = std::min(n[k], cap);
+}
+
 // Pooling: shrinks K values, each held with the weight of n[k] rewards (visited[k] false: none,
 // and the value is ignored), toward a distribution `shares` scaled to what the visited values say
 // the total is (their sum over their shares, the shares' sum taken as at least a quarter, so that
@@ -93,14 +118,11 @@ RLL_HD inline bool shrinkage_update(const CutSettings& s, float& q, float& m2, f
 template <class Visited>
 RLL_HD void shrink_toward(size_t K, Visited visited, const float* n, const float* shares, double c,
                           float* values) {
-  double v_sum = 0, s_sum = 0;
+  VisitedTotal sums;
   for (size_t k = 0; k < K; ++k)
-    if (visited(k)) {
-      v_sum += values[k];
-      s_sum += shares[k];
-    }
-  if (!(v_sum > 0)) return;
-  const double total = v_sum / std::max(s_sum, 0.25);
+    if (visited(k)) sums.add(values[k], shares[k]);
+  if (!(sums.values > 0)) return;
+  const double total = sums.total();
   for (size_t k = 0; k < K; ++k) {
     const double guess = total * shares[k], w = visited(k) ? double(n[k]) : 0.0;
     values[k] = w + c > 0 ? float((w * values[k] + c * guess) / (w + c)) : float(guess);

@@ -59,13 +59,14 @@ RLL_HD inline long collapse_choice(const LightTreeView& tree, size_t K, const ui
 // One split-collapse step (DESIGN 2b point 4) on a cut of `size` clusters held in arrays with
 // room for size + 1 (nodes, q, m2, n, weight as in Cut; value and score as SplitCollapse says):
 // returns 1 for a split with a collapse, 2 for a pure split (size < max_size), 0 if nothing
-// changed; `size` follows. `weight_of(node)` is the prior weight of a node entering the cut;
-// `share_of(node)` splits a cluster's values between its children.
+// changed; `size` follows, and `split_at` (if given) the index of the split's first child.
+// `weight_of(node)` is the prior weight of a node entering the cut; `share_of(node)` splits a
+// cluster's values between its children.
 template <typename WeightOf, typename ShareOf>
 RLL_HD int split_collapse_step(const LightTreeView& tree, int max_size, float threshold,
                                uint32_t& size, uint32_t* nodes, float* q, float* m2, float* n,
                                float* weight, float* value, float* score, const WeightOf& weight_of,
-                               const ShareOf& share_of) {
+                               const ShareOf& share_of, long* split_at = nullptr) {
   size_t K = size;
   long best = split_choice(tree, K, nodes, score);
   if (best < 0 || !(score[best] > 0)) return 0;
@@ -104,6 +105,7 @@ RLL_HD int split_collapse_step(const LightTreeView& tree, int max_size, float th
   const float s0 = share_of(nd.child), s1 = share_of(nd.child + 1);
   const float f0 = s0 + s1 > 0 ? s0 / (s0 + s1) : 0.5f, f1 = 1 - f0;
   const size_t i = size_t(best);
+  if (split_at) *split_at = best;
   const float qi = q[i], m2i = m2[i], v = value[i], sc = score[i];
   const float ni = 0.5f * n[i];
   nodes[i] = nd.child;
@@ -136,7 +138,7 @@ class SplitCollapse {
   // One step, as split_collapse_step.
   template <typename WeightOf, typename ShareOf>
   int step(Cut& cut, std::vector<float>& value, std::vector<float>& score,
-           const WeightOf& weight_of, const ShareOf& share_of) const {
+           const WeightOf& weight_of, const ShareOf& share_of, long* split_at = nullptr) const {
     uint32_t K = uint32_t(cut.nodes.size());
     auto resize = [&](size_t to) {
       for (auto* v : {&cut.q, &cut.m2, &cut.n, &cut.weight, &value, &score}) v->resize(to);
@@ -145,7 +147,7 @@ class SplitCollapse {
     resize(K + 1);  // room for a split
     const int r = split_collapse_step(m_tree.view(), m_max, m_t, K, cut.nodes.data(), cut.q.data(),
                                       cut.m2.data(), cut.n.data(), cut.weight.data(), value.data(),
-                                      score.data(), weight_of, share_of);
+                                      score.data(), weight_of, share_of, split_at);
     resize(K);
     return r;
   }

@@ -12,6 +12,8 @@
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
 #include "rll/core/sampling.h"
+#include "rll/core/search.h"
+#include "rll/learn/moments.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/scene/scene.h"
 
@@ -44,7 +46,8 @@ LtcSettings ltc_settings_from(const Params& p) {
 
 // --- Spatial clusters ---------------------------------------------------------------------------
 
-SpatialClusters SpatialClusters::build(const Scene& scene, uint32_t count, uint32_t points_per_cluster) {
+SpatialClusters SpatialClusters::build(const Scene& scene, uint32_t count,
+                                       uint32_t points_per_cluster) {
   const Mesh& mesh = scene.mesh;
   std::vector<uint32_t> tris;
   std::vector<double> prefix{0.0};
@@ -63,11 +66,13 @@ SpatialClusters SpatialClusters::build(const Scene& scene, uint32_t count, uint3
     const double total = prefix.back();
     for (size_t i = 0; i < n; ++i) {
       double target = (double(i) + rng.next_float()) / double(n) * total;  // stratified by area
-      size_t k = size_t(std::upper_bound(prefix.begin() + 1, prefix.end(), target) - prefix.begin()) - 1;
+      size_t k =
+          size_t(std::upper_bound(prefix.begin() + 1, prefix.end(), target) - prefix.begin()) - 1;
       k = std::min(k, tris.size() - 1);
       Vec2 b = sample_uniform_triangle({rng.next_float(), rng.next_float()});
       const uint32_t t = tris[k];
-      points.push_back(mesh.vertex(t, 0) * b.x + mesh.vertex(t, 1) * b.y + mesh.vertex(t, 2) * (1 - b.x - b.y));
+      points.push_back(mesh.vertex(t, 0) * b.x + mesh.vertex(t, 1) * b.y +
+                       mesh.vertex(t, 2) * (1 - b.x - b.y));
     }
   } else {
     points.push_back(scene.bounds.empty() ? Vec3(0) : scene.bounds.center());
@@ -96,7 +101,9 @@ SpatialClusters SpatialClusters::build(std::vector<Vec3> pts, uint32_t count) {
     return Leaf{node, d[axis], axis};
   };
   // The leaf with the largest box first; ties by node id, so the build is deterministic.
-  auto cmp = [](const Leaf& a, const Leaf& b) { return a.extent != b.extent ? a.extent < b.extent : a.node > b.node; };
+  auto cmp = [](const Leaf& a, const Leaf& b) {
+    return a.extent != b.extent ? a.extent < b.extent : a.node > b.node;
+  };
   std::priority_queue<Leaf, std::vector<Leaf>, decltype(cmp)> heap(cmp);
   heap.push(make_leaf(0));
   uint32_t leaves = 1;
@@ -106,8 +113,10 @@ SpatialClusters SpatialClusters::build(std::vector<Vec3> pts, uint32_t count) {
     const Range r = range[l.node];
     if (r.end - r.begin < 2 || !(l.extent > 0)) continue;  // stays a leaf
     const int axis = l.axis;
-    auto first = pts.begin() + r.begin, last = pts.begin() + r.end, mid = first + (r.end - r.begin) / 2;
-    std::nth_element(first, mid, last, [axis](const Vec3& a, const Vec3& b) { return a[axis] < b[axis]; });
+    auto first = pts.begin() + r.begin, last = pts.begin() + r.end,
+         mid = first + (r.end - r.begin) / 2;
+    std::nth_element(first, mid, last,
+                     [axis](const Vec3& a, const Vec3& b) { return a[axis] < b[axis]; });
     float m = (*mid)[axis], split = m;
     auto it = std::partition(first, last, [&](const Vec3& p) { return p[axis] < m; });
     if (it == first) {  // the median is the smallest value: put its ties on the left
@@ -141,7 +150,8 @@ SpatialClusters SpatialClusters::build(std::vector<Vec3> pts, uint32_t count) {
 // --- The initial cut ----------------------------------------------------------------------------
 
 std::vector<uint32_t> power_cut(const LightTree& tree, int size) {
-  return refine_cut(tree, size, [](const LightTree& t, uint32_t n) { return double(t.node(n).bounds.power); });
+  return refine_cut(tree, size,
+                    [](const LightTree& t, uint32_t n) { return double(t.node(n).bounds.power); });
 }
 
 // --- The sampler --------------------------------------------------------------------------------
@@ -150,7 +160,9 @@ namespace {
 constexpr double kMaxRootOfSquare = 0x1p18;  // r^2 saturates where ExactSum does
 
 // The learning rate of the t-th visit of an entry (t >= 1).
-inline double rate(double t) { return 1.0 / (4.0 * std::pow(std::max(t, 1.0), 0.857)); }
+inline double rate(double t) {
+  return 1.0 / (4.0 * std::pow(std::max(t, 1.0), 0.857));
+}
 
 // sum_{t = T+1}^{T+N} log(1 - a_t): term by term for the first visits, where a_t is large, then
 // by the midpoint integral of -a - a^2/2 (a < 2.2e-4 there; the error is far below float).
@@ -167,14 +179,16 @@ double log_keep(double T, double N) {
 }
 
 inline double unit_hash(uint64_t key, uint64_t node, uint64_t pass) {
-  uint64_t h = mix64(key * 0x9e3779b97f4a7c15ull ^ mix64(node * 0xc2b2ae3d27d4eb4full + (pass << 40) + 0x2021));
+  uint64_t h = mix64(key * 0x9e3779b97f4a7c15ull ^
+                     mix64(node * 0xc2b2ae3d27d4eb4full + (pass << 40) + 0x2021));
   return double(h >> 11) * 0x1p-53;
 }
 }  // namespace
 
 LtcLightSampler::LtcLightSampler(const Scene& scene, const LtcSettings& s)
     : m_tree(light_tree_of(scene)), m_s(s), m_m(s.max_cut) {
-  if (m_tree.depth() >= kMaxTreeDepth) fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
+  if (m_tree.depth() >= kMaxTreeDepth)
+    fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
   m_clusters = SpatialClusters::build(scene, s.clusters);
   m_initial = power_cut(m_tree, s.initial_cut);
   for (uint32_t n : m_initial) {
@@ -268,7 +282,8 @@ uint32_t LtcLightSampler::entry_key(const LightContext& ctx) const {
 }
 
 namespace {
-constexpr uint32_t kClaimed = 0xffffffffu, kFull = 0xfffffffeu;  // m_slot's states besides entry + 1
+constexpr uint32_t kClaimed = 0xffffffffu,
+                   kFull = 0xfffffffeu;  // m_slot's states besides entry + 1
 }  // namespace
 
 void LtcLightSampler::prepare(LightContext& ctx, float u) const {
@@ -322,7 +337,7 @@ float LtcLightSampler::node_probability(uint32_t entry, uint32_t k) const {
 
 uint32_t LtcLightSampler::find_node(uint32_t entry, uint32_t light) const {
   const uint32_t* ends = &m_end[size_t(entry) * m_m];
-  return uint32_t(std::upper_bound(ends, ends + m_size[entry], light) - ends);
+  return upper_bound_index(ends, 0u, m_size[entry], light);
 }
 
 SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
@@ -337,7 +352,8 @@ SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
     split.size = uint32_t(m_initial.size());
     SampledLight s = sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &split));
     if (!(s.pmf > 0)) return {};
-    s.cluster = uint32_t(std::upper_bound(m_initial_ends.begin(), m_initial_ends.end(), s.light) - m_initial_ends.begin());
+    s.cluster =
+        upper_bound_index(m_initial_ends.data(), 0u, uint32_t(m_initial_ends.size()), s.light);
     const float within = split.cluster == s.cluster ? split.below : 0.0f;
     s.cluster_pmf = within > 0 ? s.pmf / within : 0.0f;
     return s;
@@ -347,7 +363,7 @@ SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
   const size_t base = size_t(e) * m_m;
   const float* cdf = &m_cdf[base];
   const uint32_t K = m_size[e];
-  uint32_t k = uint32_t(std::upper_bound(cdf, cdf + K, u, [](double x, float c) { return x < double(c); }) - cdf);
+  uint32_t k = upper_bound_index(cdf, 0u, K, u);  // each entry compared as a double
   k = std::min(k, K - 1);
   while (k > 0 && cdf[k] == cdf[k - 1]) --k;
   const double lo = k > 0 ? double(cdf[k - 1]) : 0.0, q = double(cdf[k]) - lo;
@@ -400,7 +416,8 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
   const uint32_t K0 = fresh ? uint32_t(m_initial.size()) : m_size[e];
   double N = 0;
   for (uint32_t k = 0; k < K0; ++k) N += m_count[base + k].load(std::memory_order_relaxed);
-  if (N == 0) return;  // nothing new: the cut and CDF stand (a new entry keeps sampling like the tree)
+  if (N == 0)
+    return;  // nothing new: the cut and CDF stand (a new entry keeps sampling like the tree)
 
   // This pass's mean reward and mean squared reward per node, in scene units.
   thread_local std::vector<double> mean_r, mean_r2, mean_r2_0, cnt;
@@ -440,13 +457,10 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
       bsum = 0;
       for (uint32_t k = 0; k < K; ++k) bsum += b[k] = m_tree.node(m_initial[k]).bounds.power;
     }
-    double vsum = 0, share = 0;
+    VisitedTotal sums;
     for (uint32_t k = 0; k < K; ++k)
-      if (cnt[k] > 0) {
-        vsum += mean_r[k];
-        share += bsum > 0 ? b[k] / bsum : 0.0;
-      }
-    const double total = vsum / std::max(share, 0.25);
+      if (cnt[k] > 0) sums.add(mean_r[k], bsum > 0 ? b[k] / bsum : 0.0);
+    const double total = sums.total();
     m_prior_scale[e] = bsum > 0 ? float(total / bsum) : 0.0f;
     for (uint32_t k = 0; k < K; ++k) {
       const double prior = double(m_prior_scale[e]) * b[k];
@@ -509,7 +523,8 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
       });
       chosen.resize(room);
     }
-    std::sort(chosen.begin(), chosen.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+    std::sort(chosen.begin(), chosen.end(),
+              [](const auto& a, const auto& b) { return a.second > b.second; });
     for (const auto& [share, k] : chosen) {  // back to front: earlier indices stay valid
       (void)share;
       const size_t i = base + k;
@@ -550,7 +565,8 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
       m_node[i + 1] = nd.child + 1;
       m_w[i] = float(s0 * s0);
       m_w[i + 1] = float(s1 * s1);
-      m_n[i] = m_n[i + 1] = m_mean[i] = m_mean[i + 1] = m_sq[i] = m_sq[i + 1] = m_sq0[i] = m_sq0[i + 1] = 0;
+      m_n[i] = m_n[i + 1] = m_mean[i] = m_mean[i + 1] = m_sq[i] = m_sq[i + 1] = m_sq0[i] =
+          m_sq0[i + 1] = 0;
       m_pi[i + 1] = m_pi[i] = float(pi);
       m_size[e] = Kcur + 1;
       ++splits;
@@ -560,7 +576,8 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
 
   // The next pass's unit: the entry's largest learnt sqrt(M2).
   double largest = 0;
-  for (uint32_t k = 0; k < m_size[e]; ++k) largest = std::max(largest, std::sqrt(double(m_w[base + k])));
+  for (uint32_t k = 0; k < m_size[e]; ++k)
+    largest = std::max(largest, std::sqrt(double(m_w[base + k])));
   if (largest > 0 && std::isfinite(largest)) m_inv_unit[e] = 1 / largest;
   bake(e);
 }
@@ -600,13 +617,15 @@ void LtcLightSampler::bake(uint32_t e) {
     m_end[base + k] = nd.end;
     m_mid[base + k] = nd.is_leaf() ? 0 : m_tree.node(nd.child).end;
   }
-  for (uint32_t k = 0; k < K; ++k) m_cdf[base + k] = float(std::min(1.0, double(m_cdf[base + k]) / acc));
+  for (uint32_t k = 0; k < K; ++k)
+    m_cdf[base + k] = float(std::min(1.0, double(m_cdf[base + k]) / acc));
   m_cdf[base + K - 1] = 1.0f;
 }
 
 void LtcLightSampler::admit_by_visits() {
   // Drop the entries this pass created: which new keys got one depended on thread timing.
-  const uint32_t K0 = uint32_t(m_initial.size());  // a new entry records into the global cut's nodes
+  const uint32_t K0 =
+      uint32_t(m_initial.size());  // a new entry records into the global cut's nodes
   uint32_t used = 0;
   for (uint32_t e = 0; e < m_s.capacity; ++e) {
     if (m_key[e] == kNoCell) continue;
@@ -632,10 +651,12 @@ void LtcLightSampler::admit_by_visits() {
     want.push_back({n, k});
     m_failed_total += n;  // these visits learnt nothing
     m_request[k].store(0, std::memory_order_relaxed);
-    if (m_slot[k].load(std::memory_order_relaxed) == kFull) m_slot[k].store(0, std::memory_order_relaxed);
+    if (m_slot[k].load(std::memory_order_relaxed) == kFull)
+      m_slot[k].store(0, std::memory_order_relaxed);
   }
   const size_t room = std::min<size_t>(m_s.capacity - used, want.size());
-  const auto first = [](const std::pair<uint32_t, uint32_t>& a, const std::pair<uint32_t, uint32_t>& b) {
+  const auto first = [](const std::pair<uint32_t, uint32_t>& a,
+                        const std::pair<uint32_t, uint32_t>& b) {
     return a.first != b.first ? a.first > b.first : mix64(a.second) < mix64(b.second);
   };
   std::nth_element(want.begin(), want.begin() + room, want.end(), first);
@@ -653,7 +674,8 @@ void LtcLightSampler::end_pass() {
     admit_by_visits();
   } else {
     for (uint32_t e = 0; e < m_s.capacity; ++e)
-      if (m_key[e] != kNoCell && m_born[e] == m_pass) m_request[m_key[e]].store(0, std::memory_order_relaxed);
+      if (m_key[e] != kNoCell && m_born[e] == m_pass)
+        m_request[m_key[e]].store(0, std::memory_order_relaxed);
   }
   std::vector<uint32_t> entries;
   for (uint32_t e = 0; e < m_s.capacity; ++e)

@@ -54,8 +54,8 @@ struct CellPoint {
 // Occluded contribution of the lights under `node` at the points, irradiance-like (cosine
 // at the point, no BSDF): mean of f/p over points x rays, the light chosen by the tree's
 // descent inside the node.
-double estimate(const Scene& scene, const Accel& accel, uint32_t node, const std::vector<LightContext>& pts,
-                int rays, Pcg32& rng, uint64_t& traced) {
+double estimate(const Scene& scene, const Accel& accel, uint32_t node,
+                const std::vector<LightContext>& pts, int rays, Pcg32& rng, uint64_t& traced) {
   const LightTree& tree = light_tree_of(scene);
   double sum = 0;
   for (const LightContext& x : pts) {
@@ -71,11 +71,10 @@ double estimate(const Scene& scene, const Accel& accel, uint32_t node, const std
       if (!(ls.pdf > 0)) continue;
       float cos = dot(ls.wi, x.ns);
       if (cos <= 0 || dot(ls.wi, x.n) <= 0) continue;
-      Ray shadow = std::isfinite(ls.dist)
-                       ? spawn_ray_to(x.p, x.n, ls.point, light.type == LightType::Triangle ? light.n : Vec3(0))
-                       : spawn_ray(x.p, x.n, ls.wi, length(x.p - scene.bounds.center()) + 1.01f * scene.radius);
       ++traced;
-      if (accel.occluded(shadow)) continue;
+      if (accel.occluded(
+              shadow_ray_to_light(x.p, x.n, light, ls, scene.bounds.center(), scene.radius)))
+        continue;
       sum += double(luminance(ls.L)) * cos / ls.pdf / t.pmf;
     }
   }
@@ -91,13 +90,15 @@ float finite_estimate(double e) {
 
 }  // namespace
 
-OracleLightSampler::OracleLightSampler(const Scene& scene, const Accel& accel, const RllSettings& rll,
-                                       const OracleSettings& s)
+OracleLightSampler::OracleLightSampler(const Scene& scene, const Accel& accel,
+                                       const RllSettings& rll, const OracleSettings& s)
     : m_s(s), m_accel(accel), m_rll_settings(rll) {
   precompute(scene);
 }
 
-void OracleLightSampler::lights_changed(const Scene& scene) { precompute(scene); }
+void OracleLightSampler::lights_changed(const Scene& scene) {
+  precompute(scene);
+}
 
 void OracleLightSampler::precompute(const Scene& scene) {
   const OracleSettings& s = m_s;
@@ -105,10 +106,10 @@ void OracleLightSampler::precompute(const Scene& scene) {
   const RllSettings& rll = m_rll_settings;
   auto t0 = std::chrono::steady_clock::now();
   RllSettings fixed = rll;
-  fixed.grid.jitter = 0;  // one fixed grid: the oracle's cells never move
-  fixed.cut.guided = false;  // the oracle knows each cluster's contribution: a table per cell
+  fixed.grid.jitter = 0;          // one fixed grid: the oracle's cells never move
+  fixed.cut.guided = false;       // the oracle knows each cluster's contribution: a table per cell
   fixed.grid.direction_bins = 0;  // its discovery paths find cells by position and normal only
-  fixed.cut.pool_levels = 0;  // it knows each cell's clusters: nothing to pool
+  fixed.cut.pool_levels = 0;      // it knows each cell's clusters: nothing to pool
   fixed.cut.pool_up = 0;
   m_rll = std::make_unique<RllLightSampler>(scene, fixed);
   const LightTree& tree = light_tree_of(scene);
@@ -143,7 +144,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
             c.n = face_forward(sh.ng, -ray.d);
             c.ns = dot(sh.ns, c.n) < 0 ? -sh.ns : sh.ns;
             c.p = sh.p;
-            footprint += hit.t / std::sqrt(prev_pdf * std::max(1e-2f, absdot(ray.d, sh.ng)));
+            footprint = widen_footprint(footprint, hit.t, prev_pdf, ray.d, sh.ng);
             c.footprint = footprint;
             m_rll->prepare(c, st.next());
             if (c.cell != kNoCell) local.push_back({c.cell, mix64(st.next_double() * 0x1p53), c});
@@ -200,6 +201,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
   LongWork progress(fmt::format("the oracle's estimates (about {:.3g} shadow rays)", planned),
                     ranges.size(), "cells");
   std::atomic<uint64_t> rays{0};
+  const SplitCollapse split_collapse(tree, M, 1.0f);
   parallel_for(ranges.size(), 1, [&](size_t b, size_t e) {
     uint64_t traced = 0;
     for (size_t r = b; r < e; ++r) {
@@ -209,33 +211,30 @@ void OracleLightSampler::precompute(const Scene& scene) {
       for (size_t i = ranges[r].first; i < ranges[r].second; ++i) pts.push_back(found[i].ctx);
       const uint32_t cell = found[ranges[r].first].cell;
       Pcg32 rng(s.seed, table.key_of(cell));
-      std::vector<uint32_t> nodes = initial;
-      std::vector<float> q(nodes.size());
-      for (size_t k = 0; k < nodes.size(); ++k)
-        q[k] = finite_estimate(estimate(scene, accel, nodes[k], pts, s.rays, rng, traced));
+      // The learnt cuts' step (split_collapse.h) with q = value = score = the estimate and
+      // T = 1: split the largest, collapse the smallest sibling pair (their estimates add); the
+      // children of a split are then estimated, not shared. The estimates are never negative, so
+      // the step's refusal to split a cluster of value 0 is the collapse test's.
+      Cut cut;
+      cut.nodes = initial;
+      cut.q.resize(initial.size());
+      for (size_t k = 0; k < initial.size(); ++k)
+        cut.q[k] = finite_estimate(estimate(scene, accel, initial[k], pts, s.rays, rng, traced));
+      cut.m2.assign(initial.size(), 0.0f);  // unused: the oracle keeps no second moment
+      cut.n.assign(initial.size(), 0.0f);
+      cut.weight.assign(initial.size(), 0.0f);
+      std::vector<float> value = cut.q, score = cut.q;
+      auto no_weight = [](uint32_t) { return 0.0f; };
+      auto halves = [](uint32_t) { return 1.0f; };  // overwritten by the children's estimates
       for (int step = 0; step < s.refine; ++step) {
-        // The learnt cuts' choice (split_collapse.h) with score = value = the estimate and T = 1;
-        // the children of a split are estimated, not shared.
-        long best = split_choice(tree.view(), nodes.size(), nodes.data(), q.data());
-        if (best < 0) break;
-        if (int(nodes.size()) >= M) {
-          const long pmin = collapse_choice(tree.view(), nodes.size(), nodes.data(), q.data(), best);
-          if (pmin < 0 || !(q[best] > q[pmin] + q[pmin + 1])) break;
-          nodes[pmin] = tree.node(nodes[pmin]).parent;
-          q[pmin] += q[pmin + 1];
-          nodes.erase(nodes.begin() + pmin + 1);
-          q.erase(q.begin() + pmin + 1);
-          if (best > pmin) --best;
-        }
-        uint32_t child = tree.node(nodes[best]).child;
-        nodes[best] = child;
-        q[best] = finite_estimate(estimate(scene, accel, child, pts, s.rays, rng, traced));
-        nodes.insert(nodes.begin() + best + 1, child + 1);
-        q.insert(q.begin() + best + 1,
-                 finite_estimate(estimate(scene, accel, child + 1, pts, s.rays, rng, traced)));
+        long at = -1;
+        if (!split_collapse.step(cut, value, score, no_weight, halves, &at)) break;
+        for (const long i : {at, at + 1})
+          cut.q[i] = value[i] = score[i] =
+              finite_estimate(estimate(scene, accel, cut.nodes[i], pts, s.rays, rng, traced));
       }
       if (cancel_requested()) break;  // its estimates were cut short: it keeps no cut
-      cuts.assign(cell, nodes, q);
+      cuts.assign(cell, cut.nodes, value);
       m_cell_rays[r] = {cell, float(traced - traced_before)};
       progress.add(1);
     }
@@ -251,9 +250,14 @@ void OracleLightSampler::precompute(const Scene& scene) {
 nlohmann::json OracleLightSampler::describe() const {
   nlohmann::json j = m_rll->describe();
   j["name"] = name();
-  j["oracle"] = {{"discovery_spp", m_s.discovery_spp}, {"bounces", m_s.bounces},   {"points", m_s.points_per_cell},
-                 {"rays", m_s.rays},                   {"refine", m_s.refine},     {"cells", m_cells},
-                 {"shadow_rays", m_rays},              {"precompute_seconds", m_seconds}};
+  j["oracle"] = {{"discovery_spp", m_s.discovery_spp},
+                 {"bounces", m_s.bounces},
+                 {"points", m_s.points_per_cell},
+                 {"rays", m_s.rays},
+                 {"refine", m_s.refine},
+                 {"cells", m_cells},
+                 {"shadow_rays", m_rays},
+                 {"precompute_seconds", m_seconds}};
   if (m_interrupted) j["oracle"]["interrupted"] = true;
   return j;
 }

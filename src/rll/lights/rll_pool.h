@@ -10,6 +10,7 @@
 
 #include "rll/core/backend.h"
 #include "rll/core/device.h"
+#include "rll/core/search.h"
 #include "rll/learn/cut_end_pass.h"
 #include "rll/learn/moments.h"
 #include "rll/lights/rll_learn_view.h"
@@ -26,16 +27,7 @@ struct RllPoolView {
 
 // The index of `key` among the coarse cells, or -1 (binary search).
 RLL_HD inline long pool_find(const RllPoolView& p, uint64_t key) {
-  size_t lo = 0, count = p.keys.size;
-  while (count > 0) {
-    const size_t half = count / 2;
-    if (p.keys[lo + half] < key) {
-      lo += half + 1;
-      count -= half + 1;
-    } else {
-      count = half;
-    }
-  }
+  const size_t lo = lower_bound_index(p.keys.data, size_t(0), p.keys.size, key);
   return lo < p.keys.size && p.keys[lo] == key ? long(lo) : -1;
 }
 
@@ -61,7 +53,8 @@ RLL_HD inline uint32_t pool_fold(const CutStoreEndView& v, const PoolEntry* entr
     sum[k] = sq[k] = 0;
     n_rewards[k] = 0;
   }
-  for (size_t i = 0; i < count; ++i) cut_pass_rewards(v, entries[i].cell, sum, sq, n_rewards, scratch);
+  for (size_t i = 0; i < count; ++i)
+    cut_pass_rewards(v, entries[i].cell, sum, sq, n_rewards, scratch);
   float* q = &next.q[slot * K];
   float* m2 = &next.m2[slot * K];
   float* n = &next.n[slot * K];
@@ -86,8 +79,7 @@ RLL_HD inline uint32_t pool_fold(const CutStoreEndView& v, const PoolEntry* entr
 // back to the last 1/alpha rewards, as cut_forget does for a cell's.
 RLL_HD inline void pool_forget(const CutStoreEndView& v, const RllPoolView& p, size_t slot) {
   if (v.s.forget != Forgetting::Changes) return;
-  const float cap = float(1.0 / v.s.alpha);
-  for (size_t k = 0; k < p.k; ++k) p.n[slot * p.k + k] = std::min(p.n[slot * p.k + k], cap);
+  forget_to_window(&p.n[slot * p.k], p.k, v.s.alpha);
 }
 
 // A coarse cell's values into out (zero where it has none), normalized if `normalize`; false if
@@ -99,7 +91,7 @@ RLL_HD inline bool pool_values(const RllPoolView& p, size_t slot, bool moment, f
   const float* m2 = &p.m2[slot * K];
   double total = 0;
   for (size_t k = 0; k < K; ++k) {
-    out[k] = q[k] < 0 ? 0.0f : moment ? std::sqrt(std::max(m2[k], 0.0f)) : q[k];
+    out[k] = q[k] < 0 ? 0.0f : target_value(moment, q[k], m2[k]);
     total += out[k];
   }
   if (normalize && total > 0)
@@ -149,9 +141,7 @@ template <typename B>
 struct RllPoolState {
   typename B::template Buffer<uint64_t> keys;
   typename B::template Buffer<float> q, m2, n;
-  RllPoolView view(uint32_t k) {
-    return {k, keys.view(), q.view(), m2.view(), n.view()};
-  }
+  RllPoolView view(uint32_t k) { return {k, keys.view(), q.view(), m2.view(), n.view()}; }
   void clear(const B& b) {
     keys = b.template buffer<uint64_t>(0);
     q = b.template buffer<float>(0);
@@ -164,7 +154,7 @@ struct RllPoolState {
 // (pool + pool_up levels up).
 template <typename B>
 typename B::template Buffer<uint64_t> rll_coarse_keys(const B& b, const RllLearnView& v,
-                                                       View<const uint32_t> cells, int tier) {
+                                                      View<const uint32_t> cells, int tier) {
   const int up = v.cuts.s.pool_levels + (tier > 0 ? v.cuts.s.pool_up : 0);
   auto keys = b.template buffer<uint64_t>(cells.size);
   const View<uint64_t> out = keys.view();
@@ -199,11 +189,10 @@ template <typename B>
 void rll_give_pool_shares(const B& b, const RllLearnView& v, RllPoolState<B>& pool,
                           RllScratch<B>& scratch) {
   const View<uint64_t> key_of = v.table.key_of;
-  const auto cells =
-      select_indices(b, v.capacity, [=] RLL_HD(size_t c) { return key_of[c] != 0; });
+  const auto cells = select_indices(b, v.capacity, [=] RLL_HD(size_t c) { return key_of[c] != 0; });
   const auto coarse = rll_coarse_keys(b, v, cells.view(), 0);
-  const auto upper = rll_coarse_keys(
-      b, v, v.cuts.s.pool_tiers() > 1 ? cells.view() : View<const uint32_t>{}, 1);
+  const auto upper =
+      rll_coarse_keys(b, v, v.cuts.s.pool_tiers() > 1 ? cells.view() : View<const uint32_t>{}, 1);
   rll_give_pool_shares(b, v, pool, cells.view(), coarse.view(), upper.view(), scratch);
 }
 

@@ -12,6 +12,7 @@
 #include "rll/core/device.h"
 #include "rll/core/hash.h"
 #include "rll/core/sampling.h"
+#include "rll/core/search.h"
 #include "rll/learn/cell_grid.h"
 #include "rll/learn/cut_store.h"
 #include "rll/lights/sampler_view.h"
@@ -84,19 +85,9 @@ RLL_HD inline uint32_t rll_begin(const RllCut& c, uint32_t k) {
   return k > 0 ? c.ends[k - 1] : 0;
 }
 
-// The cluster holding `light`: the first whose end is above it (std::upper_bound).
+// The cluster holding `light`: the first whose end is above it.
 RLL_HD inline uint32_t rll_cluster_of(const RllCut& c, uint32_t light) {
-  uint32_t lo = 0, n = c.size;
-  while (n > 0) {
-    const uint32_t half = n / 2;
-    if (!(light < c.ends[lo + half])) {
-      lo += half + 1;
-      n -= half + 1;
-    } else {
-      n = half;
-    }
-  }
-  return lo;
+  return upper_bound_index(c.ends, 0u, c.size, light);
 }
 
 // Probability of cluster k in the cell's CDF: the exact width of its interval.
@@ -128,17 +119,8 @@ RLL_HD inline SampledLight rll_sample_within(const RllView& v, const LightContex
     double lo = prefix[begin], total = prefix[end] - lo;
     if (total > 0) {
       double target = lo + u * total;
-      // The first of prefix[begin + 1, end + 1) above target (std::upper_bound).
-      uint32_t first = begin + 1, n = end - begin;
-      while (n > 0) {
-        const uint32_t half = n / 2;
-        if (!(target < prefix[first + half])) {
-          first += half + 1;
-          n -= half + 1;
-        } else {
-          n = half;
-        }
-      }
+      // The first of prefix[begin + 1, end + 1) above target.
+      const uint32_t first = upper_bound_index(prefix, begin + 1, end + 1, target);
       uint32_t l = std::min(first - 1, end - 1);
       while (l > begin && prefix[l + 1] == prefix[l]) --l;  // never a zero-power light
       s.light = l;
@@ -385,16 +367,8 @@ RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx,
     // double: the interval of u that selects cluster k is exactly [cdf[k-1], cdf[k]), and its
     // width is what the pmf reports (rll_cdf_width).
     double uc = (u - eps) / (1 - eps);
-    uint32_t first = 0, n = c.size;  // std::upper_bound of uc over the CDF
-    while (n > 0) {
-      const uint32_t half = n / 2;
-      if (!(uc < double(c.cdf[first + half]))) {
-        first += half + 1;
-        n -= half + 1;
-      } else {
-        n = half;
-      }
-    }
+    // The first CDF entry above uc (each entry compared as a double).
+    const uint32_t first = upper_bound_index(c.cdf, 0u, c.size, uc);
     k = std::min(first, c.size - 1);
     while (k > 0 && c.cdf[k] == c.cdf[k - 1]) --k;
     double lo = k > 0 ? double(c.cdf[k - 1]) : 0.0;

@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "rll/core/device.h"
+#include "rll/core/search.h"
 #include "rll/lighttree/light_tree.h"
 
 namespace rll {
@@ -43,19 +44,8 @@ struct DescentSplit {
 // child's end, so clusters [k0, j] lie under the first child and [j + 1, k1) under the second.
 RLL_HD inline uint32_t children_boundary(const LightTreeView& tree, const LightTreeNode& node,
                                          const uint32_t* ends, uint32_t k0, uint32_t k1) {
-  // The first of ends[k0, k1) not below the first child's end (std::lower_bound, on either device).
-  const uint32_t target = tree.node(node.child).end;
-  uint32_t lo = k0, n = k1 - k0;
-  while (n > 0) {
-    const uint32_t half = n / 2;
-    if (ends[lo + half] < target) {
-      lo += half + 1;
-      n -= half + 1;
-    } else {
-      n = half;
-    }
-  }
-  return lo;
+  // The first of ends[k0, k1) not below the first child's end.
+  return lower_bound_index(ends, k0, k1, tree.node(node.child).end);
 }
 
 namespace detail {

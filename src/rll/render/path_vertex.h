@@ -169,8 +169,7 @@ RLL_HD inline Bsdf make_vertex_bsdf(const PathConstants& c, const SurfaceHit& sh
 RLL_HD inline LightContext make_vertex_context(const PathConstants& c, PathState& s,
                                                const SurfaceHit& sh, const Hit& hit, const Vec3& wo,
                                                const Bsdf& bsdf) {
-  float cos_in = std::max(1e-2f, absdot(wo, sh.ng));
-  s.footprint += hit.t / std::sqrt(s.prev_dir_pdf * cos_in);
+  s.footprint = widen_footprint(s.footprint, hit.t, s.prev_dir_pdf, wo, sh.ng);
   LightContext ctx;
   ctx.p = sh.p;
   ctx.n = bsdf.geometric_normal();
@@ -222,13 +221,8 @@ RLL_HD inline NeeSetup nee_setup(const PathConstants& c, const LightContext& ctx
   Rgb f = bsdf.eval(wo, ls.wi) * absdot(ls.wi, bsdf.shading_normal());
   if (is_black(f)) return n;
   n.unoccluded = f * ls.L / ls.pdf;
-  if (std::isfinite(ls.dist)) {
-    Vec3 ny = light.type == LightType::Triangle ? light.n : Vec3(0);
-    n.shadow = spawn_ray_to(ctx.p, bsdf.geometric_normal(), ls.point, ny);
-  } else {  // a directional light: test the scene's bounding sphere only, never the sky dome
-    n.shadow = spawn_ray(ctx.p, bsdf.geometric_normal(), ls.wi,
-                         length(ctx.p - c.scene_center) + 1.01f * c.scene_radius);
-  }
+  n.shadow = shadow_ray_to_light(ctx.p, bsdf.geometric_normal(), light, ls, c.scene_center,
+                                 c.scene_radius);
   n.counts_shadow_ray = true;
   n.traces = !is_black(n.unoccluded);
   return n;
@@ -327,7 +321,7 @@ RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext&
     const SampledLight sl = sample(u.light.u_light);
     if (!(sl.pmf > 0)) continue;
     const NeeSetup n = nee_setup(c, ctx, bsdf, wo, sl.light, u.light.u_pos);
-    const float w = c.nee_candidates == 1  ? (n.traces ? 1.0f : 0.0f)
+    const float w = c.nee_candidates == 1 ? (n.traces ? 1.0f : 0.0f)
                     : c.nee_learnt_target ? resample_weight(n, bsdf, wo, sl.pmf, mis) * sl.target
                                           : resample_weight(n, bsdf, wo, sl.pmf, mis);
     if (i == 0) {  // kept even at weight 0: a learning sampler records its zero

@@ -77,6 +77,27 @@ RLL_HD inline Ray spawn_ray_to(const Vec3& p, const Vec3& ng, const Vec3& y, con
   return r;
 }
 
+// The shadow ray of a next-event sample from p (geometric normal ng) to the point `ls` drew on
+// `light`: spawn_ray_to that point, or for a directional light (ls.dist infinite) a ray along
+// ls.wi that ends past the scene's bounding sphere (scene_center, scene_radius), so that it tests
+// the scene and never the sky dome. The renderers and the oracle's estimates trace the same.
+RLL_HD inline Ray shadow_ray_to_light(const Vec3& p, const Vec3& ng, const Light& light,
+                                      const LightLiSample& ls, const Vec3& scene_center,
+                                      float scene_radius) {
+  if (std::isfinite(ls.dist))
+    return spawn_ray_to(p, ng, ls.point, light.type == LightType::Triangle ? light.n : Vec3(0));
+  return spawn_ray(p, ng, ls.wi, length(p - scene_center) + 1.01f * scene_radius);
+}
+
+// A path's footprint (the learning samplers' cell size) widened by the segment of length t from
+// the previous vertex, whose direction d meets the surface (geometric normal ng) at |cos| of at
+// least 1e-2: R_k = R_{k-1} + t / sqrt(p_prev |cos|), with p_prev the solid-angle density of
+// the direction that left the previous vertex (at the camera, 1 / pixel_angle^2).
+RLL_HD inline float widen_footprint(float footprint, float t, float prev_dir_pdf, const Vec3& d,
+                                    const Vec3& ng) {
+  return footprint + t / std::sqrt(prev_dir_pdf * std::max(1e-2f, absdot(d, ng)));
+}
+
 inline Rgb sample_texture(const Image& texture, Vec2 uv) {
   return sample_texture(texture.texel_view(), uv);
 }

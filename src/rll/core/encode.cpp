@@ -1,4 +1,4 @@
-#include "rll/eval/encode.h"
+#include "rll/core/encode.h"
 
 #include <stb/stb_image_write.h>
 

@@ -1,5 +1,6 @@
-// Encodings that make reports self-contained: PNG files in memory, base64 for data URIs, and
-// escaping text for HTML and SVG.
+// Encodings written once for every layer: PNG files in memory (write_image's .png, the reports'
+// figures), base64 for data URIs (the reports, glTF's embedded buffer), and escaping text for
+// HTML and SVG.
 #pragma once
 
 #include <cstdint>
