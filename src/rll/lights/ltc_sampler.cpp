@@ -695,15 +695,10 @@ nlohmann::json LtcLightSampler::describe() const {
     }
   }
   for (uint32_t s : m_splits_per_pass) total_splits += s;
+  nlohmann::json parameters = nlohmann::json::object();
+  params_json(ltc_params(), m_s, parameters);
   return {{"name", name()},
-          {"parameters",
-           {{"clusters", m_s.clusters},
-            {"bins", m_s.bins},
-            {"capacity", m_s.capacity},
-            {"initial_cut", m_s.initial_cut},
-            {"max_cut", m_s.max_cut},
-            {"epsilon", m_s.epsilon},
-            {"no_change", m_s.no_change}}},
+          {"parameters", parameters},
           {"passes", m_pass},
           {"spatial_clusters", m_clusters.size()},
           {"entries_used", used},

@@ -251,10 +251,12 @@ void OracleLightSampler::precompute(const Scene& scene) {
 nlohmann::json OracleLightSampler::describe() const {
   nlohmann::json j = m_rll->describe();
   j["name"] = name();
-  j["oracle"] = {{"discovery_spp", m_s.discovery_spp}, {"bounces", m_s.bounces},   {"points", m_s.points_per_cell},
-                 {"rays", m_s.rays},                   {"refine", m_s.refine},     {"cells", m_cells},
-                 {"shadow_rays", m_rays},              {"precompute_seconds", m_seconds}};
-  if (m_interrupted) j["oracle"]["interrupted"] = true;
+  nlohmann::json& oracle = j["oracle"] = nlohmann::json::object();
+  params_json(oracle_params(), m_s, oracle);
+  oracle["cells"] = m_cells;
+  oracle["shadow_rays"] = m_rays;
+  oracle["precompute_seconds"] = m_seconds;
+  if (m_interrupted) oracle["interrupted"] = true;
   return j;
 }
 

@@ -40,6 +40,7 @@ class RhtLightSampler final : public LightSampler {
   nlohmann::json describe() const override;
 
  private:
+  RhtSettings m_s;  // as given: describe() reports them by rht's table
   RhtView m_view;
 };
 
