@@ -27,9 +27,10 @@ namespace {
 
 struct Trained {
   Scene scene = small_builtin_scene("cornell-boxes-room", 32, 24);
+  LightTree tree = build_light_tree(scene);
   Accel accel{scene.mesh};
   std::unique_ptr<LightSampler> make(const std::string& name, std::vector<std::string> set = {}) const {
-    return make_light_sampler(name, scene, Params::parse(set), &accel);
+    return make_light_sampler(name, scene, tree, Params::parse(set), &accel);
   }
   // Trains `sampler` for a few passes and saves its state to dir/state.bin.
   fs::path train_and_save(LightSampler& sampler, const TempDir& dir) const {
@@ -194,8 +195,9 @@ TEST(SamplerState, RefusesOtherScenesSamplersAndParameters) {
   TempDir dir;
   const fs::path file = t.train_and_save(*rll, dir);
 
-  const Scene other = small_builtin_scene("cornell-boxes-room", 32, 16);
-  auto on_other = make_light_sampler("rll", other, Params::parse({}), nullptr);
+  Scene other = small_builtin_scene("cornell-boxes-room", 32, 16);
+  const LightTree other_tree = build_light_tree(other);
+  auto on_other = make_light_sampler("rll", other, other_tree, Params::parse({}), nullptr);
   expect_mentions(error_of([&] { load_sampler_state(file, *on_other, other.fingerprint()); }), {"state.bin", "another scene"});
   auto fermat = t.make("fermat");
   expect_mentions(error_of([&] { load_sampler_state(file, *fermat, t.scene.fingerprint()); }), {"sampler 'rll'", "'fermat'"});

@@ -172,8 +172,8 @@ inline double unit_hash(uint64_t key, uint64_t node, uint64_t pass) {
 }
 }  // namespace
 
-LtcLightSampler::LtcLightSampler(const Scene& scene, const LtcSettings& s)
-    : m_tree(light_tree_of(scene)), m_s(s), m_m(s.max_cut) {
+LtcLightSampler::LtcLightSampler(const Scene& scene, const LightTree& tree, const LtcSettings& s)
+    : m_tree(tree), m_s(s), m_m(s.max_cut) {
   if (m_tree.depth() >= kMaxTreeDepth) fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
   m_clusters = SpatialClusters::build(scene, s.clusters);
   m_initial = power_cut(m_tree, s.initial_cut);

@@ -54,9 +54,8 @@ struct CellPoint {
 // Occluded contribution of the lights under `node` at the points, irradiance-like (cosine
 // at the point, no BSDF): mean of f/p over points x rays, the light chosen by the tree's
 // descent inside the node.
-double estimate(const Scene& scene, const Accel& accel, uint32_t node, const std::vector<LightContext>& pts,
-                int rays, Pcg32& rng, uint64_t& traced) {
-  const LightTree& tree = light_tree_of(scene);
+double estimate(const Scene& scene, const LightTree& tree, const Accel& accel, uint32_t node,
+                const std::vector<LightContext>& pts, int rays, Pcg32& rng, uint64_t& traced) {
   double sum = 0;
   for (const LightContext& x : pts) {
     if (cancel_requested()) break;  // the render that follows stops too
@@ -91,9 +90,10 @@ float finite_estimate(double e) {
 
 }  // namespace
 
-OracleLightSampler::OracleLightSampler(const Scene& scene, const Accel& accel, const RllSettings& rll,
+OracleLightSampler::OracleLightSampler(const Scene& scene, const LightTree& tree,
+                                       const Accel& accel, const RllSettings& rll,
                                        const OracleSettings& s)
-    : m_s(s), m_accel(accel), m_rll_settings(rll) {
+    : m_s(s), m_tree(tree), m_accel(accel), m_rll_settings(rll) {
   precompute(scene);
 }
 
@@ -110,8 +110,8 @@ void OracleLightSampler::precompute(const Scene& scene) {
   fixed.grid.direction_bins = 0;  // its discovery paths find cells by position and normal only
   fixed.cut.pool_levels = 0;  // it knows each cell's clusters: nothing to pool
   fixed.cut.pool_up = 0;
-  m_rll = std::make_unique<RllLightSampler>(scene, fixed);
-  const LightTree& tree = light_tree_of(scene);
+  m_rll = std::make_unique<RllLightSampler>(scene, m_tree, fixed);
+  const LightTree& tree = m_tree;
 
   // 1. Discovery: camera paths (diffuse bounces) find the cells and points where NEE happens.
   const int w = scene.width, h = scene.height;
@@ -212,7 +212,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
       std::vector<uint32_t> nodes = initial;
       std::vector<float> q(nodes.size());
       for (size_t k = 0; k < nodes.size(); ++k)
-        q[k] = finite_estimate(estimate(scene, accel, nodes[k], pts, s.rays, rng, traced));
+        q[k] = finite_estimate(estimate(scene, tree, accel, nodes[k], pts, s.rays, rng, traced));
       for (int step = 0; step < s.refine; ++step) {
         // The learnt cuts' choice (split_collapse.h) with score = value = the estimate and T = 1;
         // the children of a split are estimated, not shared.
@@ -229,10 +229,10 @@ void OracleLightSampler::precompute(const Scene& scene) {
         }
         uint32_t child = tree.node(nodes[best]).child;
         nodes[best] = child;
-        q[best] = finite_estimate(estimate(scene, accel, child, pts, s.rays, rng, traced));
+        q[best] = finite_estimate(estimate(scene, tree, accel, child, pts, s.rays, rng, traced));
         nodes.insert(nodes.begin() + best + 1, child + 1);
-        q.insert(q.begin() + best + 1,
-                 finite_estimate(estimate(scene, accel, child + 1, pts, s.rays, rng, traced)));
+        q.insert(q.begin() + best + 1, finite_estimate(estimate(scene, tree, accel, child + 1, pts,
+                                                                s.rays, rng, traced)));
       }
       if (cancel_requested()) break;  // its estimates were cut short: it keeps no cut
       cuts.assign(cell, nodes, q);

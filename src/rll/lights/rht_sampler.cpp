@@ -24,8 +24,9 @@ RhtSettings rht_settings_from(const Params& p) {
   return s;
 }
 
-RhtLightSampler::RhtLightSampler(const Scene& scene, const RhtSettings& settings) : m_s(settings) {
-  const LightTree& tree = light_tree_of(scene);
+RhtLightSampler::RhtLightSampler(const Scene& scene, const LightTree& tree,
+                                 const RhtSettings& settings)
+    : m_s(settings) {
   if (tree.depth() >= kMaxTreeDepth)
     fail("{}: light tree too deep ({})", scene.source, tree.depth());
   m_view.tree = tree.view();

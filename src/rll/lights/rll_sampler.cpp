@@ -41,8 +41,8 @@ void check_memory(const RllSettings& s) {
 }
 }  // namespace
 
-RllLightSampler::RllLightSampler(const Scene& scene, const RllSettings& s)
-    : m_tree(light_tree_of(scene)), m_s(s), m_keyer(s.grid, scene.bounds) {
+RllLightSampler::RllLightSampler(const Scene& scene, const LightTree& tree, const RllSettings& s)
+    : m_tree(tree), m_s(s), m_keyer(s.grid, scene.bounds) {
   check_memory(s);
   m_table = std::make_unique<CellTable>(s.capacity);
   // Guided: the rewards are ratios to the tree's importance, of the order of a reflectance.
