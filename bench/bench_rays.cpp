@@ -27,10 +27,10 @@ int main(int argc, char** argv) try {
   int threads = argc > 4 ? std::atoi(argv[4]) : 0;
   ThreadLimit limit(threads);
   Scene scene = load_scene(scene_name);
-  build_light_tree(scene);
+  const LightTree tree = build_light_tree(scene);
   Accel accel(scene.mesh);
   Params params;
-  auto sampler = make_light_sampler(sampler_name, scene, params);
+  auto sampler = make_light_sampler(sampler_name, scene, tree, params);
   IntegratorSettings is;  // path, MIS, depth 5
   Integrator integrator(scene, accel, *sampler, is);
   RenderSettings rs;

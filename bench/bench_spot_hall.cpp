@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   const int repeats = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
   std::vector<double> make_s, finalize_s, tree_s;
   Scene scene;
+  LightTree tree;
   for (int r = 0; r < repeats; ++r) {
     auto t0 = Clock::now();
     scene = make_builtin_scene("spot-hall");
@@ -38,7 +39,7 @@ int main(int argc, char** argv) {
     scene.finalize();
     finalize_s.push_back(seconds(t0));
     t0 = Clock::now();
-    build_light_tree(scene);
+    tree = build_light_tree(scene);
     tree_s.push_back(seconds(t0));
   }
   auto median = [](std::vector<double> v) {
@@ -50,11 +51,11 @@ int main(int argc, char** argv) {
   fmt::print("median of {}: make {:.3f} s, finalize {:.3f} s, light tree {:.3f} s, total {:.3f} s\n",
              repeats, median(make_s), median(finalize_s), median(tree_s),
              median(make_s) + median(finalize_s) + median(tree_s));
-  fmt::print("light tree: {:.1f} MiB\n", scene.light_tree->bytes() / 1048576.0);
+  fmt::print("light tree: {:.1f} MiB\n", tree.bytes() / 1048576.0);
   for (const char* name : {"power", "tree", "ltc", "rll"}) {
     Params p;
     const auto t0 = Clock::now();
-    auto sampler = make_light_sampler(name, scene, p);
+    auto sampler = make_light_sampler(name, scene, tree, p);
     const double s = seconds(t0);
     const nlohmann::json d = sampler->describe();
     fmt::print("{:<6} made in {:.3f} s, state {}\n", name, s,

@@ -23,7 +23,7 @@ struct PyState {
 
   const CutStore& cuts() const { return rll->cuts(); }
   const CellTable& table() const { return rll->table(); }
-  const LightTree& tree() const { return *handle.session->scene().light_tree; }
+  const LightTree& tree() const { return handle.session->light_tree(); }
 
   std::vector<uint32_t> cells() const {
     std::vector<uint32_t> ids;

@@ -421,8 +421,9 @@ TEST(Hardening3Cli, ARenderCancelledBeforeItsFirstPassSaysSo) {
   // The variant: a cancel that came before the first pass ran none at all; the render used to
   // report a finished render of 0 spp, which its caller wrote.
   Scene scene = small_builtin_scene("cornell-box", 8, 8);
+  const LightTree tree = build_light_tree(scene);
   Accel accel(scene.mesh);
-  auto sampler = make_light_sampler("power", scene, Params(), &accel);
+  auto sampler = make_light_sampler("power", scene, tree, Params(), &accel);
   Integrator integrator(scene, accel, *sampler, IntegratorSettings{});
   Film film(8, 8);
   RenderSettings rs;

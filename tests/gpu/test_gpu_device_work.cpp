@@ -23,12 +23,13 @@ bool same_bits(const Image& a, const Image& b) {
 }
 
 TEST(GpuDeviceWork, OneSyncPerPassAndTheFilmCopiedOnceAtTheEnd) {
-  const Scene scene = test::small_builtin_scene("cornell-boxes-room", 64, 48);
+  Scene scene = test::small_builtin_scene("cornell-boxes-room", 64, 48);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   cuda::GpuRenderer gpu(scene);
   for (const char* name : {"power", "tree"}) {
     SCOPED_TRACE(name);
-    auto sampler = make_light_sampler(name, scene, Params{}, &accel);
+    auto sampler = make_light_sampler(name, scene, tree, Params{}, &accel);
     Film film(scene.width, scene.height);
     RenderSettings rs;
     rs.spp = 12;
@@ -59,17 +60,18 @@ TEST(GpuDeviceWork, OneSyncPerPassAndTheFilmCopiedOnceAtTheEnd) {
 // allocation in a later frame, nothing of the film copied until it is read, and the same image as
 // one render of the same passes.
 TEST(GpuDeviceWork, FramesKeepTheFilmOnTheDeviceWithTheSameImage) {
-  const Scene scene = test::small_builtin_scene("cornell-boxes-room", 64, 48);
+  Scene scene = test::small_builtin_scene("cornell-boxes-room", 64, 48);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   cuda::GpuRenderer gpu(scene);
   RenderSettings rs;
   rs.pass_spp = rs.max_pass_spp = 1;
-  auto one = make_light_sampler("power", scene, Params{}, &accel);
+  auto one = make_light_sampler("power", scene, tree, Params{}, &accel);
   Film whole(scene.width, scene.height);
   rs.spp = 4;
   gpu.render(scene, *one, IntegratorSettings{}, whole, rs);
 
-  auto frames = make_light_sampler("power", scene, Params{}, &accel);
+  auto frames = make_light_sampler("power", scene, tree, Params{}, &accel);
   Film film(scene.width, scene.height);
   WavefrontWork work;
   WavefrontSettings ws;

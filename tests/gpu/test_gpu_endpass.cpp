@@ -28,7 +28,7 @@ bool close(float a, float b) {
 
 TEST(GpuEndPass, CutEndPassMatchesTheCpu) {
   Scene scene = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *scene.light_tree;
+  const LightTree tree = build_light_tree(scene);
   for (bool guided : {false, true}) {
     CutSettings s;
     s.cut_size = guided ? 32 : 24;
@@ -111,7 +111,7 @@ TEST(GpuEndPass, ResidentLightsChangedMatchesTheCpu) {
     rll_end_pass_resident_gpu(*t.b);
     t.scene.animate(t.scene, frame);
     t.scene.refresh_lights_from_mesh();
-    refit_light_tree(t.scene);
+    t.tree.refit(t.scene.lights);
     t.a->lights_changed(t.scene);
     rll_lights_changed_resident_gpu(*t.b, t.scene);
     SCOPED_TRACE(frame);

@@ -28,9 +28,10 @@ class GpuSamplers : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(GpuSamplers, DispatchMatchesTheCpu) {
   for (const char* scene_name : {"cornell-boxes-room", "arch-interior"}) {
-    const Scene scene = test::small_builtin_scene(scene_name, 48, 36);
+    Scene scene = test::small_builtin_scene(scene_name, 48, 36);
+    const LightTree tree = build_light_tree(scene);
     const Accel accel(scene.mesh);
-    auto sampler = make_light_sampler(GetParam(), scene, Params{});
+    auto sampler = make_light_sampler(GetParam(), scene, tree, Params{});
     test::train_sampler(scene, accel, *sampler, 4);
     const SamplerView view = sampler->sampler_view();
     ASSERT_NE(view.kind, SamplerKind::None);

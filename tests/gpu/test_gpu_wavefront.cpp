@@ -55,15 +55,16 @@ Image scaled(Image image, float s) {
 
 TEST(GpuWavefront, EqualsTheCpuWithinNoiseByRegion) {
   for (const Case& c : kCases) {
-    const Scene scene = test::small_builtin_scene(c.scene, 32, 24);
+    Scene scene = test::small_builtin_scene(c.scene, 32, 24);
+    const LightTree tree = build_light_tree(scene);
     const Accel accel(scene.mesh);
     cuda::GpuRenderer gpu(scene);
     for (const IntegratorType type : {IntegratorType::Direct, IntegratorType::Path}) {
       for (const char* name : {"power", "tree", "rll"}) {
         SCOPED_TRACE(c.scene + " " + integrator_name(type) + " " + name);
         const int spp = type == IntegratorType::Direct ? c.spp_direct : c.spp_path;
-        auto on_cpu = make_light_sampler(name, scene, Params{}, &accel);
-        auto on_gpu = make_light_sampler(name, scene, Params{}, &accel);
+        auto on_cpu = make_light_sampler(name, scene, tree, Params{}, &accel);
+        auto on_gpu = make_light_sampler(name, scene, tree, Params{}, &accel);
         const Image cpu = render_on(nullptr, scene, accel, *on_cpu, type, spp, 1);
         const Image gpu_image = render_on(&gpu, scene, accel, *on_gpu, type, spp, 2);
         EXPECT_EQ(test::region_disagreement(gpu_image, cpu), "");
@@ -76,12 +77,13 @@ TEST(GpuWavefront, EqualsTheCpuWithinNoiseByRegion) {
 }
 
 TEST(GpuWavefront, SameSeedSameImage) {
-  const Scene scene = test::small_builtin_scene("cornell-boxes-room", 48, 36);
+  Scene scene = test::small_builtin_scene("cornell-boxes-room", 48, 36);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   cuda::GpuRenderer gpu(scene);
   std::vector<Image> images;
   for (int run = 0; run < 2; ++run) {
-    auto sampler = make_light_sampler("rll", scene, Params{}, &accel);
+    auto sampler = make_light_sampler("rll", scene, tree, Params{}, &accel);
     images.push_back(render_on(&gpu, scene, accel, *sampler, IntegratorType::Path, 16, 7, 1));
   }
   ASSERT_EQ(images[0].pixel_count(), images[1].pixel_count());
@@ -93,11 +95,12 @@ TEST(GpuWavefront, SameSeedSameImage) {
 TEST(GpuWavefront, RllLearntOnTheGpuPassesTheSamplerChecks) {
   for (const char* name : {"cornell-boxes-room", "arch-interior"}) {
     SCOPED_TRACE(name);
-    const Scene scene = test::small_builtin_scene(name, 48, 36);
+    Scene scene = test::small_builtin_scene(name, 48, 36);
+    const LightTree tree = build_light_tree(scene);
     const Accel accel(scene.mesh);
     cuda::GpuRenderer gpu(scene);
-    auto sampler = make_light_sampler("rll", scene, Params{}, &accel);
-    auto untrained = make_light_sampler("rll", scene, Params{}, &accel);
+    auto sampler = make_light_sampler("rll", scene, tree, Params{}, &accel);
+    auto untrained = make_light_sampler("rll", scene, tree, Params{}, &accel);
     render_on(&gpu, scene, accel, *sampler, IntegratorType::Path, 32, 1, 1);
     std::vector<LightContext> contexts = test::make_contexts(scene, accel, 100, 1234);
     const uint32_t n = uint32_t(scene.lights.size());
@@ -115,10 +118,11 @@ TEST(GpuWavefront, RllLearntOnTheGpuPassesTheSamplerChecks) {
 }
 
 TEST(GpuWavefront, RefusesASamplerWithoutADeviceVersion) {
-  const Scene scene = test::small_builtin_scene("cornell-boxes-room", 16, 12);
+  Scene scene = test::small_builtin_scene("cornell-boxes-room", 16, 12);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   cuda::GpuRenderer gpu(scene);
-  auto ltc = make_light_sampler("ltc", scene, Params{}, &accel);
+  auto ltc = make_light_sampler("ltc", scene, tree, Params{}, &accel);
   try {
     render_on(&gpu, scene, accel, *ltc, IntegratorType::Path, 1, 1);
     FAIL() << "ltc rendered on the GPU";

@@ -83,12 +83,13 @@ struct LtcRender {
 
 uint64_t ltc_capacity(IntegratorType type) { return type == IntegratorType::Path ? 4000 : 1000; }
 
-LtcRender render_ltc(const Scene& scene, IntegratorType type, int threads, uint64_t seed) {
+LtcRender render_ltc(Scene scene, IntegratorType type, int threads, uint64_t seed) {
   ThreadLimit limit(threads);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   LtcSettings settings;
   settings.capacity = uint32_t(ltc_capacity(type));
-  LtcLightSampler ltc(scene, settings);
+  LtcLightSampler ltc(scene, tree, settings);
   IntegratorSettings is;
   is.type = type;
   const Integrator integrator(scene, accel, ltc, is);

@@ -105,12 +105,13 @@ class OracleCoverage final : public LightSampler {
 // The share of a `path` render's vertices whose cell the oracle (with `set` over its defaults)
 // has no knowledge of. Few points and rays and no refinement: the cells it finds do not depend
 // on them.
-double oracle_missed_share(const Scene& scene, int spp, std::vector<std::string> set) {
+double oracle_missed_share(Scene scene, int spp, std::vector<std::string> set) {
+  const LightTree tree = build_light_tree(scene);
   for (const char* fast : {"oracle.points=1", "oracle.rays=1", "oracle.refine=0"})
     set.push_back(fast);
   Params params = Params::parse(set);
   Accel accel(scene.mesh);
-  auto sampler = make_light_sampler("oracle", scene, params, &accel);
+  auto sampler = make_light_sampler("oracle", scene, tree, params, &accel);
   params.check_all_used();
   OracleCoverage coverage(dynamic_cast<const OracleLightSampler&>(*sampler));
   render_path_passes(scene, accel, coverage, spp);
@@ -137,14 +138,15 @@ TEST(OracleDiscovery, FindsTheCellsOfPathVertices) {
 // scene of lamps inside boxes, `tree` (blind to visibility) beats `power`, and rll, which learns
 // visibility, beats `tree`. Counted by the megakernel and the wavefront alike.
 TEST(VisibleSampleRatio, RllLearnsVisibilityThatTreeCannotSee) {
-  const Scene scene = small_builtin_scene("cornell-boxes-room", 64, 48);
+  Scene scene = small_builtin_scene("cornell-boxes-room", 64, 48);
+  const LightTree light_tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   IntegratorSettings is;
   is.type = IntegratorType::Direct;
   RenderSettings rs;
   rs.spp = 32;
   auto ratio = [&](const char* name, bool wavefront) {
-    auto sampler = make_light_sampler(name, scene, Params{}, &accel);
+    auto sampler = make_light_sampler(name, scene, light_tree, Params{}, &accel);
     Film film(scene.width, scene.height);
     RenderProgress p;
     if (wavefront) {

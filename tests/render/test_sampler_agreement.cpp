@@ -95,8 +95,10 @@ void expect_regions_see_group_bias(const Scene& scene, IntegratorType type, int 
   RenderRequest r = tree_request(type, spp);
   const Image reference = render_scene(scene, r);
   r.seed = 12;
-  const std::vector<uint32_t> group = brightest_light_group(scene, group_lights);
-  const SamplerWrap wrap = [&](LightSampler& tree, const Scene&) -> std::unique_ptr<LightSampler> {
+  std::vector<uint32_t> group;  // in the render's light order, which its tree sets
+  const SamplerWrap wrap = [&](LightSampler& tree, const Scene& lit,
+                               const LightTree& light_tree) -> std::unique_ptr<LightSampler> {
+    group = brightest_light_group(lit, light_tree, group_lights);
     return std::make_unique<BiasedSampler>(tree, group, 1.05, BiasedSampler::Pmf::Understated);
   };
   const Image biased = render_scene_wrapped(scene, r, wrap);

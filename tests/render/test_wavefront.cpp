@@ -38,11 +38,11 @@ struct Render {
 };
 
 // A scene rendered by one of the two renderers with a fresh sampler: its image and film counts.
-Image render_image(const Scene& scene, const Accel& accel, const Render& r,
+Image render_image(const Scene& scene, const LightTree& tree, const Accel& accel, const Render& r,
                    RenderProgress* progress = nullptr) {
   ThreadLimit limit(r.threads);
   Params params;
-  auto sampler = make_light_sampler(r.sampler, scene, params, &accel);
+  auto sampler = make_light_sampler(r.sampler, scene, tree, params, &accel);
   IntegratorSettings is;
   is.type = r.type;
   is.nee_candidates = r.nee_candidates;
@@ -101,7 +101,8 @@ class WavefrontAgreement : public ::testing::TestWithParam<std::tuple<size_t, In
 TEST_P(WavefrontAgreement, EqualsMegakernelWithinNoiseByRegion) {
   const SceneCase& sc = kScenes[std::get<0>(GetParam())];
   const IntegratorType type = std::get<1>(GetParam());
-  const Scene scene = small_builtin_scene(sc.name, sc.width, sc.height);
+  Scene scene = small_builtin_scene(sc.name, sc.width, sc.height);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   for (const std::string& sampler : kSamplers) {
     SCOPED_TRACE(sampler);
@@ -116,14 +117,14 @@ TEST_P(WavefrontAgreement, EqualsMegakernelWithinNoiseByRegion) {
     }
     r.wavefront = false;
     r.seed = 1;
-    const Image megakernel = render_image(scene, accel, r);
+    const Image megakernel = render_image(scene, tree, accel, r);
     r.wavefront = true;
     // Traced by Embree, and by rll's own BVH (the GPU's traversal, run here on the CPU).
     for (const WavefrontTracer tracer : {WavefrontTracer::Embree, WavefrontTracer::Bvh}) {
       SCOPED_TRACE(tracer == WavefrontTracer::Bvh ? "rll's BVH" : "Embree");
       r.tracer = tracer;
       r.seed = 2;  // independent of the megakernel's samples
-      const Image wavefront = render_image(scene, accel, r);
+      const Image wavefront = render_image(scene, tree, accel, r);
       EXPECT_EQ(region_disagreement(wavefront, megakernel), "");
       // The bound's power: an image `bias` too bright, or too dark, is caught.
       for (const float scale : {1 + bias, 1 - bias}) {
@@ -139,7 +140,8 @@ TEST_P(WavefrontAgreement, EqualsMegakernelWithinNoiseByRegion) {
 
 // Where the sampler learns nothing within a pass, the wavefront takes each path through the same
 // functions with the same numbers as the megakernel: the same film, to the bit.
-void expect_megakernels_image_to_the_bit(const Scene& scene, IntegratorType type) {
+void expect_megakernels_image_to_the_bit(Scene scene, IntegratorType type) {
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   // One light sample per vertex, and the reservoir's choice of four (nee.candidates=4).
   for (const auto& [sampler, candidates] :
@@ -152,10 +154,10 @@ void expect_megakernels_image_to_the_bit(const Scene& scene, IntegratorType type
     r.nee_candidates = candidates;
     r.wavefront = false;
     RenderProgress pm, pw;
-    const Image megakernel = render_image(scene, accel, r, &pm);
+    const Image megakernel = render_image(scene, tree, accel, r, &pm);
     r.wavefront = true;
     r.path_slots = 500;  // several batches per pass
-    const Image wavefront = render_image(scene, accel, r, &pw);
+    const Image wavefront = render_image(scene, tree, accel, r, &pw);
     EXPECT_TRUE(same_bits(wavefront, megakernel)) << sampler;
     EXPECT_EQ(pw.rays.camera, pm.rays.camera) << sampler;
     EXPECT_EQ(pw.rays.bounce, pm.rays.bounce) << sampler;
@@ -200,42 +202,44 @@ INSTANTIATE_TEST_SUITE_P(Scenes, WavefrontAgreement,
 // rll learns while rendering (records from every thread, end_pass between passes): its image is
 // still the same to the bit with 1, 2 and 4 threads, and with any budget of path slots.
 TEST(Wavefront, BitIdenticalForAnyThreadCount) {
-  const Scene scene = small_builtin_scene("cornell-boxes-room", 24, 18);
+  Scene scene = small_builtin_scene("cornell-boxes-room", 24, 18);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   Render r;
   r.sampler = "rll";
   r.spp = 12;
   r.threads = 1;
-  const Image one = render_image(scene, accel, r);
+  const Image one = render_image(scene, tree, accel, r);
   for (int threads : {2, 4}) {
     r.threads = threads;
-    EXPECT_TRUE(same_bits(render_image(scene, accel, r), one)) << threads << " threads";
+    EXPECT_TRUE(same_bits(render_image(scene, tree, accel, r), one)) << threads << " threads";
   }
   r.path_slots = 777;
-  EXPECT_TRUE(same_bits(render_image(scene, accel, r), one)) << "777 path slots";
+  EXPECT_TRUE(same_bits(render_image(scene, tree, accel, r), one)) << "777 path slots";
   r.seed = 2;  // the comparison can fail: another seed gives another image
-  EXPECT_FALSE(same_bits(render_image(scene, accel, r), one));
+  EXPECT_FALSE(same_bits(render_image(scene, tree, accel, r), one));
 }
 
 // The stage times (--stats of `rll interactive`): filled when asked for, without changing the
 // image; every stage that ran took time, and the stages fit in the render's total.
 TEST(Wavefront, StageTimesAreRecordedWithoutChangingTheImage) {
-  const Scene scene = small_builtin_scene("cornell-boxes-room", 24, 18);
+  Scene scene = small_builtin_scene("cornell-boxes-room", 24, 18);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   Render r;
   r.sampler = "rll";
   r.spp = 4;
   r.path_slots = 300;  // several batches per pass
-  const Image plain = render_image(scene, accel, r);
+  const Image plain = render_image(scene, tree, accel, r);
   WavefrontTimes times;
   r.times = &times;
-  EXPECT_TRUE(same_bits(render_image(scene, accel, r), plain));
+  EXPECT_TRUE(same_bits(render_image(scene, tree, accel, r), plain));
   for (size_t s = 0; s < kWavefrontStages; ++s)
     EXPECT_GT(times.stage_seconds[s], 0.0) << kWavefrontStageNames[s];
   EXPECT_LE(times.stages_sum(), times.total_seconds);
   // A second render adds to the record.
   const WavefrontTimes first = times;
-  render_image(scene, accel, r);
+  render_image(scene, tree, accel, r);
   EXPECT_GT(times.total_seconds, first.total_seconds);
   EXPECT_GT(times[WavefrontStage::ClosestHit],
             first.stage_seconds[size_t(WavefrontStage::ClosestHit)]);
@@ -247,10 +251,11 @@ TEST(Wavefront, StageTimesAreRecordedWithoutChangingTheImage) {
 TEST(Wavefront, RllLearntByTheWavefrontPassesTheSamplerChecks) {
   for (const char* name : {"cornell-boxes-room", "arch-interior"}) {
     SCOPED_TRACE(name);
-    const Scene scene = small_builtin_scene(name, 48, 36);
+    Scene scene = small_builtin_scene(name, 48, 36);
+    const LightTree tree = build_light_tree(scene);
     const Accel accel(scene.mesh);
     Params params;
-    auto sampler = make_light_sampler("rll", scene, params, &accel);
+    auto sampler = make_light_sampler("rll", scene, tree, params, &accel);
     IntegratorSettings is;
     is.max_depth = 3;
     Film film(scene.width, scene.height);
@@ -259,11 +264,11 @@ TEST(Wavefront, RllLearntByTheWavefrontPassesTheSamplerChecks) {
     rs.pass_spp = rs.max_pass_spp = 1;  // 32 passes: strongly non-uniform cells
     render_wavefront(scene, accel, *sampler, is, film, rs);
     // The same passes by the megakernel learn the same table; an untrained one differs.
-    auto by_megakernel = make_light_sampler("rll", scene, params, &accel);
+    auto by_megakernel = make_light_sampler("rll", scene, tree, params, &accel);
     Integrator integrator(scene, accel, *by_megakernel, is);
     Film film2(scene.width, scene.height);
     render(scene, integrator, *by_megakernel, film2, rs);
-    auto untrained = make_light_sampler("rll", scene, params, &accel);
+    auto untrained = make_light_sampler("rll", scene, tree, params, &accel);
 
     std::vector<LightContext> contexts = make_contexts(scene, accel, 100, 1234);
     const uint32_t n = uint32_t(scene.lights.size());

@@ -28,13 +28,14 @@ struct CountedRun {
   Image image;
 };
 
-CountedRun render_counted(const Scene& scene, const Accel& accel, const std::string& sampler_name,
+CountedRun render_counted(const Scene& scene, const LightTree& tree, const Accel& accel,
+                          const std::string& sampler_name,
                           IntegratorType type, int spp, uint32_t path_slots,
                           WavefrontMemory* memory = nullptr, LightSampler* sampler = nullptr) {
   Params params;
   std::unique_ptr<LightSampler> own;
   if (!sampler) {
-    own = make_light_sampler(sampler_name, scene, params, &accel);
+    own = make_light_sampler(sampler_name, scene, tree, params, &accel);
     sampler = own.get();
   }
   IntegratorSettings is;
@@ -76,14 +77,15 @@ void expect_one_sync_per_pass(const CountedRun& r, const std::string& what) {
 // runs) and one that does not: always one synchronisation per pass, whatever the bounces and
 // batches, and the slots' memory taken once.
 TEST(WavefrontDeviceWork, OneSyncPerPassAndNoAllocationAfterTheFirst) {
-  const Scene scene = small_builtin_scene("cornell-boxes-room", 12, 9);
+  Scene scene = small_builtin_scene("cornell-boxes-room", 12, 9);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   for (const char* sampler : {"power", "rll"})
     for (const IntegratorType type : {IntegratorType::Path, IntegratorType::Direct})
       for (const uint32_t slots : {300u, 0u}) {
         const std::string what =
             fmt::format("{} {} {} slots", sampler, integrator_name(type), slots);
-        const CountedRun r = render_counted(scene, accel, sampler, type, 12, slots);
+        const CountedRun r = render_counted(scene, tree, accel, sampler, type, 12, slots);
         expect_one_sync_per_pass(r, what);
         if (slots == 0) {
           EXPECT_EQ(r.work.path_slots, 12u * 9u * 4u) << what;  // 4-spp passes
@@ -94,10 +96,11 @@ TEST(WavefrontDeviceWork, OneSyncPerPassAndNoAllocationAfterTheFirst) {
 // A deep path (max depth 64, Russian roulette ends most paths long before): the bounces are
 // launched without reading how many rays are left, still one synchronisation per pass.
 TEST(WavefrontDeviceWork, DeepPathsStillOneSyncPerPass) {
-  const Scene scene = small_builtin_scene("glazed-room", 10, 8);
+  Scene scene = small_builtin_scene("glazed-room", 10, 8);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   Params params;
-  auto sampler = make_light_sampler("tree", scene, params, &accel);
+  auto sampler = make_light_sampler("tree", scene, tree, params, &accel);
   IntegratorSettings is;
   is.max_depth = 64;
   Film film(scene.width, scene.height);
@@ -117,17 +120,18 @@ TEST(WavefrontDeviceWork, DeepPathsStillOneSyncPerPass) {
 // after the first render, and the image is the one a fresh render gives, to the bit (the reused
 // slots hold the last render's paths, which no stage reads).
 TEST(WavefrontDeviceWork, KeptMemoryTakesNothingNewAndChangesNoBit) {
-  const Scene scene = small_builtin_scene("cornell-boxes-room", 12, 9);
+  Scene scene = small_builtin_scene("cornell-boxes-room", 12, 9);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   WavefrontMemory memory;
-  const CountedRun fresh = render_counted(scene, accel, "rll", IntegratorType::Path, 8, 0);
-  const CountedRun first = render_counted(scene, accel, "rll", IntegratorType::Path, 8, 0, &memory);
+  const CountedRun fresh = render_counted(scene, tree, accel, "rll", IntegratorType::Path, 8, 0);
+  const CountedRun first = render_counted(scene, tree, accel, "rll", IntegratorType::Path, 8, 0, &memory);
   EXPECT_GT(first.work.passes.front().allocations, 0u);
   EXPECT_GT(memory.bytes(), 0u);
   // Another sampler and integrator into the same memory (whose slots hold rll's paths now), then
   // rll again.
-  render_counted(scene, accel, "power", IntegratorType::Direct, 4, 0, &memory);
-  const CountedRun again = render_counted(scene, accel, "rll", IntegratorType::Path, 8, 0, &memory);
+  render_counted(scene, tree, accel, "power", IntegratorType::Direct, 4, 0, &memory);
+  const CountedRun again = render_counted(scene, tree, accel, "rll", IntegratorType::Path, 8, 0, &memory);
   for (const DeviceWork& w : again.work.passes) {
     EXPECT_EQ(w.allocations, 0u);
     EXPECT_EQ(w.syncs, 1u);

@@ -54,7 +54,6 @@ Scene two_lamps() {
   s.camera.fov = 40;
   s.has_camera = true;
   s.finalize();
-  build_light_tree(s);
   return s;
 }
 
@@ -63,14 +62,14 @@ struct Trained {
   std::unique_ptr<RllLightSampler> sampler;
 };
 
-Trained train(const Scene& scene, int passes, int threads, std::vector<std::string> extra = {}) {
+Trained train(const Scene& scene, const LightTree& tree, int passes, int threads, std::vector<std::string> extra = {}) {
   ThreadLimit limit(threads);
   Trained t;
   t.accel = std::make_unique<Accel>(scene.mesh);
   std::vector<std::string> set = {"rll.cut_size=2", "rll.splits=0"};
   set.insert(set.end(), extra.begin(), extra.end());
   Params p = Params::parse(set);
-  t.sampler = std::make_unique<RllLightSampler>(scene, rll_settings_from(p));
+  t.sampler = std::make_unique<RllLightSampler>(scene, tree, rll_settings_from(p));
   IntegratorSettings is;
   is.type = IntegratorType::Direct;
   Integrator integrator(scene, *t.accel, *t.sampler, is);
@@ -96,7 +95,7 @@ LightContext floor_point(const Scene& scene, const RllLightSampler& sampler, int
 
 TEST(RllLearning, OccludedLampFallsToTheDefensiveFloor) {
   Scene scene = two_lamps();
-  const LightTree& tree = *scene.light_tree;
+  const LightTree tree = build_light_tree(scene);
   // The root's two children are the two lamps (their two triangles each).
   ASSERT_EQ(tree.light_count(), 4u);
   const uint32_t a = tree.node(LightTree::kRoot).child, b = a + 1;
@@ -106,7 +105,7 @@ TEST(RllLearning, OccludedLampFallsToTheDefensiveFloor) {
 
   float previous_eps = 1.0f;
   for (int passes : {1, 4, 8, 16}) {
-    Trained t = train(scene, passes, 1);
+    Trained t = train(scene, tree, passes, 1);
     // Points of the floor in view, each in its cell.
     int checked = 0;
     float max_reach = 0, eps_sum = 0, max_ratio = 0;
@@ -167,12 +166,12 @@ TEST(RllLearning, OccludedLampFallsToTheDefensiveFloor) {
 // and stays positive.
 TEST(RllLearning, GuidedDescentLearnsTheOccludedLamp) {
   Scene scene = two_lamps();
-  const LightTree& tree = *scene.light_tree;
+  const LightTree tree = build_light_tree(scene);
   const uint32_t a = tree.node(LightTree::kRoot).child, b = a + 1;
   const uint32_t node_b = scene.lights[tree.node(b).begin].centroid().x > 2 ? b : a;
   // A short trust schedule, so that the defensive weight (which bounds how far a factor falls)
   // is near epsilon after 16 passes.
-  Trained t = train(scene, 16, 1, {"rll.sampling=guided", "rll.trust=16"});
+  Trained t = train(scene, tree, 16, 1, {"rll.sampling=guided", "rll.trust=16"});
   int checked = 0;
   std::vector<float> ratios;
   for (int k = 0; k < 40; ++k) {
@@ -207,10 +206,9 @@ namespace {
 // Trains rll with `settings` on two_lamps() and checks that every learnt floor cell has its coarse
 // cell's shares, and that they give the hidden lamp (node_b) nothing where the tree rates it
 // highly.
-void check_pooled_hidden_lamp(const Scene& scene, uint32_t node_b,
+void check_pooled_hidden_lamp(const Scene& scene, const LightTree& tree, uint32_t node_b,
                               const std::vector<std::string>& settings) {
-  const LightTree& tree = *scene.light_tree;
-  Trained t = train(scene, 8, 1, settings);
+  Trained t = train(scene, tree, 8, 1, settings);
   const nlohmann::json d = t.sampler->describe();
   const uint64_t cells = d["cells_used"].get<uint64_t>(), pooled = d["pool_cells"].get<uint64_t>();
   std::printf("%llu cells pooled into %llu coarse cells\n", (unsigned long long)cells,
@@ -245,19 +243,19 @@ void check_pooled_hidden_lamp(const Scene& scene, uint32_t node_b,
 // every learnt cell as a share near zero, while a visibility-blind prior rates it highly.
 TEST(RllLearning, PooledCoarseCellsLearnTheOccludedLamp) {
   Scene scene = two_lamps();
-  const LightTree& tree = *scene.light_tree;
+  const LightTree tree = build_light_tree(scene);
   const uint32_t a = tree.node(LightTree::kRoot).child, b = a + 1;
   const uint32_t node_b = scene.lights[tree.node(b).begin].centroid().x > 2 ? b : a;
   // Both guesses (the coarse cell's share of the rewards, its factor on each cell's prior), and
   // two tiers of coarse cells.
   for (const char* guess : {"share", "ratio"}) {
     SCOPED_TRACE(guess);
-    check_pooled_hidden_lamp(scene, node_b, {"rll.pool=1", std::string("rll.pool_guess=") + guess});
+    check_pooled_hidden_lamp(scene, tree, node_b, {"rll.pool=1", std::string("rll.pool_guess=") + guess});
     check_pooled_hidden_lamp(
-        scene, node_b, {"rll.pool=1", "rll.pool_up=1", std::string("rll.pool_guess=") + guess});
+        scene, tree, node_b, {"rll.pool=1", "rll.pool_up=1", std::string("rll.pool_guess=") + guess});
   }
   // Without pooling there are no coarse cells.
-  Trained alone = train(scene, 2, 1, {"rll.pool=0"});
+  Trained alone = train(scene, tree, 2, 1, {"rll.pool=0"});
   EXPECT_EQ(alone.sampler->describe()["pool_cells"].get<uint64_t>(), 0u);
 }
 
@@ -289,9 +287,10 @@ TEST(RllLearning, TrainedStateIsStronglyNonUniform) {
   // The sampler statistics (test_light_samplers.cpp) run on this trained state; they mean
   // something for RLL only if the cells' cluster distributions are far from uniform.
   Scene scene = small_builtin_scene("cornell-boxes-room", 48, 36);
+  const LightTree tree = build_light_tree(scene);
   Accel accel(scene.mesh);
   Params params;
-  RllLightSampler rll(scene, rll_settings_from(params));
+  RllLightSampler rll(scene, tree, rll_settings_from(params));
   train_sampler(scene, accel, rll, 32);  // as the statistical suite does
   std::vector<float> concentration;      // K * max cluster probability: 1 for uniform
   for (uint32_t c = 0; c < rll.table().capacity(); ++c) {
@@ -328,8 +327,9 @@ TEST(RllLearning, RewardsOfANewCellReachTheClustersOfTheirLights) {
   // coarse cell's first). Stochastic level rounding gives the same point a coarse and a fine
   // cell (u picks one); nearest rounding would give it only one.
   Scene scene = small_builtin_scene("many-lights-open", 32, 24);
+  const LightTree tree = build_light_tree(scene);
   RllLightSampler rll(
-      scene, rll_settings_from(Params::parse({"rll.pool=0", "rll.level_rounding=stochastic"})));
+      scene, tree, rll_settings_from(Params::parse({"rll.pool=0", "rll.level_rounding=stochastic"})));
   const uint32_t L = uint32_t(scene.lights.size()), half = L / 2;
   LightContext coarse;
   coarse.p = scene.bounds.center();
@@ -364,7 +364,7 @@ TEST(RllLearning, RewardsOfANewCellReachTheClustersOfTheirLights) {
   ASSERT_FALSE(shares.empty());
   double second_half = 0, first_half = 0;
   for (size_t k = 0; k < shares.size(); ++k) {
-    const LightTreeNode& nd = scene.light_tree->node(rll.cuts().nodes(fine.cell)[k]);
+    const LightTreeNode& nd = tree.node(rll.cuts().nodes(fine.cell)[k]);
     (nd.end > half ? second_half : first_half) += shares[k];  // holds lights of the second half
   }
   EXPECT_GT(second_half, 0.95) << "first half " << first_half;
@@ -372,7 +372,7 @@ TEST(RllLearning, RewardsOfANewCellReachTheClustersOfTheirLights) {
   std::vector<double> coarse_shares = rll.cuts().learnt_shares(coarse.cell);
   double coarse_first = 0;
   for (size_t k = 0; k < coarse_shares.size(); ++k)
-    if (scene.light_tree->node(rll.cuts().nodes(coarse.cell)[k]).end <= half)
+    if (tree.node(rll.cuts().nodes(coarse.cell)[k]).end <= half)
       coarse_first += coarse_shares[k];
   EXPECT_GT(coarse_first, 0.95);
 }
@@ -382,9 +382,10 @@ TEST(RllLearning, FullTableEvictsAndStaysCorrect) {
   // least recently used cells are evicted between passes, and the sampler stays a valid,
   // unbiased distribution throughout.
   Scene scene = small_builtin_scene("cornell-boxes-room", 32, 24);
+  const LightTree tree = build_light_tree(scene);
   Accel accel(scene.mesh);
   Params params = Params::parse({"rll.capacity=40"});
-  RllLightSampler rll(scene, rll_settings_from(params));
+  RllLightSampler rll(scene, tree, rll_settings_from(params));
   train_sampler(scene, accel, rll, 12);
   nlohmann::json d = rll.describe();
   EXPECT_GT(d["evictions"].get<uint64_t>(), 0u);
@@ -411,7 +412,7 @@ TEST(RllLearning, FullTableEvictsAndStaysCorrect) {
   b.sampler = "rll";
   b.set = {"rll.capacity=40"};
   b.seed = 7;
-  const Image ib = render_scene(scene, b), ia = render_scene(scene, a);
+  const Image ib = render_scene(scene, tree, b), ia = render_scene(scene, tree, a);
   Estimate diff = difference_estimate(ib, ia);
   EXPECT_LE(std::abs(diff.mean), 4.5 * diff.stderr_) << diff.mean << " +- " << diff.stderr_;
   expect_bound_sees(ib, ia, "rll with a full table vs tree", 0.05);  // sees 1.5%
@@ -422,18 +423,18 @@ TEST(RllLearning, AnimatedFramesRefitAndStayUnbiased) {
   // every node consistent with its children and lights), and rll, carrying what it learnt
   // from the earlier frames, renders the last frame as the tree sampler does.
   Scene scene = small_builtin_scene("cornell-boxes-dynamic", 32, 24);
+  LightTree tree = build_light_tree(scene);
   Accel accel(scene.mesh);
   Params params;
-  RllLightSampler rll(scene, rll_settings_from(params));
+  RllLightSampler rll(scene, tree, rll_settings_from(params));
   for (int f = 0; f < 3; ++f) {
     scene.animate(scene, f);
     scene.refresh_lights_from_mesh();
-    refit_light_tree(scene);
+    tree.refit(scene.lights);
     accel.update_vertices(scene.mesh);
     rll.lights_changed(scene);
     train_sampler(scene, accel, rll, 8);
   }
-  const LightTree& tree = *scene.light_tree;
   size_t dark = 0;
   for (uint32_t l = 0; l < scene.lights.size(); ++l) {
     const LightBounds& leaf = tree.node(tree.leaf_of(l)).bounds;
@@ -465,7 +466,7 @@ TEST(RllLearning, AnimatedFramesRefitAndStayUnbiased) {
   t.sampler = "tree";
   t.integrator = is;
   t.spp = 512;
-  const Image last = film.resolve(), ref = render_scene(scene, t);
+  const Image last = film.resolve(), ref = render_scene(scene, tree, t);
   Estimate diff = difference_estimate(last, ref);
   EXPECT_LE(std::abs(diff.mean), 4.5 * diff.stderr_) << diff.mean << " +- " << diff.stderr_;
   expect_bound_sees(last, ref, "rll's last animated frame vs tree", 0.05);  // sees 1.5%
@@ -477,12 +478,13 @@ TEST(RllLearning, PoolSharesFollowTheLampsThatSwitchOff) {
   // follow at once (as a sampler loaded from the state would compute them), not keep the old
   // priors' weights until the next pass ends.
   Scene scene = small_builtin_scene("cornell-boxes-dynamic", 32, 24);
+  LightTree tree = build_light_tree(scene);
   Accel accel(scene.mesh);
   Params params;
   const RllSettings settings = rll_settings_from(params);
   ASSERT_GT(settings.cut.pool_levels, 0);
   ASSERT_TRUE(settings.cut.pool_ratio);
-  RllLightSampler rll(scene, settings);
+  RllLightSampler rll(scene, tree, settings);
   scene.animate(scene, 0);
   train_sampler(scene, accel, rll, 6);
   auto shares_of = [](const RllLightSampler& s) {
@@ -495,13 +497,13 @@ TEST(RllLearning, PoolSharesFollowTheLampsThatSwitchOff) {
   const auto before = shares_of(rll);
   scene.animate(scene, 1);
   scene.refresh_lights_from_mesh();
-  refit_light_tree(scene);
+  tree.refit(scene.lights);
   accel.update_vertices(scene.mesh);
   rll.lights_changed(scene);
   const auto after = shares_of(rll);
   BinaryWriter w;
   rll.save_state(w);
-  RllLightSampler loaded(scene, settings);
+  RllLightSampler loaded(scene, tree, settings);
   BinaryReader r(w.bytes(), "state");
   loaded.load_state(r);
   ASSERT_EQ(shares_of(loaded).size(), after.size());
@@ -525,10 +527,11 @@ TEST(RllLearning, PoolSharesFollowTheLampsThatSwitchOff) {
 namespace {
 // What every learnt cell of rll, trained on `scene` over `spp` samples per pixel (direct, seed
 // `seed`, default passes), learnt: its clusters' shares V / sum V, by cell key.
-std::map<uint64_t, std::vector<double>> learnt_after(const Scene& scene, const Accel& accel,
+std::map<uint64_t, std::vector<double>> learnt_after(const Scene& scene, const LightTree& tree,
+                                                     const Accel& accel,
                                                      int spp, uint64_t seed,
                                                      const std::vector<std::string>& set) {
-  RllLightSampler rll(scene, rll_settings_from(Params::parse(set)));
+  RllLightSampler rll(scene, tree, rll_settings_from(Params::parse(set)));
   IntegratorSettings is;
   is.type = IntegratorType::Direct;
   Integrator integrator(scene, accel, rll, is);
@@ -580,6 +583,7 @@ TEST(RllLearning, LearntDistributionKeepsSharpeningOverALongRender) {
   // checks that it would fail it. An 8-cluster cut, so that every cluster passes 50 rewards
   // before 16 spp; 4 seeds.
   Scene scene = small_builtin_scene("cornell-boxes-room", 40, 30);
+  const LightTree tree = build_light_tree(scene);
   Accel accel(scene.mesh);
   double ratio[2];
   for (int rule = 0; rule < 2; ++rule) {
@@ -589,7 +593,7 @@ TEST(RllLearning, LearntDistributionKeepsSharpeningOverALongRender) {
     for (int i = 0; i < 2; ++i) {
       std::vector<std::map<uint64_t, std::vector<double>>> runs;
       for (uint64_t seed = 1; seed <= 4; ++seed)
-        runs.push_back(learnt_after(scene, accel, i == 0 ? 16 : 256, seed, set));
+        runs.push_back(learnt_after(scene, tree, accel, i == 0 ? 16 : 256, seed, set));
       spread[i] = median_spread(runs);
       ASSERT_GT(spread[i], 0) << "too few cells learnt in every render";
     }

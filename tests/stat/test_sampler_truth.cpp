@@ -129,7 +129,8 @@ std::vector<double> tree_truth(const LightTree& tree, const LightContext& ctx) {
   return out;
 }
 
-std::vector<double> truth_of(Truth truth, const Scene& scene, const LightContext& ctx) {
+std::vector<double> truth_of(Truth truth, const Scene& scene, const LightTree& tree,
+                             const LightContext& ctx) {
   const size_t n = scene.lights.size();
   switch (truth) {
     case Truth::None:
@@ -144,7 +145,7 @@ std::vector<double> truth_of(Truth truth, const Scene& scene, const LightContext
       return p;
     }
     case Truth::Tree:
-      return tree_truth(*scene.light_tree, ctx);
+      return tree_truth(tree, ctx);
   }
   return {};
 }
@@ -210,6 +211,7 @@ TEST_P(SamplerTruth, StratifiedCountsAndChiSquareAtManyContexts) {
   const TruthCase& c = truth_cases()[std::get<0>(GetParam())];
   const SamplerScene s = sampler_scene(std::get<1>(GetParam()), c.sampler, c.set);
   const Scene& scene = s.scene;
+  const LightTree& tree = *s.tree;
   const Accel& accel = *s.accel;
   const std::unique_ptr<LightSampler>& sampler = s.sampler;
   if (c.passes > 0) train_sampler(scene, accel, *sampler, c.passes);
@@ -222,7 +224,6 @@ TEST_P(SamplerTruth, StratifiedCountsAndChiSquareAtManyContexts) {
                         ? int(std::min<size_t>(64 * n, size_t(1) << 20))
                         : c.draws;
   const double alpha = sidak_alpha(0.01, kChiTests);
-  const LightTree& tree = *scene.light_tree;
   std::vector<double> node_score(tree.node_count(), 0.0), node_p(tree.node_count()),
       node_max(tree.node_count());
   std::vector<std::vector<double>> pmf_at(contexts.size());
@@ -251,7 +252,7 @@ TEST_P(SamplerTruth, StratifiedCountsAndChiSquareAtManyContexts) {
     const std::vector<double> count = stratified_counts(*sampler, ctx, draws, n);
     EXPECT_EQ(count_misfits(count, scaled(pmf, draws), &first), 0) << first;
     if (c.truth != Truth::None) {
-      const std::vector<double> truth = truth_of(c.truth, scene, ctx);
+      const std::vector<double> truth = truth_of(c.truth, scene, tree, ctx);
       EXPECT_EQ(pmf_misfits(pmf, truth), 0) << "pmf off the truth";
       EXPECT_EQ(count_misfits(count, scaled(truth, draws), &first), 0)
           << "against the truth: " << first;
@@ -291,7 +292,7 @@ TEST_P(SamplerTruth, StratifiedCountsAndChiSquareAtManyContexts) {
     caught_apart += count_misfits(stratified_counts(apart, ctx, draws, n),
                                   scaled(pmfs(apart, ctx, n), draws), nullptr) > 0;
     if (c.truth == Truth::None) continue;
-    const std::vector<double> truth = truth_of(c.truth, scene, ctx);
+    const std::vector<double> truth = truth_of(c.truth, scene, tree, ctx);
     const std::vector<double> count = stratified_counts(consistent, ctx, draws, n);
     caught_truth += pmf_misfits(pmfs(consistent, ctx, n), truth) > 0 &&
                     count_misfits(count, scaled(truth, draws), nullptr) > 0;

@@ -59,9 +59,9 @@ float BiasedSampler::pmf(const LightContext& ctx, uint32_t light) const {
   return float(double(p) * w * (1 - group_branch(ctx)));
 }
 
-std::vector<uint32_t> brightest_light_group(const Scene& scene, uint32_t max_lights) {
+std::vector<uint32_t> brightest_light_group(const Scene& scene, const LightTree& tree,
+                                            uint32_t max_lights) {
   const std::vector<float> power = light_powers(scene);
-  const LightTree& tree = *scene.light_tree;
   uint32_t best = 0;
   double best_power = -1;
   for (uint32_t i = 0; i < tree.node_count(); ++i) {

@@ -49,6 +49,7 @@ class BiasedSampler final : public LightSampler {
 // A group of at most `max_lights` lights that the tree keeps together (the lights of one node),
 // the node of largest total power among those of that size: a group that lights a part of the
 // scene, as a wrong learnt cluster or a wrong subtree would.
-std::vector<uint32_t> brightest_light_group(const Scene& scene, uint32_t max_lights);
+std::vector<uint32_t> brightest_light_group(const Scene& scene, const LightTree& tree,
+                                            uint32_t max_lights);
 
 }  // namespace rll::test

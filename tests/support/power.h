@@ -10,10 +10,14 @@
 
 namespace rll::test {
 
-// Makes the sampler a render uses of the one it names (a test-only wrapper such as BiasedSampler).
-using SamplerWrap = std::function<std::unique_ptr<LightSampler>(LightSampler&, const Scene&)>;
+// Makes the sampler a render uses of the one it names (a test-only wrapper such as BiasedSampler),
+// given the render's scene and light tree.
+using SamplerWrap =
+    std::function<std::unique_ptr<LightSampler>(LightSampler&, const Scene&, const LightTree&)>;
 // render_scene, with the sampler `wrap` makes of the requested one (none: the requested one).
 Image render_scene_wrapped(const Scene& scene, const RenderRequest& request,
+                           const SamplerWrap& wrap);
+Image render_scene_wrapped(const Scene& scene, const LightTree& tree, const RenderRequest& request,
                            const SamplerWrap& wrap);
 
 // An agreement bound's power: the smallest bias of `a` proportional to the image (a made brighter

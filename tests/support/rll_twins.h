@@ -24,6 +24,7 @@ namespace rll::test {
 
 struct RllTwins {
   Scene scene;
+  LightTree tree;
   std::unique_ptr<Accel> accel;
   std::vector<LightContext> contexts;
   std::unique_ptr<RllLightSampler> a, b;
@@ -32,6 +33,7 @@ struct RllTwins {
   RllTwins(const std::string& scene_name, const std::string& sampler,
            const std::vector<std::string>& set) {
     scene = small_builtin_scene(scene_name, 32, 24);
+    tree = build_light_tree(scene);
     accel = std::make_unique<Accel>(scene.mesh);
     contexts = make_contexts(scene, *accel, 300, 21);
     // (A table of 4096 cells unless the case sets one: the default's 32768 cells of cuts take
@@ -43,8 +45,8 @@ struct RllTwins {
     const Params p = Params::parse(all);
     const RllSettings s = sampler == "fermat" ? rll_settings_from(p, "fermat", fermat_settings())
                                               : rll_settings_from(p, "rll");
-    a = std::make_unique<RllLightSampler>(scene, s);
-    b = std::make_unique<RllLightSampler>(scene, s);
+    a = std::make_unique<RllLightSampler>(scene, tree, s);
+    b = std::make_unique<RllLightSampler>(scene, tree, s);
   }
 
   // One pass: every point looked up in both (one thread, so that both hand out cell ids in one

@@ -20,10 +20,10 @@ SamplerScene sampler_scene(const std::string& scene_name, const std::string& sam
   s.scene.width = 48;
   s.scene.height = 36;
   s.scene.finalize();
-  build_light_tree(s.scene);
+  s.tree = std::make_unique<LightTree>(build_light_tree(s.scene));
   s.accel = std::make_unique<Accel>(s.scene.mesh);
   Params params = Params::parse(set);
-  s.sampler = make_light_sampler(sampler, s.scene, params, s.accel.get());
+  s.sampler = make_light_sampler(sampler, s.scene, *s.tree, params, s.accel.get());
   params.check_all_used();
   return s;
 }

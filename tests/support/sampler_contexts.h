@@ -9,6 +9,7 @@
 #include "rll/accel/accel.h"
 #include "rll/core/rng.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/scene/scene.h"
 
 namespace rll::test {
@@ -19,6 +20,7 @@ namespace rll::test {
 // tracer, which no other sampler reads).
 struct SamplerScene {
   Scene scene;
+  std::unique_ptr<LightTree> tree;  // (held by pointer: the sampler keeps its address)
   std::unique_ptr<Accel> accel;
   std::unique_ptr<LightSampler> sampler;
 };

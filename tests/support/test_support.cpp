@@ -89,7 +89,6 @@ Scene small_builtin_scene(const std::string& name, int width, int height) {
   s.width = width;
   s.height = height;
   s.finalize();
-  build_light_tree(s);
   return s;
 }
 
@@ -97,17 +96,25 @@ Image render_scene(const Scene& given, const RenderRequest& req) {
   return render_scene_wrapped(given, req, {});
 }
 
+Image render_scene(const Scene& scene, const LightTree& tree, const RenderRequest& req) {
+  return render_scene_wrapped(scene, tree, req, {});
+}
+
 Image render_scene_wrapped(const Scene& given, const RenderRequest& req, const SamplerWrap& wrap) {
-  // A scene without a tree renders as a render session would render it: with one.
-  std::optional<Scene> treed;
-  if (!given.light_tree) build_light_tree(treed.emplace(given));
-  const Scene& scene = treed ? *treed : given;
+  // As a render session renders it: with a light tree of its own, the lights in its order.
+  Scene scene = given;
+  const LightTree tree = build_light_tree(scene);
+  return render_scene_wrapped(scene, tree, req, wrap);
+}
+
+Image render_scene_wrapped(const Scene& scene, const LightTree& tree, const RenderRequest& req,
+                           const SamplerWrap& wrap) {
   ThreadLimit limit(req.threads);
   Params params = Params::parse(req.set);
   Accel accel(scene.mesh);
-  auto named = make_light_sampler(req.sampler, scene, params, &accel);
+  auto named = make_light_sampler(req.sampler, scene, tree, params, &accel);
   params.check_all_used();
-  auto wrapped = wrap ? wrap(*named, scene) : nullptr;
+  auto wrapped = wrap ? wrap(*named, scene, tree) : nullptr;
   LightSampler& sampler = wrapped ? *wrapped : *named;
   Integrator integrator(scene, accel, sampler, req.integrator);
   Film film(scene.width, scene.height);

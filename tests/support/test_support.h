@@ -15,6 +15,7 @@
 #include "rll/core/memory_budget.h"
 #include "rll/core/rng.h"
 #include "rll/render/integrator.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/scene/scene.h"
 
 namespace rll::test {
@@ -94,10 +95,15 @@ RenderRequest request(const std::string& sampler, const std::string& integrator,
                       const std::string& strategy, int spp, uint64_t seed,
                       PointSet points = PointSet::Sobol);
 
-Scene small_builtin_scene(const std::string& name, int width, int height);  // with its light tree
+// Finalized, without a light tree: build_light_tree makes one (and orders the lights), as a
+// render session does.
+Scene small_builtin_scene(const std::string& name, int width, int height);
 
-// Renders a finalized scene (from a copy with a light tree, where it has none): the mean image.
+// Renders a finalized scene (a copy, with a light tree of its own, as a session would): the mean
+// image.
 Image render_scene(const Scene& scene, const RenderRequest& request);
+// The same over a scene whose lights `tree` (build_light_tree) has ordered: no tree of its own.
+Image render_scene(const Scene& scene, const LightTree& tree, const RenderRequest& request);
 
 // Mean over all pixels and channels.
 double image_mean(const Image& image);

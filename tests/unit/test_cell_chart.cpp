@@ -20,14 +20,16 @@ namespace {
 
 struct Rendered {
   Scene scene;
+  LightTree tree;
   Accel accel;
   IntegratorSettings settings;
   std::unique_ptr<LightSampler> rll, oracle;
-  Rendered(Scene s, int spp) : scene(std::move(s)), accel(scene.mesh) {
+  Rendered(Scene s, int spp)
+      : scene(std::move(s)), tree(build_light_tree(scene)), accel(scene.mesh) {
     settings.type = IntegratorType::Direct;
-    rll = make_light_sampler("rll", scene, Params{}, &accel);
+    rll = make_light_sampler("rll", scene, tree, Params{}, &accel);
     Params fast = Params::parse({"oracle.points=2", "oracle.rays=1", "oracle.discovery_spp=2"});
-    oracle = make_light_sampler("oracle", scene, fast, &accel);
+    oracle = make_light_sampler("oracle", scene, tree, fast, &accel);
     Integrator integrator(scene, accel, *rll, settings);
     Film film(scene.width, scene.height);
     RenderSettings rs;

@@ -33,10 +33,11 @@ uint32_t cell_of(const RllLightSampler& rll, const Scene& scene, Vec3 wo, bool g
 }  // namespace
 
 TEST(CellGrid, DirectionBinsSplitGlossyPointsByViewDirection) {
-  const Scene scene = small_builtin_scene("cornell-box", 16, 16);
+  Scene scene = small_builtin_scene("cornell-box", 16, 16);
+  const LightTree tree = build_light_tree(scene);
   const Vec3 up_left = normalize(Vec3(-1, 1, 0)), up_right = normalize(Vec3(1, 1, 0));
-  RllLightSampler binned(scene, rll_settings_from(Params::parse({"rll.direction_bins=4"})));
-  RllLightSampler plain(scene, rll_settings_from(Params()));
+  RllLightSampler binned(scene, tree, rll_settings_from(Params::parse({"rll.direction_bins=4"})));
+  RllLightSampler plain(scene, tree, rll_settings_from(Params()));
   // A glossy point seen from two far-apart directions: two cells with bins, one without.
   EXPECT_NE(cell_of(binned, scene, up_left, true), cell_of(binned, scene, up_right, true));
   EXPECT_EQ(cell_of(plain, scene, up_left, true), cell_of(plain, scene, up_right, true));

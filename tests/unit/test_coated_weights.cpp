@@ -232,9 +232,10 @@ TEST(CoatedWeights, ReferenceCacheKeysKeepTheWeightsApart) {
 namespace {
 // glazed-room (a rough coateddiffuse lit through windows) rendered by the megakernel or the
 // wavefront renderer, `power` (it learns nothing, so the two agree to the bit).
-Image render_glazed(const Scene& scene, const Accel& accel, CoatedWeights w, bool wavefront) {
+Image render_glazed(const Scene& scene, const LightTree& tree, const Accel& accel, CoatedWeights w,
+                    bool wavefront) {
   Params params;
-  auto sampler = make_light_sampler("power", scene, params, &accel);
+  auto sampler = make_light_sampler("power", scene, tree, params, &accel);
   IntegratorSettings is;
   is.coated_weights = w;
   Film film(scene.width, scene.height);
@@ -260,14 +261,15 @@ bool same_image(const Image& a, const Image& b) {
 // CUDA) both build with make_path_constants: a render with it differs from the default, and the
 // wavefront renderer's image equals the megakernel's to the bit with either weight.
 TEST(CoatedWeights, ReachesTheMegakernelAndTheWavefrontRenderer) {
-  const Scene scene = small_builtin_scene("glazed-room", 24, 18);
+  Scene scene = small_builtin_scene("glazed-room", 24, 18);
+  const LightTree tree = build_light_tree(scene);
   const Accel accel(scene.mesh);
   IntegratorSettings is;
   is.coated_weights = CoatedWeights::Pbrt;
   EXPECT_EQ(make_path_constants(scene, SceneView{}, is).coated_weights, CoatedWeights::Pbrt);
-  const Image mega = render_glazed(scene, accel, CoatedWeights::Unbiased, false);
-  const Image mega_pbrt = render_glazed(scene, accel, CoatedWeights::Pbrt, false);
-  const Image wave_pbrt = render_glazed(scene, accel, CoatedWeights::Pbrt, true);
+  const Image mega = render_glazed(scene, tree, accel, CoatedWeights::Unbiased, false);
+  const Image mega_pbrt = render_glazed(scene, tree, accel, CoatedWeights::Pbrt, false);
+  const Image wave_pbrt = render_glazed(scene, tree, accel, CoatedWeights::Pbrt, true);
   EXPECT_FALSE(same_image(mega, mega_pbrt));
   EXPECT_TRUE(same_image(mega_pbrt, wave_pbrt));
 }

@@ -109,7 +109,7 @@ void expect_equal_cells(const CutStore& a, const CutStore& b, bool guided) {
 // cell, in the opposite order, leave every array equal to the bit: cells are independent.
 TEST(CutEndPass, ParallelLoopOverCellsEqualsTheClassCellByCell) {
   Scene scene = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *scene.light_tree;
+  const LightTree tree = build_light_tree(scene);
   for (const Variant& v : variants()) {
     SCOPED_TRACE(v.name);
     Twins t(tree, v.s);
@@ -147,7 +147,7 @@ TEST(CutEndPass, ParallelLoopOverCellsEqualsTheClassCellByCell) {
 // they replace: each inner node's children's prior-weighted mean of g, sums added child by child.
 TEST(CutEndPass, GuidedFactorsEqualARecursiveBake) {
   Scene scene = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *scene.light_tree;
+  const LightTree tree = build_light_tree(scene);
   CutSettings s;
   s.cut_size = s.initial_size = 64;
   s.guided = true;
@@ -210,7 +210,7 @@ TEST(RllPool, FindIsABinarySearchOverTheSortedKeys) {
 // from the coarse cell's previous values where it had some.
 TEST(RllPool, FoldEqualsSumsInTheOrderOfTheCellsKeys) {
   Scene scene = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *scene.light_tree;
+  const LightTree tree = build_light_tree(scene);
   CutSettings s;
   s.cut_size = s.initial_size = 16;
   s.pool_levels = 1;
@@ -286,13 +286,14 @@ namespace {
 // A one-cell store of 4 clusters on many-lights-open's tree, with `forget`.
 struct OneCell {
   Scene scene = test::small_builtin_scene("many-lights-open", 16, 12);
+  LightTree tree = build_light_tree(scene);
   std::unique_ptr<CutStore> store;
   explicit OneCell(Forgetting forget, float change_z = 5) {
     CutSettings s;
     s.cut_size = s.initial_size = 4;
     s.forget = forget;
     s.change_z = change_z;
-    store = std::make_unique<CutStore>(*scene.light_tree, 1, s, 1.0);
+    store = std::make_unique<CutStore>(tree, 1, s, 1.0);
     store->set_anchor(0, {Vec3(0, 1, 0), Vec3(0, 1, 0), -4});
   }
   // One pass: 100 rewards of cluster 0 from `reward(i)`, 100 of 1 each, the others none.

@@ -35,7 +35,7 @@ void expect_cell_invariants(const LightTree& tree, const CutStore& store, uint32
 
 TEST(InitialCut, PartitionsAllLightsWithMNodes) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   for (int m : {1, 2, 7, 64, 128, 1000}) {
     auto cut = initial_cut(tree, m);
     EXPECT_TRUE(is_valid_cut(tree, cut)) << "M = " << m;
@@ -45,7 +45,7 @@ TEST(InitialCut, PartitionsAllLightsWithMNodes) {
 
 TEST(SplitCollapse, InvariantsAfterManyRandomPasses) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   CutSettings cs;
   cs.cut_size = 24;  // small, so that collapses happen constantly
   cs.initial_size = 16;
@@ -85,7 +85,7 @@ TEST(SplitCollapse, InvariantsAfterManyRandomPasses) {
 
 TEST(SplitCollapse, SplitsTheLargestAndCollapsesTheSmallest) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   Cut cut;
   cut.nodes = initial_cut(tree, 8);
   const size_t K = cut.nodes.size();
@@ -142,7 +142,7 @@ TEST(SplitCollapse, SplitsTheLargestAndCollapsesTheSmallest) {
 // rounded to zero), and a cluster's int64 sum wrapped after ~2000 saturated rewards in a pass.
 TEST(CutStore, DimRewardsAreLearntBesideAVeryBrightLight) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   CutSettings cs;
   cs.splits = 0;
   CutStore store(tree, 1, cs, /*reward_scale=*/1e9);  // one light 1e9 brighter than these rewards
@@ -169,7 +169,7 @@ TEST(CutStore, DimRewardsAreLearntBesideAVeryBrightLight) {
 
 TEST(CutStore, SaturatedRewardsNeverWrapAround) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   CutSettings cs;
   cs.splits = 0;
   CutStore store(tree, 1, cs, 1.0);
@@ -230,7 +230,7 @@ std::vector<double> shares_after(LearnTarget target, const LightTree& tree,
 
 TEST(CutStore, HalfHiddenClusterGetsMoreUnderMomentAndHiddenFallsToTheFloor) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   std::vector<float> cdf_moment, cdf_mean;
   std::vector<double> moment = shares_after(LearnTarget::Moment, tree, &cdf_moment);
   std::vector<double> mean = shares_after(LearnTarget::Mean, tree, &cdf_mean);
@@ -253,7 +253,7 @@ TEST(CutStore, HalfHiddenClusterGetsMoreUnderMomentAndHiddenFallsToTheFloor) {
 // the same factors from what the file holds.
 TEST(CutStore, TargetFactorIsTheTableOverThePrior) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   CutSettings cs;
   cs.cut_size = 24;
   cs.initial_size = 16;
@@ -307,7 +307,7 @@ TEST(CutStore, TargetFactorIsTheTableOverThePrior) {
 // rewards reach the coarse sums in absolute units.
 TEST(CutStore, PoolSharesStandInForClustersACellHasNotVisited) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   CutSettings cs;
   cs.cut_size = cs.initial_size = 8;
   cs.pool_levels = 1;
@@ -383,7 +383,7 @@ TEST(CutStore, PoolSharesStandInForClustersACellHasNotVisited) {
 // so that cells far from and near to a light pool the same visibility factor.
 TEST(CutStore, PoolRatioDividesRewardsByTheCellsOwnPrior) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   CutSettings cs;
   cs.cut_size = cs.initial_size = 8;
   cs.pool_levels = 1;

@@ -57,8 +57,8 @@ void expect_split_descents_agree(const LightTree& tree, const std::vector<uint32
 TEST(DescentSplit, ProductsEqualTheReachAndTheDescentBelowTheCluster) {
   for (const char* name : {"cornell-boxes-room", "arch-interior", "many-lights-open"}) {
     SCOPED_TRACE(name);
-    const Scene scene = test::small_builtin_scene(name, 16, 12);
-    const LightTree& tree = *scene.light_tree;
+    Scene scene = test::small_builtin_scene(name, 16, 12);
+    const LightTree tree = build_light_tree(scene);
     const Bounds3 box = scene.bounds;
     // The root alone, a small and a large initial cut, and every leaf.
     int below = 0;
@@ -106,9 +106,9 @@ struct Caterpillar {
 };
 
 TEST(DescentSplit, PathsDeeperThan64LevelsKeepTheirProducts) {
-  const Scene scene = test::small_builtin_scene("many-lights-open", 16, 12);
+  Scene scene = test::small_builtin_scene("many-lights-open", 16, 12);
   const uint32_t n = 300;  // paths up to 299 steps, past kMaxTreeDepth (256)
-  const Caterpillar tree(n, *scene.light_tree);
+  const Caterpillar tree(n, build_light_tree(scene));
   const LightTreeView v = tree.view();
   // A cut of the first m leaves and the inner node m above the rest, m = 100: the clusters of
   // the first lights are reached after k + 1 steps, the last one after 100, with up to 199

@@ -157,6 +157,7 @@ TEST(Hardening3Samplers, ExactIntegrationCostBoundsTheCellsVisited) {
 // ray, naming the keys.
 TEST(Hardening3Samplers, OracleRefusesAPlanBeyondItsBound) {
   Scene s = rll::test::small_builtin_scene("cornell-boxes-room", 32, 32);
+  const LightTree tree = build_light_tree(s);
   Accel accel(s.mesh);
   for (const std::vector<std::string>& set :
        {std::vector<std::string>{"oracle.points=4096", "oracle.rays=4096"},
@@ -164,7 +165,7 @@ TEST(Hardening3Samplers, OracleRefusesAPlanBeyondItsBound) {
         std::vector<std::string>{"oracle.points=4096", "oracle.rays=64", "oracle.refine=4096"}}) {
     const Params p = Params::parse(set);
     const auto t0 = std::chrono::steady_clock::now();
-    const std::string msg = error_of([&] { make_light_sampler("oracle", s, p, &accel); });
+    const std::string msg = error_of([&] { make_light_sampler("oracle", s, tree, p, &accel); });
     EXPECT_LT(seconds_since(t0), 20.0 * kSlowdown) << msg;
     expect_mentions(msg, {"shadow rays", "oracle.points=4096", "oracle.rays=", "oracle.refine=",
                           "lower oracle.points, oracle.rays or oracle.refine"});
@@ -175,6 +176,7 @@ TEST(Hardening3Samplers, OracleRefusesAPlanBeyondItsBound) {
 // stops at once, and says it was interrupted.
 TEST(Hardening3Samplers, OraclePrecomputeStopsAtTheCancelFlag) {
   Scene s = rll::test::small_builtin_scene("cornell-box", 32, 32);
+  const LightTree tree = build_light_tree(s);
   Accel accel(s.mesh);
   // About 4e8 shadow rays planned (under the bound): minutes here, a minute on a large machine.
   const Params p = Params::parse({"oracle.points=4096", "oracle.rays=4096"});
@@ -186,7 +188,7 @@ TEST(Hardening3Samplers, OraclePrecomputeStopsAtTheCancelFlag) {
     cancel = true;
   });
   const auto t0 = std::chrono::steady_clock::now();
-  auto sampler = make_light_sampler("oracle", s, p, &accel);
+  auto sampler = make_light_sampler("oracle", s, tree, p, &accel);
   signal.join();
   EXPECT_LT(seconds_since(t0), 20.0 * kSlowdown);
   const auto* oracle = dynamic_cast<const OracleLightSampler*>(sampler.get());
@@ -201,15 +203,16 @@ TEST(Hardening3Samplers, OraclePrecomputeStopsAtTheCancelFlag) {
 // while rll.capacity is checked: refused before allocating, with the keys and what to do.
 TEST(Hardening3Samplers, LtcTablesBeyondTheBudgetAreRefusedBeforeAllocating) {
   Scene s = rll::test::small_builtin_scene("cornell-box", 8, 8);
+  const LightTree tree = build_light_tree(s);
   EXPECT_REFUSED_IN_BOUNDED_MEMORY(
-      make_light_sampler("ltc", s, Params::parse({"ltc.capacity=16777216"}), nullptr),
+      make_light_sampler("ltc", s, tree, Params::parse({"ltc.capacity=16777216"}), nullptr),
       "ltc.capacity=16777216.*needs .*lower ltc.capacity");
   // A variant: the key table (spatial clusters x direction bins^2: 2^17 x 32^2 keys, 2 GiB)
   // against a small budget.
   {
     rll::test::BudgetScope budget(size_t(1) << 30);
     const std::string msg = error_of([&] {
-      make_light_sampler("ltc", s, Params::parse({"ltc.clusters=131072", "ltc.bins=32"}), nullptr);
+      make_light_sampler("ltc", s, tree, Params::parse({"ltc.clusters=131072", "ltc.bins=32"}), nullptr);
     });
     expect_mentions(msg, {"ltc.bins=32", "spatial clusters", "more than", "lower ltc.capacity"});
   }
@@ -217,7 +220,7 @@ TEST(Hardening3Samplers, LtcTablesBeyondTheBudgetAreRefusedBeforeAllocating) {
   {
     rll::test::BudgetScope budget(size_t(1) << 30);
     EXPECT_NO_THROW(make_light_sampler(
-        "ltc", s, Params::parse({"ltc.clusters=64", "ltc.capacity=4096"}), nullptr));
+        "ltc", s, tree, Params::parse({"ltc.clusters=64", "ltc.capacity=4096"}), nullptr));
   }
 }
 
@@ -248,7 +251,6 @@ Scene huge_light_scene(float huge, bool facing_wall = false) {
   s.camera.fov = 45;
   s.has_camera = true;
   s.finalize();
-  build_light_tree(s);
   return s;
 }
 
@@ -279,8 +281,11 @@ TEST(Hardening3Samplers, HugePowerLightLeavesTheOtherLightsTheirShareUnderEveryS
   const Scene huge = huge_light_scene(3e38f), plain = huge_light_scene(0);
   ASSERT_EQ(huge.lights.size(), plain.lights.size() + 2);  // two triangles
   EXPECT_FALSE(std::isfinite(light_power(huge.lights.back(), huge.radius)));
-  EXPECT_EQ(warnings_with(huge, "more power than a float holds"), 1u);
-  expect_mentions(huge.warnings.back(), {"huge", "material 'sun'", "lower their radiance"});
+  // The tree's build (a render session's) says so once, into the scene's warnings.
+  Scene lit = huge;
+  build_light_tree(lit);
+  ASSERT_EQ(warnings_with(lit, "more power than a float holds"), 1u);
+  expect_mentions(lit.warnings.back(), {"huge", "material 'sun'", "lower their radiance"});
   for (const std::string& name : all_samplers()) {
     SCOPED_TRACE(name);
     auto req = rll::test::request(name, "direct", 1, "mis", 16, 7);
@@ -313,7 +318,6 @@ Scene four_huge_lights_scene() {
   s.camera.fov = 45;
   s.has_camera = true;
   s.finalize();
-  build_light_tree(s);
   return s;
 }
 }  // namespace
@@ -326,7 +330,8 @@ TEST(Hardening3Samplers, HugePowerLightsLightingTheSceneGiveALitImage) {
   for (const Scene* scene : {&one, &four}) {
     SCOPED_TRACE(scene->source);
     // Sums of the capped powers are finite.
-    const LightTree& tree = light_tree_of(*scene);
+    Scene lit = *scene;
+    const LightTree tree = build_light_tree(lit);
     EXPECT_TRUE(std::isfinite(tree.node(LightTree::kRoot).bounds.power));
     double uniform = 0;  // uniform's, which never looked at power (the list's first)
     for (const std::string& name : all_samplers()) {
@@ -382,12 +387,14 @@ TEST(Hardening3Samplers, PowerCapActsOnlyBeyondIt) {
 namespace {
 
 // Renders with the diagnostics measured and returns them.
-std::vector<std::pair<std::string, std::vector<float>>> render_aovs(const Scene& scene,
+std::vector<std::pair<std::string, std::vector<float>>> render_aovs(const Scene& given,
                                                                     const std::string& name,
                                                                     const std::vector<Aov>& aovs) {
   Params params = Params::parse(quick_settings(name));
+  Scene scene = given;  // in the order of a light tree of its own, as a render session's
+  const LightTree tree = build_light_tree(scene);
   Accel accel(scene.mesh);
-  auto sampler = make_light_sampler(name, scene, params, &accel);
+  auto sampler = make_light_sampler(name, scene, tree, params, &accel);
   IntegratorSettings is;
   is.max_depth = 1;
   Integrator integrator(scene, accel, *sampler, is);

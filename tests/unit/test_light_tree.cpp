@@ -27,7 +27,6 @@ Scene builtin(const std::string& name, void (*edit)(Scene&) = nullptr) {
   s.height = 12;
   if (edit) edit(s);
   s.finalize();
-  build_light_tree(s);
   return s;
 }
 
@@ -164,16 +163,16 @@ TEST(LightTree, DegenerateLayoutsStayShallow) {
       s.lights.push_back(make_point_light(p, Rgb(1.0f + float(i % 7))));
     }
     s.finalize();
-    build_light_tree(s);
+    const LightTree tree = build_light_tree(s);
     SCOPED_TRACE(layout);
-    expect_tree_invariants(*s.light_tree, s.lights);
-    EXPECT_LE(int(s.light_tree->depth()), layout == 0 ? 200 : 11);
+    expect_tree_invariants(tree, s.lights);
+    EXPECT_LE(int(tree.depth()), layout == 0 ? 200 : 11);
   }
 }
 
 TEST(LightTree, GroupsHaveTheirOwnSubtrees) {
   Scene s = builtin("cornell-boxes-room", add_sun);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   expect_tree_invariants(tree, s.lights);
   const uint32_t local = tree.group_root(LightGroup::Local),
                  dome = tree.group_root(LightGroup::Dome),
@@ -207,19 +206,21 @@ TEST(LightTree, GroupsHaveTheirOwnSubtrees) {
 
   // Missing groups take their parent's place: arch-interior has a dome and a sun, no lamps.
   Scene arch = builtin("arch-interior");
-  EXPECT_EQ(arch.light_tree->group_root(LightGroup::Local), LightTree::kNone);
-  EXPECT_TRUE(arch.light_tree->node(LightTree::kRoot).group);
-  EXPECT_EQ(arch.light_tree->group_root(LightGroup::Dome),
-            arch.light_tree->node(LightTree::kRoot).child);
+  const LightTree arch_tree = build_light_tree(arch);
+  EXPECT_EQ(arch_tree.group_root(LightGroup::Local), LightTree::kNone);
+  EXPECT_TRUE(arch_tree.node(LightTree::kRoot).group);
+  EXPECT_EQ(arch_tree.group_root(LightGroup::Dome), arch_tree.node(LightTree::kRoot).child);
   // A lone group is the whole tree.
   Scene open = builtin("many-lights-open");
-  EXPECT_EQ(open.light_tree->group_root(LightGroup::Local), LightTree::kRoot);
-  EXPECT_FALSE(open.light_tree->node(LightTree::kRoot).group);
+  const LightTree open_tree = build_light_tree(open);
+  EXPECT_EQ(open_tree.group_root(LightGroup::Local), LightTree::kRoot);
+  EXPECT_FALSE(open_tree.node(LightTree::kRoot).group);
 }
 
 TEST(LightTree, EachContributingGroupGetsAnEqualShare) {
   Scene s = builtin("cornell-boxes-room", add_sun);
-  TreeLightSampler sampler(s);
+  const LightTree tree = build_light_tree(s);
+  TreeLightSampler sampler(s, tree);
   // On the floor facing up: lamps, sky and sun can all reach it.
   auto all = group_shares(s, sampler, Vec3(7, 0, 6), Vec3(0, 1, 0));
   for (LightGroup g : {LightGroup::Local, LightGroup::Dome, LightGroup::Directional})
@@ -251,10 +252,10 @@ TEST(LightTree, TinyImportanceNextToAHugeOneKeepsAPositivePmf) {
   b.triangle(Vec3(-1, 1, -1), Vec3(1, 1, -1), Vec3(0, 1, 1), b.emitter(Rgb(1e6f)));
   b.triangle(Vec3(-0.01f, 100, 0), Vec3(0.01f, 100, 0), Vec3(0, 100, 0.01f), b.emitter(Rgb(1e-3f)));
   s.finalize();
-  build_light_tree(s);
+  const LightTree tree = build_light_tree(s);
   ASSERT_EQ(s.lights.size(), 2u);
-  ASSERT_EQ(s.light_tree->node_count(), 3u);
-  TreeLightSampler sampler(s);
+  ASSERT_EQ(tree.node_count(), 3u);
+  TreeLightSampler sampler(s, tree);
   LightContext c;
   c.n = c.ns = Vec3(0, 1, 0);
   const uint32_t dim = s.lights[0].p0.y > 50 ? 0 : 1;
@@ -271,17 +272,18 @@ TEST(LightTree, TinyImportanceNextToAHugeOneKeepsAPositivePmf) {
 
 TEST(LightTree, RefitAfterLightsMoveKeepsBoundsConservative) {
   Scene s = builtin("cornell-boxes-dynamic");
+  LightTree tree = build_light_tree(s);
   Accel accel(s.mesh);
   for (int frame : {1, 2, 5}) {
     SCOPED_TRACE(frame);
     s.animate(s, frame);
     s.refresh_lights_from_mesh();
-    refit_light_tree(s);
+    tree.refit(s.lights);
     accel.update_vertices(s.mesh);
-    expect_tree_invariants(*s.light_tree, s.lights);
-    expect_conservative_bounds(*s.light_tree, s.lights);
+    expect_tree_invariants(tree, s.lights);
+    expect_conservative_bounds(tree, s.lights);
     // Every light that can contribute somewhere keeps a positive probability there.
-    TreeLightSampler sampler(s);
+    TreeLightSampler sampler(s, tree);
     for (const LightContext& c : test::make_contexts(s, accel, 40, 7 + frame))
       for (uint32_t l = 0; l < s.lights.size(); ++l) {
         if (test::light_can_contribute(s.lights[l], c.p, c.n)) {
@@ -355,39 +357,36 @@ TEST(LightBounds, ImportanceStopsGrowingAtTheLightsArea) {
               light_importance(b, Vec3(0.5f, -3, 0.3f), Vec3(0, 1, 0)), 1e-6f);
 }
 
-// The tree is built by whoever renders (the render session), not by Scene::finalize: a sampler
-// made over a scene without one says so, naming the scene, instead of reading a null tree.
-TEST(LightTree, FinalizeBuildsNoTreeAndSamplersSayWhatIsMissing) {
-  Scene s = make_builtin_scene("cornell-box");
-  s.width = 16;
-  s.height = 12;
-  s.finalize();
-  EXPECT_FALSE(s.light_tree);
-  test::expect_mentions(test::error_of([&] { TreeLightSampler sampler(s); }),
-                        {"builtin:cornell-box", "light tree"});
-  build_light_tree(s);
-  ASSERT_TRUE(s.light_tree);
-  expect_tree_invariants(light_tree_of(s), s.lights);
-  // finalize() again remakes the triangle lights: the old tree would index them wrongly.
-  s.finalize();
-  EXPECT_FALSE(s.light_tree);
+// The tree is the render session's, not the scene's: it builds it once and every sampler it
+// makes reads that tree itself (its nodes where the session keeps them), not a copy of its own.
+TEST(LightTree, TheSessionOwnsTheTreeItsSamplersRead) {
+  SessionSettings ss;
+  ss.scene = "builtin:cornell-boxes-room";
+  ss.resolution = "16x12";
+  RenderSession session(ss);
+  const LightTree& tree = session.light_tree();
+  expect_tree_invariants(tree, session.scene().lights);
+  EXPECT_EQ(session.make_sampler("tree")->sampler_view().tree.nodes.data, tree.view().nodes.data);
 }
 
 // Everything keyed by the light order (reference keys, render shares, learnt states) is keyed
-// by the order a tree build leaves: building again on the same scene must not move a light.
-TEST(LightTree, BuildingAgainKeepsTheLightOrder) {
+// by the order a tree build leaves: every build over a scene as finalize() leaves it (each
+// session's, each test's) orders its lights alike. Build once: a build over lights already in
+// tree order may order ties otherwise (so the tree is built where the scene is loaded, by its
+// owner, and nowhere again).
+TEST(LightTree, EveryBuildOverALoadedSceneOrdersItsLightsAlike) {
   for (const char* name : {"cornell-boxes-room", "arch-interior", "many-lights-open"}) {
     SCOPED_TRACE(name);
-    Scene s = builtin(name);
-    const uint64_t fingerprint = s.fingerprint();
-    const std::vector<Light> order = s.lights;
-    build_light_tree(s);
-    ASSERT_EQ(s.lights.size(), order.size());
-    for (size_t l = 0; l < order.size(); ++l) {
-      ASSERT_EQ(s.lights[l].type, order[l].type) << "light " << l;
-      ASSERT_EQ(s.lights[l].triangle, order[l].triangle) << "light " << l;
+    const Scene loaded = builtin(name);
+    Scene a = loaded, b = loaded;
+    build_light_tree(a);
+    build_light_tree(b);
+    ASSERT_EQ(a.lights.size(), b.lights.size());
+    for (size_t l = 0; l < a.lights.size(); ++l) {
+      ASSERT_EQ(a.lights[l].type, b.lights[l].type) << "light " << l;
+      ASSERT_EQ(a.lights[l].triangle, b.lights[l].triangle) << "light " << l;
     }
-    EXPECT_EQ(s.fingerprint(), fingerprint);
+    EXPECT_EQ(a.fingerprint(), b.fingerprint());
   }
 }
 
@@ -419,6 +418,6 @@ TEST(LightTree, SessionRefitsTheTreeBetweenFrames) {
   for (int frame : {1, 3}) {
     SCOPED_TRACE(frame);
     session.set_frame(frame, nullptr);
-    expect_conservative_bounds(light_tree_of(session.scene()), session.scene().lights);
+    expect_conservative_bounds(session.light_tree(), session.scene().lights);
   }
 }

@@ -90,7 +90,7 @@ TEST(LtcClusters, FewerWhenPointsCannotSplit) {
 
 TEST(LtcCut, GlobalCutByPowerPartitionsLights) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   for (int m : {1, 2, 8, 64}) {
     auto cut = power_cut(tree, m);
     EXPECT_TRUE(is_valid_cut(tree, cut)) << m;
@@ -100,7 +100,8 @@ TEST(LtcCut, GlobalCutByPowerPartitionsLights) {
 
 TEST(LtcSampler, DirectionBinsCoverTheSphere) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  LtcLightSampler ltc(s, small_settings());
+  const LightTree tree = build_light_tree(s);
+  LtcLightSampler ltc(s, tree, small_settings());
   std::vector<int> hits(64, 0);
   Pcg32 rng(3);
   for (int i = 0; i < 20000; ++i) {
@@ -115,9 +116,9 @@ TEST(LtcSampler, DirectionBinsCoverTheSphere) {
 
 TEST(LtcSampler, LearningMovesProbabilityOntoTheLitLights) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  const LightTree& tree = *s.light_tree;
+  const LightTree tree = build_light_tree(s);
   ASSERT_GT(tree.light_count(), 64u);
-  LtcLightSampler ltc(s, small_settings());
+  LtcLightSampler ltc(s, tree, small_settings());
   LightContext ctx = floor_context(s);
   ltc.prepare(ctx, 0.5f);
   ASSERT_NE(ctx.cell, kNoCell);
@@ -159,7 +160,8 @@ TEST(LtcSampler, LearntStateIndependentOfRewardOrder) {
   // Two samplers get the same rewards, one in reverse order (as threads might deliver them):
   // every pmf afterwards is identical to the bit.
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  LtcLightSampler a(s, small_settings()), b(s, small_settings());
+  const LightTree tree = build_light_tree(s);
+  LtcLightSampler a(s, tree, small_settings()), b(s, tree, small_settings());
   LightContext ctx = floor_context(s), cb = ctx;
   a.prepare(ctx, 0.5f);
   b.prepare(cb, 0.5f);

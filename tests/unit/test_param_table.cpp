@@ -1,13 +1,16 @@
 // The learning samplers' parameter tables (core/param_table.h, learn/cut_params.h,
 // lights/rll_settings.h): every key of rll and fermat is refused just outside each end of its
 // range and on NaN, infinity or an unknown choice, the error naming the sampler's own key; every
-// key reads back what it is given; and docs/rll.md's parameter table lists exactly these keys.
+// key reads back what it is given; docs/rll.md's parameter table lists exactly these keys; and
+// params_json writes a table's every key, so that a key added to a table joins a sampler's
+// describe() and with it a saved state's identity.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
 #include <string>
@@ -154,6 +157,50 @@ TEST(ParamTable, DocsListExactlyTheseKeys) {
   std::set<std::string> keys;
   for (const Entry& e : all_entries()) keys.insert(e.key);
   EXPECT_EQ(documented, keys);
+}
+
+// A test-only settings struct and table: params_json writes each kind as describe() always
+// wrote it, and an entry added to the table is in the JSON with nothing else written by hand.
+struct Toy {
+  int count = 7;
+  float weight = 0.1f;
+  bool guided = true;
+};
+
+TEST(ParamTable, ParamsJsonWritesEveryKeyOfTheTable) {
+  std::vector<ParamSpec<Toy>> table = {
+      int_param("count", ParamRange::at_least(0), field<Toy, &Toy::count>()),
+      float_param("weight", ParamRange::at_least(0), field<Toy, &Toy::weight>()),
+  };
+  nlohmann::json j = nlohmann::json::object();
+  params_json(table, Toy{}, j);
+  // As {{"count", s.count}, {"weight", s.weight}} wrote it: the float's own value, not 0.1.
+  EXPECT_EQ(j.dump(), nlohmann::json({{"count", 7}, {"weight", 0.1f}}).dump());
+  EXPECT_EQ(j.dump(), R"({"count":7,"weight":0.10000000149011612})");
+  table.push_back(choice_param("sampling", {"table", "guided"}, field<Toy, &Toy::guided>()));
+  nlohmann::json more = nlohmann::json::object();
+  params_json(table, Toy{}, more);
+  EXPECT_EQ(more.size(), 3u);
+  EXPECT_EQ(more["sampling"], "guided");
+  // Two tables of one sampler naming one key would hide one of them: refused.
+  EXPECT_THROW(params_json(table, Toy{}, more), Error);
+}
+
+// rll's and fermat's "parameters" are the three tables' keys, each with its value, and no other.
+TEST(ParamTable, RllParametersJsonHoldsEveryKeyOfTheTables) {
+  for (const std::string prefix : {"rll", "fermat"}) {
+    const RllSettings s = prefix == "rll" ? RllSettings{} : fermat_settings();
+    const nlohmann::json j = rll_parameters_json(s);
+    const auto entries = all_entries();
+    EXPECT_EQ(j.size(), entries.size());
+    for (const Entry& e : entries) {
+      ASSERT_TRUE(j.contains(e.key)) << prefix << "." << e.key;
+      if (e.kind == ParamKind::Choice)
+        EXPECT_EQ(j[e.key], e.choices.at(size_t(e.get(s)))) << e.key;
+      else
+        EXPECT_EQ(j[e.key].get<double>(), e.get(s)) << e.key;
+    }
+  }
 }
 
 }  // namespace

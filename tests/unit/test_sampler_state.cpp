@@ -1,13 +1,20 @@
 // Learnt sampler states in files (--rll-state): a loaded sampler is the saved one (the same pmf
 // for every light at the same points, the same samples), and a state of another scene, sampler,
-// parameters or version, a truncated or a damaged file is refused with an rll::Error.
+// parameters or version, a truncated or a damaged file is refused with an rll::Error; a state's
+// parameters are every key of the sampler's tables, so that a state saved before a key joined a
+// table is refused too.
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <set>
 
 #include "rll/accel/accel.h"
 #include "rll/core/hash.h"
 #include "rll/core/params.h"
+#include "rll/lights/ltc_sampler.h"
+#include "rll/lights/oracle_sampler.h"
+#include "rll/lights/rht_sampler.h"
+#include "rll/lights/rll_settings.h"
 #include "rll/lights/sampler_state.h"
 #include "support/sampler_contexts.h"
 #include "support/test_support.h"
@@ -20,9 +27,10 @@ namespace {
 
 struct Trained {
   Scene scene = small_builtin_scene("cornell-boxes-room", 32, 24);
+  LightTree tree = build_light_tree(scene);
   Accel accel{scene.mesh};
   std::unique_ptr<LightSampler> make(const std::string& name, std::vector<std::string> set = {}) const {
-    return make_light_sampler(name, scene, Params::parse(set), &accel);
+    return make_light_sampler(name, scene, tree, Params::parse(set), &accel);
   }
   // Trains `sampler` for a few passes and saves its state to dir/state.bin.
   fs::path train_and_save(LightSampler& sampler, const TempDir& dir) const {
@@ -48,7 +56,96 @@ float largest_pmf_difference(const LightSampler& a, const LightSampler& b,
   return worst;
 }
 
+// The parameters a saved state holds, and the state with `parameters` in their place (its
+// checksum made again): the header is the 18-byte magic, the version (4 bytes), the scene's
+// fingerprint (8), then the sampler's name and parameters, each an 8-byte length and its bytes.
+constexpr size_t kNameAt = 18 + 4 + 8;
+size_t parameters_at(const std::string& bytes) {
+  uint64_t name_len = 0;
+  std::memcpy(&name_len, bytes.data() + kNameAt, 8);
+  return kNameAt + 8 + name_len;
+}
+std::string parameters_of_state(const std::string& bytes) {
+  uint64_t len = 0;
+  std::memcpy(&len, bytes.data() + parameters_at(bytes), 8);
+  return bytes.substr(parameters_at(bytes) + 8, len);
+}
+std::string with_parameters(const std::string& bytes, const std::string& parameters) {
+  const size_t at = parameters_at(bytes), rest = at + 8 + parameters_of_state(bytes).size();
+  const uint64_t len = parameters.size();
+  std::string out = bytes.substr(0, at);
+  out.append(reinterpret_cast<const char*>(&len), 8);
+  out += parameters;
+  out += bytes.substr(rest, bytes.size() - 8 - rest);
+  Hasher h;
+  h.bytes(out.data(), out.size());
+  const uint64_t sum = h.value();
+  out.append(reinterpret_cast<const char*>(&sum), 8);
+  return out;
+}
+
+template <class S>
+std::set<std::string> keys_of(const std::vector<ParamSpec<S>>& table) {
+  std::set<std::string> keys;
+  for (const auto& e : table) keys.insert(e.key);
+  return keys;
+}
+std::set<std::string> rll_keys() {
+  std::set<std::string> keys;
+  const RllSettings defaults;
+  for_each_rll_table(defaults, [&](const auto& table, const auto&) { keys.merge(keys_of(table)); });
+  return keys;
+}
+// The keys of a JSON object (all of them), or those of them in `among`.
+std::set<std::string> keys_in(const nlohmann::json& j, const std::set<std::string>& among = {}) {
+  std::set<std::string> keys;
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (among.empty() || among.count(it.key())) keys.insert(it.key());
+  return keys;
+}
+
 }  // namespace
+
+// describe() reports every key of a sampler's tables (its "parameters", what a state is matched
+// against): rll's and fermat's three tables and no other key, ltc's, the oracle's (with rll's,
+// which it samples with) and rht's.
+TEST(SamplerState, EveryTableKeyIsInTheSamplersDescribe) {
+  Trained t;
+  const std::set<std::string> rll = rll_keys();
+  EXPECT_EQ(rll.size(), cut_params().size() + cell_grid_params().size() + rll_params().size());
+  for (const std::string name : {"rll", "fermat"})
+    EXPECT_EQ(keys_in(t.make(name)->describe()["parameters"]), rll) << name;
+  EXPECT_EQ(keys_in(t.make("ltc")->describe()["parameters"]), keys_of(ltc_params()));
+  const nlohmann::json oracle = t.make("oracle", {"oracle.discovery_spp=1", "oracle.points=1",
+                                                  "oracle.rays=1", "oracle.refine=0"})
+                                    ->describe();
+  EXPECT_EQ(keys_in(oracle["parameters"]), rll);
+  EXPECT_EQ(keys_in(oracle["oracle"], keys_of(oracle_params())), keys_of(oracle_params()));
+  EXPECT_EQ(keys_in(t.make("rht")->describe(), keys_of(rht_params())), keys_of(rht_params()));
+}
+
+// A state saved by an rll whose tables lacked one of today's keys (its parameters without it) is
+// refused, naming the key, for every key of the tables: a key that joins a table changes the
+// state's identity with nothing else to write.
+TEST(SamplerState, AStateSavedWithoutAKeyOfTheTablesIsRefused) {
+  Trained t;
+  auto rll = t.make("rll");
+  TempDir dir;
+  const std::string bytes = read_text(t.train_and_save(*rll, dir));
+  const nlohmann::json saved = nlohmann::json::parse(parameters_of_state(bytes));
+  auto fresh = t.make("rll");
+  // The rewriting keeps a state whole: with its own parameters it loads.
+  dir.write("same.bin", with_parameters(bytes, saved.dump()));
+  EXPECT_NO_THROW(load_sampler_state(dir / "same.bin", *fresh, t.scene.fingerprint()));
+  for (const std::string& key : rll_keys()) {
+    nlohmann::json older = saved;
+    ASSERT_EQ(older.erase(key), 1u) << key;
+    dir.write("older.bin", with_parameters(bytes, older.dump()));
+    expect_mentions(
+        error_of([&] { load_sampler_state(dir / "older.bin", *fresh, t.scene.fingerprint()); }),
+        {"other rll parameters", key + " none (this render: "});
+  }
+}
 
 TEST(SamplerState, LoadedSamplerHasTheSavedPmfsAndSamples) {
   // rll's table, Fermat's, rll's guided descent (its factors baked again on loading), and rll
@@ -98,8 +195,9 @@ TEST(SamplerState, RefusesOtherScenesSamplersAndParameters) {
   TempDir dir;
   const fs::path file = t.train_and_save(*rll, dir);
 
-  const Scene other = small_builtin_scene("cornell-boxes-room", 32, 16);
-  auto on_other = make_light_sampler("rll", other, Params::parse({}), nullptr);
+  Scene other = small_builtin_scene("cornell-boxes-room", 32, 16);
+  const LightTree other_tree = build_light_tree(other);
+  auto on_other = make_light_sampler("rll", other, other_tree, Params::parse({}), nullptr);
   expect_mentions(error_of([&] { load_sampler_state(file, *on_other, other.fingerprint()); }), {"state.bin", "another scene"});
   auto fermat = t.make("fermat");
   expect_mentions(error_of([&] { load_sampler_state(file, *fermat, t.scene.fingerprint()); }), {"sampler 'rll'", "'fermat'"});

@@ -32,6 +32,7 @@ static_assert(std::is_trivially_copyable_v<CellKeyer>);
 
 struct Fixture {
   Scene scene;
+  std::unique_ptr<LightTree> tree;  // (by pointer: the samplers keep its address)
   std::unique_ptr<Accel> accel;
   std::vector<LightContext> contexts;
 };
@@ -39,6 +40,7 @@ struct Fixture {
 Fixture make_fixture(const std::string& name) {
   Fixture f;
   f.scene = small_builtin_scene(name, 48, 36);
+  f.tree = std::make_unique<LightTree>(build_light_tree(f.scene));
   f.accel = std::make_unique<Accel>(f.scene.mesh);
   f.contexts = make_contexts(f.scene, *f.accel, 80, 77);
   return f;
@@ -77,7 +79,7 @@ const SamplerCase kCases[] = {
 
 std::unique_ptr<LightSampler> make_case(Fixture& f, const SamplerCase& c, int passes) {
   Params params = Params::parse(c.set);
-  auto sampler = make_light_sampler(c.name, f.scene, params);
+  auto sampler = make_light_sampler(c.name, f.scene, *f.tree, params);
   if (passes > 0) train_sampler(f.scene, *f.accel, *sampler, passes);
   return sampler;
 }
@@ -193,7 +195,7 @@ INSTANTIATE_TEST_SUITE_P(Samplers, SamplerViewDispatch,
 TEST(SamplerView, SamplersWithoutADeviceVersionHaveNone) {
   Fixture& f = fixture("cornell-boxes-room");
   for (const char* name : {"ltc", "rht"})
-    EXPECT_EQ(make_light_sampler(name, f.scene, Params{})->sampler_view().kind, SamplerKind::None)
+    EXPECT_EQ(make_light_sampler(name, f.scene, *f.tree, Params{})->sampler_view().kind, SamplerKind::None)
         << name;
 }
 

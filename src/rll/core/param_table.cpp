@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <nlohmann/json.hpp>
+
 #include "rll/core/error.h"
 
 namespace rll {
@@ -78,6 +80,17 @@ std::string describe_param(const std::string& key, ParamKind kind, const ParamRa
   }
   if (kind == ParamKind::Float) return fmt::format("{}={}  ({})", key, float(value), range.text());
   return fmt::format("{}={}  ({})", key, value, range.text());
+}
+
+void put_param(nlohmann::json& out, const char* key, ParamKind kind,
+               const std::vector<std::string>& choices, double value) {
+  if (out.contains(key)) fail("parameter '{}' is in two of a sampler's tables", key);
+  if (kind == ParamKind::Choice)
+    out[key] = choices.at(size_t(value));
+  else if (kind == ParamKind::Int)
+    out[key] = static_cast<long long>(value);
+  else
+    out[key] = value;  // a float field's value exactly, as the field itself would be written
 }
 
 }  // namespace detail

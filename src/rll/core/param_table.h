@@ -1,13 +1,15 @@
 // A settings struct's parameters as one table: each entry's key, its range or choices and the
 // field of the struct it sets, written once. read_params reads every entry given as
 // `--set PREFIX.KEY=VALUE` and checks it as it reads, check_params checks every entry of a
-// struct (for callers that fill it in code), and describe_params lists them with their defaults
-// (`rll samplers --params NAME`); an error names the sampler's own key (`fermat.alpha`, never
+// struct (for callers that fill it in code), describe_params lists them with their defaults
+// (`rll samplers --params NAME`) and params_json with a struct's values (a sampler's describe(),
+// and so a saved state's identity); an error names the sampler's own key (`fermat.alpha`, never
 // `rll.alpha`).
 #pragma once
 
 #include <cmath>
 #include <limits>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -113,6 +115,8 @@ void check_param(const std::string& key, ParamKind kind, const ParamRange& range
                  const std::vector<std::string>& choices, double value, const char* note);
 std::string describe_param(const std::string& key, ParamKind kind, const ParamRange& range,
                            const std::vector<std::string>& choices, double value);
+void put_param(nlohmann::json& out, const char* key, ParamKind kind,
+               const std::vector<std::string>& choices, double value);
 }  // namespace detail
 
 // Reads every entry of `table` given as PREFIX.KEY in `params` into `s` (marking it used, and
@@ -148,6 +152,16 @@ std::vector<std::string> describe_params(const std::vector<ParamSpec<S>>& table,
     out.push_back(detail::describe_param(prefix + "." + e.key, e.kind, e.range, e.choices,
                                          e.field.get(s)));
   return out;
+}
+
+// Adds every entry of `table` to the JSON object `out` as KEY: its value in `s` (an Int as an
+// integer, a Float as a number, a Choice by its name). A sampler's describe() reports its
+// parameters so, and a saved state (lights/sampler_state.h) is matched against them: made from
+// the tables, that identity holds every key the sampler reads. A key already in `out` (two tables
+// of one sampler naming one key) throws rll::Error.
+template <class S>
+void params_json(const std::vector<ParamSpec<S>>& table, const S& s, nlohmann::json& out) {
+  for (const auto& e : table) detail::put_param(out, e.key, e.kind, e.choices, e.field.get(s));
 }
 
 }  // namespace rll

@@ -29,7 +29,7 @@ RllPassCounts rll_end_pass_gpu(const RllLearnView& v, RllPoolState<HostBackend>&
 // The sampler's state uploaded to the device as `rll render --device cuda` keeps it
 // (cuda/device_rll.cuh), one end of pass run there, and the state pulled back.
 void rll_end_pass_resident_gpu(RllLightSampler& s);
-// The same for lights_changed (the scene's light tree refit already): run on the device's copy.
+// The same for lights_changed (the session's light tree refit already): run on the device's copy.
 void rll_lights_changed_resident_gpu(RllLightSampler& s, const Scene& scene);
 
 }  // namespace rll

@@ -40,20 +40,25 @@ std::vector<std::string> light_sampler_parameters(const std::string& name) {
 }
 
 std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const Scene& scene,
-                                                 const Params& params, const Accel* accel) {
+                                                 const LightTree& tree, const Params& params,
+                                                 const Accel* accel) {
   if (name == "uniform") return std::make_unique<UniformLightSampler>(scene);
   if (name == "power") return std::make_unique<PowerLightSampler>(scene);
-  if (name == "tree") return std::make_unique<TreeLightSampler>(scene);
-  if (name == "rll") return std::make_unique<RllLightSampler>(scene, rll_settings_from(params));
+  if (name == "tree") return std::make_unique<TreeLightSampler>(scene, tree);
+  if (name == "rll")
+    return std::make_unique<RllLightSampler>(scene, tree, rll_settings_from(params));
   if (name == "fermat")  // the paper's RLL as published: rll with Fermat's settings (fermat.*)
     return std::make_unique<RllLightSampler>(
-        scene, rll_settings_from(params, "fermat", fermat_settings()));
-  if (name == "ltc") return std::make_unique<LtcLightSampler>(scene, ltc_settings_from(params));
-  if (name == "rht") return std::make_unique<RhtLightSampler>(scene, rht_settings_from(params));
+        scene, tree, rll_settings_from(params, "fermat", fermat_settings()));
+  if (name == "ltc")
+    return std::make_unique<LtcLightSampler>(scene, tree, ltc_settings_from(params));
+  if (name == "rht")
+    return std::make_unique<RhtLightSampler>(scene, tree, rht_settings_from(params));
   if (name == "oracle") {
     if (!accel) fail("the oracle sampler traces rays before rendering and needs the scene's ray tracer");
     // The oracle samples with RLL's settings (rll.*), so that only the learning differs.
-    return std::make_unique<OracleLightSampler>(scene, *accel, rll_settings_from(params), oracle_settings_from(params));
+    return std::make_unique<OracleLightSampler>(scene, tree, *accel, rll_settings_from(params),
+                                                oracle_settings_from(params));
   }
   unknown_sampler(name);
 }

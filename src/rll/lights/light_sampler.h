@@ -82,11 +82,12 @@ const std::vector<std::string>& light_sampler_names();
 // it samples with); none for uniform, power and tree. Throws rll::Error for an unknown name.
 std::vector<std::string> light_sampler_parameters(const std::string& name);
 
-// Builds a sampler by name with its parameters from `params` (keys "<name>.<param>");
-// throws rll::Error listing valid names on an unknown name. The oracle traces rays before
-// rendering and needs `accel`.
+// Builds a sampler by name with its parameters from `params` (keys "<name>.<param>") over
+// `scene` and its light tree (build_light_tree), which the caller holds (the render session
+// does) for as long as the sampler lives; throws rll::Error listing valid names on an unknown
+// name. The oracle traces rays before rendering and needs `accel`.
 std::unique_ptr<LightSampler> make_light_sampler(const std::string& name, const Scene& scene,
-                                                 const Params& params,
+                                                 const LightTree& tree, const Params& params,
                                                  const Accel* accel = nullptr);
 
 }  // namespace rll

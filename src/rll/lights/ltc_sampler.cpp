@@ -185,8 +185,8 @@ inline double unit_hash(uint64_t key, uint64_t node, uint64_t pass) {
 }
 }  // namespace
 
-LtcLightSampler::LtcLightSampler(const Scene& scene, const LtcSettings& s)
-    : m_tree(light_tree_of(scene)), m_s(s), m_m(s.max_cut) {
+LtcLightSampler::LtcLightSampler(const Scene& scene, const LightTree& tree, const LtcSettings& s)
+    : m_tree(tree), m_s(s), m_m(s.max_cut) {
   if (m_tree.depth() >= kMaxTreeDepth)
     fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
   m_clusters = SpatialClusters::build(scene, s.clusters);
@@ -717,15 +717,10 @@ nlohmann::json LtcLightSampler::describe() const {
     }
   }
   for (uint32_t s : m_splits_per_pass) total_splits += s;
+  nlohmann::json parameters = nlohmann::json::object();
+  params_json(ltc_params(), m_s, parameters);
   return {{"name", name()},
-          {"parameters",
-           {{"clusters", m_s.clusters},
-            {"bins", m_s.bins},
-            {"capacity", m_s.capacity},
-            {"initial_cut", m_s.initial_cut},
-            {"max_cut", m_s.max_cut},
-            {"epsilon", m_s.epsilon},
-            {"no_change", m_s.no_change}}},
+          {"parameters", parameters},
           {"passes", m_pass},
           {"spatial_clusters", m_clusters.size()},
           {"entries_used", used},

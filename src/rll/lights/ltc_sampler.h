@@ -120,7 +120,7 @@ std::vector<uint32_t> power_cut(const LightTree& tree, int size);
 
 class LtcLightSampler final : public LightSampler {
  public:
-  LtcLightSampler(const Scene& scene, const LtcSettings& settings);
+  LtcLightSampler(const Scene& scene, const LightTree& tree, const LtcSettings& settings);
   std::string name() const override { return "ltc"; }
   void prepare(LightContext& ctx, float u) const override;
   bool prepares() const override { return true; }
@@ -153,7 +153,7 @@ class LtcLightSampler final : public LightSampler {
   void learn(uint32_t entry, uint64_t pass, uint32_t& splits);
   void bake(uint32_t entry);
 
-  const LightTree& m_tree;
+  const LightTree& m_tree;  // the render session's (it outlives its samplers)
   LtcSettings m_s;
   int m_m;  // node slots per entry (max_cut)
   SpatialClusters m_clusters;

@@ -54,9 +54,8 @@ struct CellPoint {
 // Occluded contribution of the lights under `node` at the points, irradiance-like (cosine
 // at the point, no BSDF): mean of f/p over points x rays, the light chosen by the tree's
 // descent inside the node.
-double estimate(const Scene& scene, const Accel& accel, uint32_t node,
+double estimate(const Scene& scene, const LightTree& tree, const Accel& accel, uint32_t node,
                 const std::vector<LightContext>& pts, int rays, Pcg32& rng, uint64_t& traced) {
-  const LightTree& tree = light_tree_of(scene);
   double sum = 0;
   for (const LightContext& x : pts) {
     if (cancel_requested()) break;  // the render that follows stops too
@@ -90,9 +89,10 @@ float finite_estimate(double e) {
 
 }  // namespace
 
-OracleLightSampler::OracleLightSampler(const Scene& scene, const Accel& accel,
-                                       const RllSettings& rll, const OracleSettings& s)
-    : m_s(s), m_accel(accel), m_rll_settings(rll) {
+OracleLightSampler::OracleLightSampler(const Scene& scene, const LightTree& tree,
+                                       const Accel& accel, const RllSettings& rll,
+                                       const OracleSettings& s)
+    : m_s(s), m_tree(tree), m_accel(accel), m_rll_settings(rll) {
   precompute(scene);
 }
 
@@ -111,8 +111,8 @@ void OracleLightSampler::precompute(const Scene& scene) {
   fixed.grid.direction_bins = 0;  // its discovery paths find cells by position and normal only
   fixed.cut.pool_levels = 0;      // it knows each cell's clusters: nothing to pool
   fixed.cut.pool_up = 0;
-  m_rll = std::make_unique<RllLightSampler>(scene, fixed);
-  const LightTree& tree = light_tree_of(scene);
+  m_rll = std::make_unique<RllLightSampler>(scene, m_tree, fixed);
+  const LightTree& tree = m_tree;
 
   // 1. Discovery: camera paths (diffuse bounces) find the cells and points where NEE happens.
   const int w = scene.width, h = scene.height;
@@ -219,7 +219,8 @@ void OracleLightSampler::precompute(const Scene& scene) {
       cut.nodes = initial;
       cut.q.resize(initial.size());
       for (size_t k = 0; k < initial.size(); ++k)
-        cut.q[k] = finite_estimate(estimate(scene, accel, initial[k], pts, s.rays, rng, traced));
+        cut.q[k] =
+            finite_estimate(estimate(scene, tree, accel, initial[k], pts, s.rays, rng, traced));
       cut.m2.assign(initial.size(), 0.0f);  // unused: the oracle keeps no second moment
       cut.n.assign(initial.size(), 0.0f);
       cut.weight.assign(initial.size(), 0.0f);
@@ -231,7 +232,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
         if (!split_collapse.step(cut, value, score, no_weight, halves, &at)) break;
         for (const long i : {at, at + 1})
           cut.q[i] = value[i] = score[i] =
-              finite_estimate(estimate(scene, accel, cut.nodes[i], pts, s.rays, rng, traced));
+              finite_estimate(estimate(scene, tree, accel, cut.nodes[i], pts, s.rays, rng, traced));
       }
       if (cancel_requested()) break;  // its estimates were cut short: it keeps no cut
       cuts.assign(cell, cut.nodes, value);
@@ -250,15 +251,12 @@ void OracleLightSampler::precompute(const Scene& scene) {
 nlohmann::json OracleLightSampler::describe() const {
   nlohmann::json j = m_rll->describe();
   j["name"] = name();
-  j["oracle"] = {{"discovery_spp", m_s.discovery_spp},
-                 {"bounces", m_s.bounces},
-                 {"points", m_s.points_per_cell},
-                 {"rays", m_s.rays},
-                 {"refine", m_s.refine},
-                 {"cells", m_cells},
-                 {"shadow_rays", m_rays},
-                 {"precompute_seconds", m_seconds}};
-  if (m_interrupted) j["oracle"]["interrupted"] = true;
+  nlohmann::json& oracle = j["oracle"] = nlohmann::json::object();
+  params_json(oracle_params(), m_s, oracle);
+  oracle["cells"] = m_cells;
+  oracle["shadow_rays"] = m_rays;
+  oracle["precompute_seconds"] = m_seconds;
+  if (m_interrupted) oracle["interrupted"] = true;
   return j;
 }
 

@@ -39,7 +39,8 @@ const std::vector<ParamSpec<OracleSettings>>& oracle_params();
 
 class OracleLightSampler final : public LightSampler {
  public:
-  OracleLightSampler(const Scene& scene, const Accel& accel, const RllSettings& rll, const OracleSettings& settings);
+  OracleLightSampler(const Scene& scene, const LightTree& tree, const Accel& accel,
+                     const RllSettings& rll, const OracleSettings& settings);
   std::string name() const override { return "oracle"; }
   void prepare(LightContext& ctx, float u) const override { m_rll->prepare(ctx, u); }
   bool prepares() const override { return true; }
@@ -62,6 +63,7 @@ class OracleLightSampler final : public LightSampler {
  private:
   void precompute(const Scene& scene);
   OracleSettings m_s;
+  const LightTree& m_tree;  // the render session's (it outlives its samplers)
   const Accel& m_accel;
   RllSettings m_rll_settings;
   std::unique_ptr<RllLightSampler> m_rll;

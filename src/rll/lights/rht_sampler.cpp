@@ -24,8 +24,9 @@ RhtSettings rht_settings_from(const Params& p) {
   return s;
 }
 
-RhtLightSampler::RhtLightSampler(const Scene& scene, const RhtSettings& settings) {
-  const LightTree& tree = light_tree_of(scene);
+RhtLightSampler::RhtLightSampler(const Scene& scene, const LightTree& tree,
+                                 const RhtSettings& settings)
+    : m_s(settings) {
   if (tree.depth() >= kMaxTreeDepth)
     fail("{}: light tree too deep ({})", scene.source, tree.depth());
   m_view.tree = tree.view();
@@ -51,11 +52,9 @@ float RhtLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
 }
 
 nlohmann::json RhtLightSampler::describe() const {
-  return {{"name", name()},
-          {"gamma", m_view.gamma},
-          {"reservoirs", m_view.reservoirs},
-          {"samples", m_view.samples},
-          {"directional_lights", m_view.dir_count}};
+  nlohmann::json j = {{"name", name()}, {"directional_lights", m_view.dir_count}};
+  params_json(rht_params(), m_s, j);
+  return j;
 }
 
 }  // namespace rll

@@ -28,7 +28,7 @@ const std::vector<ParamSpec<RhtSettings>>& rht_params();
 
 class RhtLightSampler final : public LightSampler {
  public:
-  RhtLightSampler(const Scene& scene, const RhtSettings& settings);
+  RhtLightSampler(const Scene& scene, const LightTree& tree, const RhtSettings& settings);
   std::string name() const override { return "rht"; }
   // rht draws several samples per vertex (rht_view()): a renderer that asks for one light gets an
   // error naming it, never a wrong image.
@@ -40,6 +40,7 @@ class RhtLightSampler final : public LightSampler {
   nlohmann::json describe() const override;
 
  private:
+  RhtSettings m_s;  // as given: describe() reports them by rht's table
   RhtView m_view;
 };
 

@@ -41,8 +41,8 @@ void check_memory(const RllSettings& s) {
 }
 }  // namespace
 
-RllLightSampler::RllLightSampler(const Scene& scene, const RllSettings& s)
-    : m_tree(light_tree_of(scene)), m_s(s), m_keyer(s.grid, scene.bounds) {
+RllLightSampler::RllLightSampler(const Scene& scene, const LightTree& tree, const RllSettings& s)
+    : m_tree(tree), m_s(s), m_keyer(s.grid, scene.bounds) {
   check_memory(s);
   m_table = std::make_unique<CellTable>(s.capacity);
   // Guided: the rewards are ratios to the tree's importance, of the order of a reflectance.
@@ -279,48 +279,9 @@ nlohmann::json RllLightSampler::describe() const {
       mean_cut += m_cuts->size(c);
       ++active;
     }
-  const char* within[] = {"uniform", "power", "tree", "hybrid"};
-  const char* weight_names[] = {"importance", "power", "uniform"};
-  const char* reward_names[] = {"cluster", "fullpdf", "fermat"};
   nlohmann::json j = {
       {"name", name()},
-      {"parameters",
-       {{"cut_size", m_s.cut.cut_size},
-        {"alpha", m_s.cut.alpha},
-        {"T", m_s.cut.threshold},
-        {"splits", m_s.cut.splits},
-        {"epsilon", m_s.cut.epsilon},
-        {"prior", weight_names[int(m_s.cut.prior)]},
-        {"split_by", weight_names[int(m_s.cut.split)]},
-        {"within", within[int(m_s.within)]},
-        {"reward", reward_names[int(m_s.reward)]},
-        {"defensive", m_s.defensive == Defensive::Tree ? "tree" : "cell"},
-        {"capacity", m_s.capacity},
-        {"footprint_scale", m_s.grid.footprint_scale},
-        {"max_cell", m_s.grid.max_cell},
-        {"normal_bins", m_s.grid.normal_bins},
-        {"jitter", m_s.grid.jitter},
-        {"initial_cut", m_s.cut.initial_size},
-        {"target", m_s.cut.target == LearnTarget::Moment ? "moment" : "mean"},
-        {"descend_above", m_s.descend_above},
-        {"learning", m_s.cut.rule == LearningRule::Shrinkage ? "shrinkage" : "exponential"},
-        {"prior_samples", m_s.cut.prior_samples},
-        {"forget", m_s.cut.forget == Forgetting::Changes ? "changes" : "floor"},
-        {"change_z", m_s.cut.change_z},
-        {"trust", m_s.cut.trust},
-        {"pool", m_s.cut.pool_levels},
-        {"pool_weight", m_s.cut.pool_weight},
-        {"pool_guess", m_s.cut.pool_ratio ? "ratio" : "share"},
-        {"pool_up", m_s.cut.pool_up},
-        {"q_init", m_s.cut.q_init},
-        {"cold", m_s.cold_uniform ? "uniform" : "tree"},
-        {"sample_jitter", m_s.sample_jitter},
-        {"reset_every", m_s.reset_every},
-        {"sampling", m_s.cut.guided ? "guided" : "table"},
-        {"direction_bins", m_s.grid.direction_bins},
-        {"level_rounding", m_s.grid.level_rounding == CellGridSettings::LevelRounding::Nearest
-                               ? "nearest"
-                               : "stochastic"}}},
+      {"parameters", rll_parameters_json(m_s)},
       {"resets", m_resets},
       {"passes", m_pass},
       {"cells_used", m_table->used()},

@@ -2,8 +2,11 @@
 // a 5D hash grid, a learnt cut of the light tree with the mean and second moment of each
 // cluster's reward; NEE picks a cluster from the cell's baked table (the defensive prior folded
 // in), then a light inside it from a static table or a short descent. Every NEE sample rewards
-// its cluster; between passes the rewards are folded in, cuts grow where the variance is, and
-// the tables are baked again.
+// its cluster; between passes the rewards are folded in and the tables are baked again. A cell's
+// cut stays the initial cut unless rll.splits > 0 (fermat's settings: 1; rll's default is 0,
+// the pooled cut every cell shares): then each pass splits where the variance is and collapses
+// where the clusters are darkest (learn/split_collapse.h). The light tree is the render
+// session's, lent to the sampler for its lifetime.
 #pragma once
 
 #include <functional>
@@ -22,7 +25,7 @@ namespace rll {
 
 class RllLightSampler final : public LightSampler {
  public:
-  RllLightSampler(const Scene& scene, const RllSettings& settings);
+  RllLightSampler(const Scene& scene, const LightTree& tree, const RllSettings& settings);
   std::string name() const override { return m_s.name; }
   void prepare(LightContext& ctx, float u) const override;
   bool prepares() const override { return true; }
@@ -111,7 +114,7 @@ class RllLightSampler final : public LightSampler {
   mutable RemoteLightsChanged m_remote_lights;
   RllScratch<HostBackend> m_scratch;  // the end of pass's, kept between passes
 
-  const LightTree& m_tree;
+  const LightTree& m_tree;  // the render session's (it outlives its samplers)
   RllSettings m_s;
   CellKeyer m_keyer;
   std::unique_ptr<CellTable> m_table;

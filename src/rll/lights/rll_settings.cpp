@@ -1,8 +1,9 @@
 #include "rll/lights/rll_settings.h"
 
+#include <nlohmann/json.hpp>
+
 #include "rll/core/error.h"
 #include "rll/core/params.h"
-#include "rll/learn/cut_params.h"
 
 namespace rll {
 
@@ -27,9 +28,8 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
   auto bad = [&](const char* k, const char* what) { fail("--set {}: {}", key(k), what); };
   // The initial cut follows the cut size unless the base starts smaller.
   const bool initial_is_whole = s.cut.initial_size == s.cut.cut_size;
-  read_params(cut_params(), p, prefix, s.cut);
-  read_params(cell_grid_params(), p, prefix, s.grid);
-  read_params(rll_params(), p, prefix, s);
+  for_each_rll_table(s,
+                     [&](const auto& table, auto& part) { read_params(table, p, prefix, part); });
   if (initial_is_whole && !p.has(key("initial_cut"))) s.cut.initial_size = s.cut.cut_size;
   s.cut.prior_in_cdf = s.defensive == Defensive::Cell;
   if (s.cut.guided) {
@@ -58,9 +58,17 @@ RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSet
 }
 
 std::vector<std::string> describe_rll_params(const RllSettings& s, const std::string& prefix) {
-  std::vector<std::string> out = describe_params(cut_params(), prefix, s.cut);
-  for (auto& line : describe_params(cell_grid_params(), prefix, s.grid)) out.push_back(line);
-  for (auto& line : describe_params(rll_params(), prefix, s)) out.push_back(line);
+  std::vector<std::string> out;
+  for_each_rll_table(s, [&](const auto& table, const auto& part) {
+    for (auto& line : describe_params(table, prefix, part)) out.push_back(std::move(line));
+  });
+  return out;
+}
+
+nlohmann::json rll_parameters_json(const RllSettings& s) {
+  nlohmann::json out = nlohmann::json::object();
+  for_each_rll_table(s,
+                     [&](const auto& table, const auto& part) { params_json(table, part, out); });
   return out;
 }
 

@@ -9,6 +9,7 @@
 
 #include "rll/core/param_table.h"
 #include "rll/learn/cell_grid.h"
+#include "rll/learn/cut_params.h"
 #include "rll/learn/cut_settings.h"
 #include "rll/lights/rll_view.h"
 
@@ -54,7 +55,19 @@ RllSettings rll_settings_from(const Params& params, const std::string& prefix = 
 // the three tables with its value in `s` and its range, one a line, as `rll samplers --params`
 // lists them.
 const std::vector<ParamSpec<RllSettings>>& rll_params();
+// Calls f(table, part) for each of the three tables, with the part of `s` (the cut's, the
+// cells', the whole) that it reads and sets: one list of rll's tables for reading, listing and
+// describing them.
+template <class Settings, class F>
+void for_each_rll_table(Settings& s, F&& f) {
+  f(cut_params(), s.cut);
+  f(cell_grid_params(), s.grid);
+  f(rll_params(), s);
+}
 std::vector<std::string> describe_rll_params(const RllSettings& s, const std::string& prefix);
+// Every key of the three tables with its value in `s`, as one JSON object: the "parameters" of
+// rll's and fermat's describe(), which a saved state is matched against.
+nlohmann::json rll_parameters_json(const RllSettings& s);
 // Fermat's RLL as published (PEERS.md): 256-cluster initial cut by light count, 75% uniform +
 // 25% learnt clusters with every Q starting at 0.01, exponential learning at 0.05, the
 // max-RGB full-pdf reward, one split-collapse per pass with T = 1 and Q split half and half,

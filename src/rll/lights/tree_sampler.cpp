@@ -6,7 +6,7 @@
 
 namespace rll {
 
-TreeLightSampler::TreeLightSampler(const Scene& scene) : m_tree(light_tree_of(scene)) {
+TreeLightSampler::TreeLightSampler(const Scene& scene, const LightTree& tree) : m_tree(tree) {
   if (m_tree.depth() >= kMaxTreeDepth)
     fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
 }

@@ -11,7 +11,7 @@ namespace rll {
 
 class TreeLightSampler final : public LightSampler {
  public:
-  explicit TreeLightSampler(const Scene& scene);
+  TreeLightSampler(const Scene& scene, const LightTree& tree);
   std::string name() const override { return "tree"; }
   SampledLight sample(const LightContext& ctx, double u) const override;
   float pmf(const LightContext& ctx, uint32_t light) const override;
@@ -19,7 +19,7 @@ class TreeLightSampler final : public LightSampler {
   SamplerView sampler_view() const override;
 
  private:
-  const LightTree& m_tree;
+  const LightTree& m_tree;  // the render session's (it outlives its samplers)
 };
 
 }  // namespace rll

@@ -494,12 +494,8 @@ void LightTree::prepare_importance() {
   });
 }
 
-void build_light_tree(Scene& scene) {
-  // A build over lights already in tree order can order ties differently, which would change
-  // the scene's fingerprint: the tree finalize() left in place (it drops any tree when it remakes
-  // the lights) is kept.
-  if (scene.light_tree && scene.light_tree->light_count() == scene.lights.size()) return;
-  scene.light_tree = std::make_shared<LightTree>(LightTree::build(scene));
+LightTree build_light_tree(Scene& scene) {
+  LightTree tree = LightTree::build(scene);
   // Said once, as the load's warnings are (the scene layer below cannot weigh lights).
   if (std::string w = capped_power_warning(scene);
       !w.empty() &&
@@ -507,15 +503,7 @@ void build_light_tree(Scene& scene) {
     fmt::print(stderr, "rll: warning: {}\n", w);
     scene.warnings.push_back(std::move(w));
   }
-}
-
-const LightTree& light_tree_of(const Scene& scene) {
-  if (!scene.light_tree) fail("{}: the light tree was not built (build_light_tree)", scene.source);
-  return *scene.light_tree;
-}
-
-void refit_light_tree(Scene& scene) {
-  if (scene.light_tree) scene.light_tree->refit(scene.lights);
+  return tree;
 }
 
 }  // namespace rll

@@ -164,18 +164,14 @@ class LightTree {
   TreeBuild m_method = TreeBuild::Saoh;
 };
 
-// Builds the light tree of a finalized scene into scene.light_tree and reorders scene.lights
-// (and the mesh's triangle -> light ids) into tree order. The render session calls it once,
-// right after loading; so does every other user of a tree (the reference cache, tests,
-// benchmarks). A scene that has its tree keeps it (building again could order ties otherwise).
-// Scene::fingerprint, and with it reference keys, render shares and learnt states, is taken
-// after it: the light order it hashes is the tree's, as it was when finalize() built the tree.
-void build_light_tree(Scene& scene);
-// The tree that build_light_tree made for `scene`; throws rll::Error naming the scene if none
-// was built.
-const LightTree& light_tree_of(const Scene& scene);
-// Refits the scene's light tree after animate() and Scene::refresh_lights_from_mesh() moved
-// lights or changed their power (topology and light order kept); no-op without a tree.
-void refit_light_tree(Scene& scene);
+// Builds the light tree of a finalized scene and reorders scene.lights (and the mesh's triangle
+// -> light ids) into tree order, warning once (into scene.warnings) of lights whose power was
+// capped. Whoever renders owns the tree, next to the scene: the render session
+// (session/session.h) builds it once, right after loading, and lends it to every sampler it
+// makes; tests and benchmarks hold their own. Build once per scene: a build over lights already
+// in tree order can order ties otherwise. Scene::fingerprint, and with it reference keys, render
+// shares and learnt states, is taken after it: the light order it hashes is the tree's. After
+// animate() and Scene::refresh_lights_from_mesh() move lights, the owner calls refit().
+LightTree build_light_tree(Scene& scene);
 
 }  // namespace rll

@@ -286,9 +286,7 @@ void Scene::finalize() {
   // Textured emitters: split where large, and each triangle's exact mean emission.
   const std::vector<Rgb> texture_means = prepare_textured_emitters(*this);
   mesh.light.assign(mesh.triangles.size(), -1);
-  // Drop triangle lights from an earlier finalize() (finalize is idempotent), and the tree over
-  // them, which would no longer match the lights.
-  light_tree.reset();
+  // Drop triangle lights from an earlier finalize() (finalize is idempotent).
   std::erase_if(lights, [](const Light& l) { return l.type == LightType::Triangle; });
   for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     const Material& m = materials[mesh.material[t]];

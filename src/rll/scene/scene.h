@@ -15,8 +15,6 @@
 
 namespace rll {
 
-class LightTree;
-
 // An environment image for the sky: the radiance seen along world direction d is
 // SkyDome::radiance * lookup(d).
 struct EnvironmentMap {
@@ -78,8 +76,6 @@ struct Scene {
   // True once finalize() has split the large textured emitters into pieces (textured_emitters.h),
   // so that a second finalize does not split them again.
   bool textured_emitters_split = false;
-  // The light tree over `lights`: null until build_light_tree (rll/lighttree/) builds it.
-  std::shared_ptr<LightTree> light_tree;
 
   // Animated scenes move lights between frames: called with the frame index, it updates the
   // mesh and the lights in place (triangle lights keep their ids).
@@ -87,8 +83,9 @@ struct Scene {
   int frame_count = 1;
 
   // Validates the scene (finite vertices, valid indices, at least one light, film size), adds
-  // the sky dome, creates one light per emissive triangle and fits a camera if none was given;
-  // build_light_tree (not this) builds the light tree. Throws rll::Error naming `source`.
+  // the sky dome, creates one light per emissive triangle and fits a camera if none was given.
+  // The light tree is not the scene's: whoever renders builds and holds it (build_light_tree,
+  // rll/lighttree/; the render session does). Throws rll::Error naming `source`.
   void finalize();
 
   // A hash of everything in the finalized scene that the expected image depends on (mesh
@@ -102,7 +99,7 @@ struct Scene {
   // Reorders lights: new_lights[i] = lights[order[i]]; triangle->light ids follow.
   void reorder_lights(const std::vector<uint32_t>& order);
   // Re-reads triangle light geometry and emission from the mesh and materials (after
-  // animate()); the light tree, if any, is refitted by refit_light_tree.
+  // animate()); the light tree's owner then refits it (LightTree::refit).
   void refresh_lights_from_mesh();
 };
 

@@ -10,7 +10,6 @@
 #include "rll/core/error.h"
 #include "rll/cuda/cuda.h"
 #include "rll/lights/light_sampler.h"
-#include "rll/lighttree/light_tree.h"
 #include "rll/render/progress.h"
 
 namespace rll {
@@ -62,7 +61,7 @@ RenderSession::RenderSession(const SessionSettings& settings)
   // is allocated (a render's commands check again with what else they keep a pixel).
   check_film_memory(kRenderBytesPerPixel);
   // Reorders the lights: everything keyed by their order (fingerprint, learnt states) follows.
-  build_light_tree(m_scene);
+  m_tree = build_light_tree(m_scene);
   m_integrator = make_integrator_settings(settings.integrator, settings.max_depth, m_params);
   m_accel = std::make_unique<Accel>(m_scene.mesh);
   if (settings.device == "cuda") m_gpu = std::make_unique<cuda::GpuRenderer>(m_scene);
@@ -123,14 +122,14 @@ Params RenderSession::variant_params(const std::string& spec, std::string& name,
 
 std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::string& spec) const {
   if (spec.find(':') == std::string::npos) {
-    auto sampler = make_light_sampler(spec, m_scene, m_params, m_accel.get());
+    auto sampler = make_light_sampler(spec, m_scene, m_tree, m_params, m_accel.get());
     m_made.push_back(spec);
     return sampler;
   }
   std::string name;
   std::vector<std::string> own;  // the keys as the spec gives them
   Params params = variant_params(spec, name, own);
-  auto sampler = make_light_sampler(name, m_scene, params, m_accel.get());
+  auto sampler = make_light_sampler(name, m_scene, m_tree, params, m_accel.get());
   // The integrator's keys (nee.candidates, ...) are a variant's too: integrator_for reads them.
   make_integrator_settings(m_settings.integrator, m_settings.max_depth, params);
   // A variant's own keys must all be known, and are reported as the spec wrote them (not as
@@ -189,7 +188,7 @@ void RenderSession::set_frame(int frame, LightSampler* sampler) {
   if (!m_scene.animate) return;
   m_scene.animate(m_scene, frame);
   m_scene.refresh_lights_from_mesh();
-  refit_light_tree(m_scene);
+  m_tree.refit(m_scene.lights);
   m_accel->update_vertices(m_scene.mesh);
   if (m_gpu) m_gpu->update(m_scene);
   if (sampler) sampler->lights_changed(m_scene);

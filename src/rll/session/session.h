@@ -1,6 +1,8 @@
-// What every render of one scene shares (the loaded scene, its ray-tracing structure, the
-// integrator settings and the `--set` parameters), and rendering it with any light sampler:
-// the common ground of `rll render`, `rll reference` and `rll compare`.
+// What every render of one scene shares (the loaded scene, its light tree, its ray-tracing
+// structure, the integrator settings and the `--set` parameters), and rendering it with any
+// light sampler: the common ground of `rll render`, `rll reference` and `rll compare`.
+// The session owns the light tree: it builds it once after loading, lends it to every sampler
+// it makes (which must not outlive it) and refits it when an animated scene's lights move.
 #pragma once
 
 #include <atomic>
@@ -14,6 +16,7 @@
 #include "rll/core/params.h"
 #include "rll/cuda/wavefront.h"
 #include "rll/io/load.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/render/integrator.h"
 #include "rll/render/render.h"
 #include "rll/scene/scene.h"
@@ -48,6 +51,8 @@ class RenderSession {
 
   Scene& scene() { return m_scene; }
   const Scene& scene() const { return m_scene; }
+  // The light tree over scene().lights, in whose order the lights are.
+  const LightTree& light_tree() const { return m_tree; }
   Accel& accel() { return *m_accel; }
   const IntegratorSettings& integrator() const { return m_integrator; }
   PointSet points() const { return m_points; }
@@ -114,6 +119,7 @@ class RenderSession {
   SessionSettings m_settings;
   Params m_params;
   Scene m_scene;
+  LightTree m_tree;
   IntegratorSettings m_integrator;
   PointSet m_points = PointSet::Sobol;
   std::unique_ptr<Accel> m_accel;
