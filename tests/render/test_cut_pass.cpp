@@ -30,11 +30,11 @@ struct CutRender {
 // `sampler` on `scene`, direct light, passes of 64, 64, 128, 128 ... samples per pixel up to `spp`,
 // cancelled by another thread about half way through the third pass (after the second pass, it
 // waits as long as that pass took; the third is twice as long).
-CutRender cut_render(const Scene& scene, const std::string& sampler,
+CutRender cut_render(const Scene& scene, const LightTree& tree, const std::string& sampler,
                      const std::vector<std::string>& set, int spp, uint64_t seed) {
   Params params = Params::parse(set);
   Accel accel(scene.mesh);
-  auto s = make_light_sampler(sampler, scene, params, &accel);
+  auto s = make_light_sampler(sampler, scene, tree, params, &accel);
   IntegratorSettings is;
   is.type = IntegratorType::Direct;
   Integrator integrator(scene, accel, *s, is);
@@ -71,13 +71,14 @@ CutRender cut_render(const Scene& scene, const std::string& sampler,
 // rll (its end of pass learns from the cut pass's rewards too) cut part way against tree's full
 // render, over the image and in each of 4 x 4 regions. Sees 5%.
 TEST(CutPass, ImageAgreesWithAFullRenderByRegion) {
-  const Scene scene = small_builtin_scene("cornell-boxes-room", 32, 24);
+  Scene scene = small_builtin_scene("cornell-boxes-room", 32, 24);
+  const LightTree tree = build_light_tree(scene);
   const std::vector<std::string> set = {"rll.capacity=4096"};
   CutRender cut;
   // The cut must fall inside a pass (pixels with unequal counts); a machine stalled past the
   // whole third pass cuts a later one, and one stalled past the render tries again.
   for (int attempt = 0; attempt < 3 && cut.fewest == cut.most; ++attempt)
-    cut = cut_render(scene, "rll", set, 1024, 2 + attempt);
+    cut = cut_render(scene, tree, "rll", set, 1024, 2 + attempt);
   ASSERT_LT(cut.fewest, cut.most) << "no render was cut inside a pass";
   EXPECT_GE(cut.fewest, 128u);  // the first two passes are whole
   std::printf("[ cut      ] pixels hold %u to %u samples after %d passes\n", cut.fewest, cut.most,
@@ -88,7 +89,7 @@ TEST(CutPass, ImageAgreesWithAFullRenderByRegion) {
   full.integrator.type = IntegratorType::Direct;
   full.spp = 512;
   full.seed = 11;
-  const Image reference = render_scene(scene, full);
+  const Image reference = render_scene(scene, tree, full);
   EXPECT_EQ(region_disagreement(cut.image, reference), "")
       << "means " << image_mean(cut.image) << " vs " << image_mean(reference);
   expect_bound_sees(cut.image, reference, "cut rll vs tree", 0.05);
