@@ -42,6 +42,13 @@ RLL_HD inline float light_pmf(const SamplerView& s, const LightContext& ctx, uin
   return 0;
 }
 
+// Resampled NEE's learnt factor of a drawn light's target (nee.target=learnt, docs/nee.md): rll's
+// learnt visibility of the light's cluster in the cell, from its record (ClusterDraw::target); 1
+// for a sampler that learns none.
+RLL_HD inline float nee_target(const SamplerView& s, const SampledLight& sampled) {
+  return s.kind == SamplerKind::Rll ? cluster_draw(sampled).target : 1.0f;
+}
+
 // Once per shading point before sample_light / light_pmf: a learning sampler finds the point's
 // cell (ctx.cell). u is a fresh uniform number for its stochastic choices.
 RLL_HD inline void prepare_point(const SamplerView& s, LightContext& ctx, float u) {

@@ -2,6 +2,7 @@
 
 #include "rll/core/error.h"
 #include "rll/core/params.h"
+#include "rll/lights/light_dispatch.h"
 #include "rll/render/rht_nee.h"
 
 namespace rll {
@@ -85,6 +86,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sam
       m_learns(sampler.learns()),
       m_prepares(sampler.prepares()),
       m_rht(sampler.rht_view()),
+      m_view(sampler.sampler_view()),
       m_data(scene),
       m_constants(make_path_constants(scene, m_data.view(), settings)) {
   if (m_rht && settings.nee_candidates != 1)
@@ -118,8 +120,9 @@ Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Ve
     }
     return sum;
   }
-  const NeeChoice ch = resample_nee(m_constants, ctx, bsdf, wo, stream, depth,
-                                    [&](double u) { return m_sampler.sample(ctx, u); });
+  const NeeChoice ch = resample_nee(
+      m_constants, ctx, bsdf, wo, stream, depth, [&](double u) { return m_sampler.sample(ctx, u); },
+      [&](const SampledLight& l) { return nee_target(m_view, l); });
   if (!(ch.light.pmf > 0)) return Rgb(0);
   if (ch.setup.counts_shadow_ray) ++counters.shadow;
   const bool occluded = ch.setup.traces && m_accel.occluded(ch.setup.shadow);

@@ -86,7 +86,8 @@ class Integrator {
   IntegratorSettings m_settings;
   bool m_learns, m_prepares;
   const RhtView* m_rht;  // the sampler's, where it draws several samples per vertex
-  SceneData m_data;  // the hot data the functions below read, as flat views
+  SamplerView m_view;    // the sampler as data (its kind says how to read its draws' records)
+  SceneData m_data;      // the hot data the functions below read, as flat views
   PathConstants m_constants;
 };
 

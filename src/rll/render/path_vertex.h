@@ -314,12 +314,13 @@ struct NeeChoice {
 // Draws the M = c.nee_candidates candidates with `sample(u)` (the light sampler's
 // sample(ctx, u)) and keeps one by streaming weighted reservoir sampling. With M = 1 the weight
 // is not evaluated (it cancels): one light sample, as before resampling. With
-// c.nee_learnt_target each weight is multiplied by the candidate's SampledLight::target (the
-// target p_hat times that factor; nee_finish_resampled's ratio uses the same weights).
-template <class SampleLight>
+// c.nee_learnt_target each weight is multiplied by `target(candidate)`, the sampler's learnt
+// factor of the candidate (nee_target, lights/light_dispatch.h: the target p_hat times that
+// factor; nee_finish_resampled's ratio uses the same weights).
+template <class SampleLight, class Target>
 RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext& ctx,
                                      const Bsdf& bsdf, const Vec3& wo, SampleStream& stream,
-                                     int depth, const SampleLight& sample) {
+                                     int depth, const SampleLight& sample, const Target& target) {
   NeeChoice ch;
   const bool mis = c.strategy == LightStrategy::Mis;
   for (int i = 0; i < c.nee_candidates; ++i) {
@@ -327,8 +328,8 @@ RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext&
     const SampledLight sl = sample(u.light.u_light);
     if (!(sl.pmf > 0)) continue;
     const NeeSetup n = nee_setup(c, ctx, bsdf, wo, sl.light, u.light.u_pos);
-    const float w = c.nee_candidates == 1  ? (n.traces ? 1.0f : 0.0f)
-                    : c.nee_learnt_target ? resample_weight(n, bsdf, wo, sl.pmf, mis) * sl.target
+    const float w = c.nee_candidates == 1 ? (n.traces ? 1.0f : 0.0f)
+                    : c.nee_learnt_target ? resample_weight(n, bsdf, wo, sl.pmf, mis) * target(sl)
                                           : resample_weight(n, bsdf, wo, sl.pmf, mis);
     if (i == 0) {  // kept even at weight 0: a learning sampler records its zero
       ch.setup = n;

@@ -157,6 +157,7 @@ struct ViewSampler {
   RLL_HD float pmf(const LightContext& ctx, uint32_t light) const {
     return light_pmf(view, ctx, light);
   }
+  RLL_HD float target(const SampledLight& l) const { return nee_target(view, l); }
   RLL_HD void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) const {
     record_nee(view, ctx, s, r);
   }
@@ -235,8 +236,10 @@ struct WavefrontKernels {
   // nee.candidates > 1 the candidate a weighted reservoir keeps of several (render/path_vertex.h).
   RLL_HD void nee_sample_stage(uint32_t i) const {
     const LightContext& ctx = p.ctx[i];
-    const NeeChoice ch = resample_nee(c, ctx, p.bsdf[i], -p.ray[i].d, p.stream[i], p.depth[i],
-                                      [&](double u) { return sampler.sample(ctx, u); });
+    const NeeChoice ch = resample_nee(
+        c, ctx, p.bsdf[i], -p.ray[i].d, p.stream[i], p.depth[i],
+        [&](double u) { return sampler.sample(ctx, u); },
+        [&](const SampledLight& l) { return sampler.target(l); });
     p.light[i] = ch.light;
     if (!(ch.light.pmf > 0)) return;
     p.nee[i] = ch.setup;

@@ -34,6 +34,7 @@ struct HostLightSampler {
   float pmf(const LightContext& ctx, uint32_t light) const {
     return dispatched() ? light_pmf(view, ctx, light) : sampler->pmf(ctx, light);
   }
+  float target(const SampledLight& l) const { return nee_target(view, l); }
   // Safe from many threads at once; only for a sampler that learns().
   void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) const {
     if (dispatched())
