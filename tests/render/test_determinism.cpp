@@ -91,7 +91,7 @@ LtcRender render_ltc(const Scene& scene, IntegratorType type, int threads, uint6
   LtcLightSampler ltc(scene, settings);
   IntegratorSettings is;
   is.type = type;
-  const Integrator integrator(scene, accel, ltc, is);
+  Integrator integrator(scene, accel, ltc, is);
   Film film(scene.width, scene.height);
   RenderSettings rs;
   rs.spp = 16;

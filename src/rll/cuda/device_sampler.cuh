@@ -64,6 +64,7 @@ class DeviceSampler {
         break;
       }
       case SamplerKind::Uniform:
+      case SamplerKind::Host:  // (refused before: require_device_version)
       case SamplerKind::None:
         break;
     }

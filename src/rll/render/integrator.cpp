@@ -83,8 +83,6 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sam
       m_accel(accel),
       m_sampler(sampler),
       m_settings(settings),
-      m_learns(sampler.learns()),
-      m_prepares(sampler.prepares()),
       m_rht(sampler.rht_view()),
       m_view(sampler.sampler_view()),
       m_data(scene),
@@ -121,7 +119,7 @@ Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Ve
     return sum;
   }
   const NeeChoice ch = resample_nee(
-      m_constants, ctx, bsdf, wo, stream, depth, [&](double u) { return m_sampler.sample(ctx, u); },
+      m_constants, ctx, bsdf, wo, stream, depth, [&](double u) { return rll::sample_light(m_view, ctx, u); },
       [&](const SampledLight& l) { return nee_target(m_view, l); });
   if (!(ch.light.pmf > 0)) return Rgb(0);
   if (ch.setup.counts_shadow_ray) ++counters.shadow;
@@ -134,7 +132,7 @@ Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Ve
     camera->visible += reaches_light(ch.setup, occluded);
   }
   const NeeResult r = nee_finish_resampled(m_constants, ch, occluded, bsdf, wo, beta);
-  if (m_learns) m_sampler.record(ctx, ch.light, r.record);
+  if (m_view.learns) record_nee(m_view, ctx, ch.light, r.record);
   return r.value;
 }
 
@@ -152,7 +150,7 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     Vec3 wo = -ray.d;
     const HitEmission e = hit_emission(c, s, sh, wo, depth);
     add_emission(c, s, sh, e,
-                 e.needs_light_pmf ? m_sampler.pmf(s.prev_ctx, uint32_t(sh.light)) : 0.0f);
+                 e.needs_light_pmf ? light_pmf(m_view, s.prev_ctx, uint32_t(sh.light)) : 0.0f);
     if (depth >= c.max_depth) break;
 
     const BsdfNumbers u = bsdf_numbers(stream, depth);
@@ -160,8 +158,8 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     if (bsdf.is_black()) break;
     LightContext ctx = make_vertex_context(c, s, sh, hit, wo, bsdf);
     const bool light = samples_light(c, bsdf);
-    if (m_prepares && !bsdf.is_delta())
-      m_sampler.prepare(ctx, vertex_number(stream, depth, kPrepare));
+    if (m_view.prepares && !bsdf.is_delta())
+      prepare_point(m_view, ctx, vertex_number(stream, depth, kPrepare));
     CameraVertexSample* vertex = depth == 0 ? camera : nullptr;
     if (vertex) vertex->cell = ctx.cell;
     if (light) s.L += s.beta * sample_light(ctx, bsdf, wo, depth, s.beta, stream, counters, vertex);

@@ -70,6 +70,8 @@ class Integrator {
   Rgb li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters,
          CameraVertexSample* camera = nullptr) const;
   const IntegratorSettings& settings() const { return m_settings; }
+  // The sampler's view again, after a change to it (its end of pass, lights_changed, load_state).
+  void sampler_changed() { m_view = m_sampler.sampler_view(); }
   const PathConstants& constants() const { return m_constants; }
 
  private:
@@ -84,9 +86,8 @@ class Integrator {
   const Accel& m_accel;
   LightSampler& m_sampler;
   IntegratorSettings m_settings;
-  bool m_learns, m_prepares;
   const RhtView* m_rht;  // the sampler's, where it draws several samples per vertex
-  SamplerView m_view;    // the sampler as data (its kind says how to read its draws' records)
+  SamplerView m_view;    // the sampler as the dispatch reads it (light_dispatch.h)
   SceneData m_data;      // the hot data the functions below read, as flat views
   PathConstants m_constants;
 };

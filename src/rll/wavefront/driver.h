@@ -39,10 +39,10 @@ inline size_t wavefront_slot_bytes() {
   return bytes + kWavefrontQueues * sizeof(uint32_t);
 }
 
-template <typename Backend, typename Tracer, typename Sampler>
+template <typename Backend, typename Tracer>
 class WavefrontDriver {
  public:
-  using Kernels = WavefrontKernels<Tracer, Sampler>;
+  using Kernels = WavefrontKernels<Tracer>;
 
   // `k` holds the scene, camera, tables, tracer, sampler and film; the driver adds the path slots,
   // queues and tally, n_slots of each, taken from the backend once.
@@ -57,7 +57,7 @@ class WavefrontDriver {
 
   size_t slots() const { return m_slots; }
   // A sampler's view after the end of a pass (its tables may have moved).
-  void set_sampler(const Sampler& s) { m_k.sampler = s; }
+  void set_sampler(const SamplerView& s) { m_k.sampler = s; }
   const Kernels& kernels() const { return m_k; }
 
   // Starts a pass: its counts from zero.

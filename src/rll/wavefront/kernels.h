@@ -145,34 +145,17 @@ struct BvhTracer {
   RLL_HD bool shadow(const Ray& ray) const { return occluded(bvh, ray); }
 };
 
-// A light sampler with a device version, reached through the tag-dispatched functions of
-// lights/light_dispatch.h.
-struct ViewSampler {
-  SamplerView view;
-  bool prepares = false, learns = false;
-  RLL_HD void prepare(LightContext& ctx, float u) const { prepare_point(view, ctx, u); }
-  RLL_HD SampledLight sample(const LightContext& ctx, double u) const {
-    return sample_light(view, ctx, u);
-  }
-  RLL_HD float pmf(const LightContext& ctx, uint32_t light) const {
-    return light_pmf(view, ctx, light);
-  }
-  RLL_HD float target(const SampledLight& l) const { return nee_target(view, l); }
-  RLL_HD void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) const {
-    record_nee(view, ctx, s, r);
-  }
-};
-
 // Everything a stage reads, by value into every launch: the scene and integrator (PathConstants),
-// the camera, the Sobol' tables, a tracer, a light sampler, the path slots, the queues, the tally
-// and the film. Tracer and Sampler are the CPU's or the device's (BvhTracer, ViewSampler).
-template <typename Tracer, typename Sampler>
+// the camera, the Sobol' tables, a tracer, the light sampler's view (lights/light_dispatch.h, in
+// the memory of the device that runs the stages), the path slots, the queues, the tally and the
+// film. Tracer is the CPU's or the device's (AccelTracer, BvhTracer).
+template <typename Tracer>
 struct WavefrontKernels {
   PathConstants c;
   Camera camera;
   SobolView sobol;
   Tracer tracer;
-  Sampler sampler;
+  SamplerView sampler;
   PathSlots p;
   View<uint32_t> queue_slots[kWavefrontQueues];
   uint32_t* queue_sizes = nullptr;       // this bounce's block (kWavefrontQueues words)
@@ -215,7 +198,7 @@ struct WavefrontKernels {
     const Vec3 wo = -p.ray[i].d;
     const HitEmission e = hit_emission(c, s, sh, wo, depth);
     add_emission(c, s, sh, e,
-                 e.needs_light_pmf ? sampler.pmf(s.prev_ctx, uint32_t(sh.light)) : 0.0f);
+                 e.needs_light_pmf ? light_pmf(sampler, s.prev_ctx, uint32_t(sh.light)) : 0.0f);
     if (depth >= c.max_depth) return p.store(i, s);
     SampleStream& stream = p.stream[i];
     const BsdfNumbers u = bsdf_numbers(stream, depth);
@@ -223,7 +206,7 @@ struct WavefrontKernels {
     if (bsdf->is_black()) return p.store(i, s);
     LightContext ctx = make_vertex_context(c, s, sh, p.hit[i], wo, *bsdf);
     if (sampler.prepares && !bsdf->is_delta())
-      sampler.prepare(ctx, vertex_number(stream, depth, kPrepare));
+      prepare_point(sampler, ctx, vertex_number(stream, depth, kPrepare));
     p.store(i, s);
     p.surface[i] = sh;
     p.numbers[i] = u;
@@ -238,8 +221,8 @@ struct WavefrontKernels {
     const LightContext& ctx = p.ctx[i];
     const NeeChoice ch = resample_nee(
         c, ctx, p.bsdf[i], -p.ray[i].d, p.stream[i], p.depth[i],
-        [&](double u) { return sampler.sample(ctx, u); },
-        [&](const SampledLight& l) { return sampler.target(l); });
+                                              [&](double u) { return sample_light(sampler, ctx, u); },
+                                      [&](const SampledLight& l) { return nee_target(sampler, l); });
     p.light[i] = ch.light;
     if (!(ch.light.pmf > 0)) return;
     p.nee[i] = ch.setup;
@@ -271,7 +254,7 @@ struct WavefrontKernels {
 
   // Rewards to a learning sampler.
   RLL_HD void rewards_stage(uint32_t i) const {
-    if (p.light[i].pmf > 0) sampler.record(p.ctx[i], p.light[i], p.record[i]);
+    if (p.light[i].pmf > 0) record_nee(sampler, p.ctx[i], p.light[i], p.record[i]);
   }
 
   // BSDF sampling, the throughput, Russian roulette: the next bounce's rays.

@@ -65,12 +65,12 @@ inline size_t wavefront_slot_count(uint32_t path_slots, const Film& film,
 
 // What every stage of a render reads, on either device: `scene_view`, `film`, `sobol`, `tracer` and
 // `sampler` in the memory of the device that runs the stages.
-template <typename Tracer, typename Sampler>
-WavefrontKernels<Tracer, Sampler> wavefront_kernels(const Scene& scene, const SceneView& scene_view,
-                                                    const IntegratorSettings& integrator,
-                                                    const FilmView& film, const SobolView& sobol,
-                                                    const Tracer& tracer, const Sampler& sampler) {
-  WavefrontKernels<Tracer, Sampler> k;
+template <typename Tracer>
+WavefrontKernels<Tracer> wavefront_kernels(const Scene& scene, const SceneView& scene_view,
+                                           const IntegratorSettings& integrator,
+                                           const FilmView& film, const SobolView& sobol,
+                                           const Tracer& tracer, const SamplerView& sampler) {
+  WavefrontKernels<Tracer> k;
   k.c = make_path_constants(scene, scene_view, integrator);
   k.camera = scene.camera;
   k.sobol = sobol;

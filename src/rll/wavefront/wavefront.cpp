@@ -13,7 +13,6 @@
 #include "rll/core/memory_budget.h"
 #include "rll/scene/scene_view.h"
 #include "rll/wavefront/driver.h"
-#include "rll/wavefront/light_sampler_adapter.h"
 #include "rll/wavefront/passes.h"
 #include "rll/wavefront/trace.h"
 
@@ -118,14 +117,14 @@ RenderProgress render_with(
     const WavefrontSettings& wavefront) {
   const SceneData data(scene);
   const auto k = wavefront_kernels(scene, data.view(), integrator, film.view(), host_sobol_view(),
-                                   tracer, HostLightSampler::of(light_sampler));
+                                   tracer, light_sampler.sampler_view());
   HostBackend backend(wavefront.times, wavefront.memory);
   // A quarter of the memory budget for the path slots (the scene, its accel and the sampler's
   // tables take the rest).
   const size_t budget = memory_budget_bytes() / 4;
   const size_t slots =
       wavefront_slot_count(wavefront.path_slots, film, settings, budget, kHostMaxPathSlots);
-  WavefrontDriver<HostBackend, Tracer, HostLightSampler> driver(backend, k, slots);
+  WavefrontDriver<HostBackend, Tracer> driver(backend, k, slots);
   if (wavefront.work) {
     wavefront.work->path_slots = slots;
     wavefront.work->slot_bytes = slots * wavefront_slot_bytes();
@@ -133,7 +132,7 @@ RenderProgress render_with(
   }
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] { light_sampler.end_pass(); });
-    driver.set_sampler(HostLightSampler::of(light_sampler));
+    driver.set_sampler(light_sampler.sampler_view());
   };
   return run_wavefront_passes(
       scene, driver, end_pass, {}, film, settings, cancel, after_pass,
