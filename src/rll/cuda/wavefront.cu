@@ -344,17 +344,20 @@ RenderProgress GpuRenderer::render(
     start_min = film.min_count();
   }
   const FilmView device_film = {m.film_sum.view(), m.film_count.view(), film.width()};
+  check_nee_settings(integrator, sampler_view(), sampler.name());
   const auto k = wavefront_kernels(scene, m.scene->view(), integrator, device_film, m.sobol,
                                    BvhTracer{m.bvh_view}, sampler_view());
+  const size_t draws = size_t(nee_draws_per_vertex(sampler_view()));
 
   CudaWavefrontBackend& backend = m.backend;
   backend.begin(wavefront.times);
   const size_t budget = device_slot_budget();
-  const size_t slots = wavefront_slot_count(wavefront.path_slots, film, settings, budget);
+  const size_t slots =
+      wavefront_slot_count(wavefront.path_slots, film, settings, budget, kMaxPathSlots, draws);
   WavefrontDriver<CudaWavefrontBackend, BvhTracer> driver(backend, k, slots);
   if (wavefront.work) {
     wavefront.work->path_slots = slots;
-    wavefront.work->slot_bytes = slots * wavefront_slot_bytes();
+    wavefront.work->slot_bytes = slots * wavefront_slot_bytes(draws);
     wavefront.work->budget_bytes = budget;
   }
   m.render_bytes = 0;

@@ -9,7 +9,9 @@
 
 namespace rll {
 
-// A light for the shading point ctx and its probability; SampledLight{} (pmf 0) for None.
+// A light for the shading point ctx and its probability; SampledLight{} (pmf 0) for None, and for
+// Rht, which draws several per vertex: renderers draw every sampler through draw_nee
+// (render/nee_draw.h), which runs rht's own draw.
 RLL_HD inline SampledLight sample_light(const SamplerView& s, const LightContext& ctx, double u) {
   switch (s.kind) {
     case SamplerKind::Uniform:
@@ -20,6 +22,8 @@ RLL_HD inline SampledLight sample_light(const SamplerView& s, const LightContext
       return tree_sample(s.tree, ctx, u);
     case SamplerKind::Rll:
       return rll_sample(*s.rll, ctx, u);
+    case SamplerKind::Rht:
+      break;
     case SamplerKind::Host:
 #if !RLL_DEVICE_CODE
       return s.host->sample(s.host->self, ctx, u);
@@ -41,6 +45,8 @@ RLL_HD inline float light_pmf(const SamplerView& s, const LightContext& ctx, uin
       return tree_pmf(s.tree, ctx, light);
     case SamplerKind::Rll:
       return rll_pmf(*s.rll, ctx, light);
+    case SamplerKind::Rht:  // the probability that a draw yields the light (its MIS density)
+      return rht_pmf(s.rht, ctx.p, ctx.n, light);
     case SamplerKind::Host:
 #if !RLL_DEVICE_CODE
       return s.host->pmf(s.host->self, ctx, light);

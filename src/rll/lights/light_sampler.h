@@ -19,7 +19,6 @@ class LightTree;
 class Accel;
 class BinaryWriter;
 class BinaryReader;
-struct RhtView;
 
 class LightSampler {
  public:
@@ -68,12 +67,6 @@ class LightSampler {
   // the host kind over this class's calls (a sampler with no device version: a device renderer
   // refuses it).
   virtual SamplerView sampler_view() const;
-
-  // A sampler that draws several next-event samples per vertex, each with its own shadow ray
-  // (rht, docs/rht.md): its view, which the integrator draws them from (render/rht_nee.h)
-  // instead of calling sample(); its pmf() is then the probability that a draw yields the light
-  // (summing to more than one), for the BSDF strategy's MIS. nullptr for the one-sample samplers.
-  virtual const RhtView* rht_view() const { return nullptr; }
 
   // Name, parameters and statistics for --stats and reports.
   virtual nlohmann::json describe() const { return {{"name", name()}}; }

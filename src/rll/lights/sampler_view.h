@@ -11,11 +11,12 @@
 #include "rll/core/device.h"
 #include "rll/core/sampling.h"
 #include "rll/lights/light_context.h"
+#include "rll/lights/rht_view.h"
 #include "rll/lighttree/descent.h"
 
 namespace rll {
 
-enum class SamplerKind : uint8_t { None, Uniform, Power, Tree, Rll, Host };
+enum class SamplerKind : uint8_t { None, Uniform, Power, Tree, Rll, Rht, Host };
 
 struct RllView;  // lights/rll_view.h
 
@@ -41,6 +42,8 @@ struct SamplerView {
   // Rll: its views, in the memory of the device that runs the dispatch (the sampler's own on the
   // host), held by pointer so that this header need not know them.
   const RllView* rll = nullptr;
+  // Rht: draws several candidates a vertex (render/nee_draw.h); its tree is rht.tree.
+  RhtView rht;
   const HostSampler* host = nullptr;  // Host
 };
 

@@ -80,7 +80,7 @@ struct PathConstants {
   int max_depth = 5;  // 1 for `direct`
   int rr_depth = 3;
   int nee_candidates = 1;  // resampled next-event estimation (docs/nee.md): 1 = one light sample
-  bool nee_learnt_target = false;  // its target times the sampler's SampledLight::target
+  bool nee_learnt_target = false;  // its target times the sampler's factor (nee_target)
   CoatedWeights coated_weights = CoatedWeights::Unbiased;  // coated.weights (scene/bsdf.h)
 };
 
@@ -346,6 +346,17 @@ RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext&
   if (!(ch.weight > 0)) ch.setup.traces = false;
   return ch;
 }
+
+// One next-event sample of a vertex as every sampler's draw yields it (render/nee_draw.h): the
+// light sample before its shadow ray, the light with its pmf (the MIS weight's density), and the
+// factor its contribution is scaled by after the shadow ray: resampled NEE's unbiased
+// contribution weight's ratio (sum w / M) / w_kept, or rht's reservoirs' 1 / (P(first stage kept
+// it) P(second stage kept it)); 1 for a plain light sample.
+struct NeeDraw {
+  NeeSetup setup;
+  SampledLight light;
+  float scale = 1;
+};
 
 // The kept candidate after the shadow ray: nee_finish's value (its contribution over its source
 // pmf, MIS-weighted) times the unbiased contribution weight's ratio (sum w / M) / w_kept; the
