@@ -172,12 +172,17 @@ TEST(CliErrors, RhtParameters) {
   for (const char* n : {"0", "9"})
     expect_render_error(dir, with({"--set", std::string("rht.samples=") + n}), {"rht.samples"});
   expect_render_error(dir, with({"--set", "nee.candidates=4"}), {"nee.candidates", "rht"});
-  expect_render_error(dir, with({"--wavefront"}), {"rht", "wavefront"});
+  expect_render_error(dir, with({"--wavefront", "--set", "nee.candidates=2"}),
+                      {"nee.candidates", "rht"});
   // The counterpart: good values render.
   CommandResult r = run_rll({"render", "builtin:cornell-box", "--res", "8x8", "--spp", "2",
                              "--sampler", "rht", "--set", "rht.gamma=0.5", "--set",
                              "rht.reservoirs=4", "--set", "rht.samples=2", "--quiet", "-o",
                              (dir / "ok.png").string()});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // The wavefront renders it too (its several shadow rays a vertex, docs/rht.md).
+  r = run_rll({"render", "builtin:cornell-box", "--res", "8x8", "--spp", "2", "--sampler", "rht",
+               "--wavefront", "--quiet", "-o", (dir / "wavefront.png").string()});
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 

@@ -92,7 +92,7 @@ LtcRender render_ltc(Scene scene, IntegratorType type, int threads, uint64_t see
   LtcLightSampler ltc(scene, tree, settings);
   IntegratorSettings is;
   is.type = type;
-  const Integrator integrator(scene, accel, ltc, is);
+  Integrator integrator(scene, accel, ltc, is);
   Film film(scene.width, scene.height);
   RenderSettings rs;
   rs.spp = 16;

@@ -10,8 +10,8 @@
 #include <cmath>
 
 #include "rll/accel/accel.h"
-#include "rll/lighttree/light_tree.h"
 #include "rll/lights/rht_sampler.h"
+#include "rll/lighttree/light_tree.h"
 #include "rll/render/rht_nee.h"
 #include "support/sampler_contexts.h"
 #include "support/statistics.h"
@@ -21,19 +21,20 @@ using namespace rll::test;
 
 namespace {
 
-const std::vector<std::string> kScenes = {"cornell-boxes-room", "arch-interior", "many-lights-open"};
-constexpr int kContexts = 120;      // reachability and exact pdfs
-constexpr int kFreqContexts = 24;   // yield frequencies
-constexpr int kDraws = 12000;       // draws per frequency context
+const std::vector<std::string> kScenes = {"cornell-boxes-room", "arch-interior",
+                                          "many-lights-open"};
+constexpr int kContexts = 120;     // reachability and exact pdfs
+constexpr int kFreqContexts = 24;  // yield frequencies
+constexpr int kDraws = 12000;      // draws per frequency context
 
 struct Fixture : SamplerScene {
-  const RhtView* view = nullptr;
+  RhtView view;  // the sampler's view's (SamplerKind::Rht)
   std::vector<LightContext> contexts;
 };
 
 Fixture make_fixture(const std::string& scene_name, const std::vector<std::string>& set) {
-  Fixture f{sampler_scene(scene_name, "rht", set), nullptr, {}};
-  f.view = f.sampler->rht_view();
+  Fixture f{sampler_scene(scene_name, "rht", set), {}, {}};
+  f.view = f.sampler->sampler_view().rht;
   f.contexts = make_contexts(f.scene, *f.accel, kContexts, 4321);
   return f;
 }
@@ -53,7 +54,9 @@ Draw draw_numbers(uint64_t context, uint64_t k) {
 }
 
 // The descent's share of draws and the number its u is rescaled to, as rht_nee takes them.
-float descent_share(const RhtView& v) { return 1 - rht_directional_probability(v); }
+float descent_share(const RhtView& v) {
+  return 1 - rht_directional_probability(v);
+}
 
 class RhtDescent : public ::testing::TestWithParam<std::string> {
  protected:
@@ -70,7 +73,7 @@ class RhtDescent : public ::testing::TestWithParam<std::string> {
 // leaf's tree importance, and no light is yielded twice by one draw.
 TEST_P(RhtDescent, YieldedPdfEqualsReplayedPmfAndWeightIsImportance) {
   Fixture& f = fixture();
-  const RhtView& v = *f.view;
+  const RhtView& v = f.view;
   const LightTreeView& t = v.tree;
   std::vector<int> seen(f.scene.lights.size(), -1);
   long yields = 0;
@@ -101,7 +104,7 @@ TEST_P(RhtDescent, YieldedPdfEqualsReplayedPmfAndWeightIsImportance) {
 // positive rht_pmf; directional lights have their share.
 TEST_P(RhtDescent, ContributingLightsAreReachable) {
   Fixture& f = fixture();
-  const RhtView& v = *f.view;
+  const RhtView& v = f.view;
   const uint32_t n = uint32_t(f.scene.lights.size());
   const uint32_t stride = n > 3000 ? 7 : 1;
   for (size_t i = 0; i < f.contexts.size(); i += 2) {
@@ -120,7 +123,7 @@ TEST_P(RhtDescent, ContributingLightsAreReachable) {
 // sum of their standard deviations (the yields of different lights are correlated).
 TEST_P(RhtDescent, YieldFrequenciesMatchPmf) {
   Fixture& f = fixture();
-  const RhtView& v = *f.view;
+  const RhtView& v = f.view;
   const size_t n = f.scene.lights.size();
   const double z_max = 5.5;  // two-sided normal tail 4e-8: Sidak-safe over ~1e5 tests per scene
   for (int c = 0; c < kFreqContexts; ++c) {
@@ -158,19 +161,18 @@ TEST_P(RhtDescent, YieldFrequenciesMatchPmf) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenes, RhtDescent, ::testing::ValuesIn(kScenes),
-                         [](const auto& info) {
-                           std::string s = info.param;
-                           for (auto& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+INSTANTIATE_TEST_SUITE_P(Scenes, RhtDescent, ::testing::ValuesIn(kScenes), [](const auto& info) {
+  std::string s = info.param;
+  for (auto& ch : s)
+    if (ch == '-') ch = '_';
+  return s;
+});
 
 // The test above can fail: a descent that reports its candidates' pdfs 5% low for one light
 // (the error the review feared: sample and pmf agreeing, both off) is seen at some context.
 TEST(RhtDescentPower, FrequencyTestSeesAFivePercentError) {
   Fixture f = make_fixture("cornell-boxes-room", {});
-  const RhtView& v = *f.view;
+  const RhtView& v = f.view;
   int seen = 0;
   for (int c = 0; c < 6; ++c) {
     const LightContext& ctx = f.contexts[size_t(c) * 7];

@@ -191,11 +191,16 @@ INSTANTIATE_TEST_SUITE_P(Samplers, SamplerViewDispatch,
                            return s;
                          });
 
-// The samplers without a device version say so.
-TEST(SamplerView, SamplersWithoutADeviceVersionHaveNone) {
+// Every sampler has a view: ltc, without a device version, the host kind; rht its own.
+TEST(SamplerView, EverySamplerHasAView) {
   Fixture& f = fixture("cornell-boxes-room");
-  for (const char* name : {"ltc", "rht"})
-    EXPECT_EQ(make_light_sampler(name, f.scene, *f.tree, Params{})->sampler_view().kind, SamplerKind::None)
+  EXPECT_EQ(make_light_sampler("ltc", f.scene, *f.tree, Params{})->sampler_view().kind,
+            SamplerKind::Host);
+  EXPECT_EQ(make_light_sampler("rht", f.scene, *f.tree, Params{})->sampler_view().kind,
+            SamplerKind::Rht);
+  for (const char* name : {"uniform", "power", "tree", "rll", "fermat"})
+    EXPECT_NE(make_light_sampler(name, f.scene, *f.tree, Params{})->sampler_view().kind,
+              SamplerKind::Host)
         << name;
 }
 

@@ -100,6 +100,7 @@ class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
     v.kind = SamplerKind::Rll;
     v.tree = m_view.tree;
     v.rll = m_device_view.view().data;
+    v.prepares = v.learns = true;  // (a learning sampler's state: a frozen one is uploaded whole)
     return v;
   }
 

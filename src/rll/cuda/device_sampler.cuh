@@ -33,6 +33,9 @@ class DeviceSampler {
       case SamplerKind::Tree:
         m_view.tree = mirror_tree(m_memory, h.tree);
         break;
+      case SamplerKind::Rht:
+        m_view.rht.tree = mirror_tree(m_memory, h.rht.tree);
+        break;
       case SamplerKind::Rll: {
         RllView r = *h.rll;
         r.tree = mirror_tree(m_memory, r.tree);
@@ -64,6 +67,7 @@ class DeviceSampler {
         break;
       }
       case SamplerKind::Uniform:
+      case SamplerKind::Host:  // (refused before: require_device_version)
       case SamplerKind::None:
         break;
     }

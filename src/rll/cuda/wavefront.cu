@@ -186,10 +186,6 @@ size_t device_slot_budget() {
   return total / 4;
 }
 
-ViewSampler view_sampler(const SamplerView& v, const LightSampler& s) {
-  return {v, s.prepares(), s.learns()};
-}
-
 }  // namespace
 
 struct GpuRenderer::Impl {
@@ -351,17 +347,20 @@ RenderProgress GpuRenderer::render(
     start_min = film.min_count();
   }
   const FilmView device_film = {m.film_sum.view(), m.film_count.view(), film.width()};
+  check_nee_settings(integrator, sampler_view(), sampler.name());
   const auto k = wavefront_kernels(scene, m.scene->view(), integrator, device_film, m.sobol,
-                                   BvhTracer{m.bvh_view}, view_sampler(sampler_view(), sampler));
+                                   BvhTracer{m.bvh_view}, sampler_view());
+  const size_t draws = size_t(nee_draws_per_vertex(sampler_view()));
 
   CudaWavefrontBackend& backend = m.backend;
   backend.begin(wavefront.times);
   const size_t budget = device_slot_budget();
-  const size_t slots = wavefront_slot_count(wavefront.path_slots, film, settings, budget);
-  WavefrontDriver<CudaWavefrontBackend, BvhTracer, ViewSampler> driver(backend, k, slots);
+  const size_t slots =
+      wavefront_slot_count(wavefront.path_slots, film, settings, budget, kMaxPathSlots, draws);
+  WavefrontDriver<CudaWavefrontBackend, BvhTracer> driver(backend, k, slots);
   if (wavefront.work) {
     wavefront.work->path_slots = slots;
-    wavefront.work->slot_bytes = slots * wavefront_slot_bytes();
+    wavefront.work->slot_bytes = slots * wavefront_slot_bytes(draws);
     wavefront.work->budget_bytes = budget;
   }
   m.render_bytes = 0;
@@ -387,7 +386,7 @@ RenderProgress GpuRenderer::render(
       }
     });
     note_bytes();
-    driver.set_sampler(view_sampler(sampler_view(), sampler));
+    driver.set_sampler(sampler_view());
   };
   // The film comes back only where the host reads it: before an after_pass that reads it, after
   // a stopped pass, and after the last pass unless it stays here; in the pass's one wait.

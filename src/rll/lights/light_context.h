@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 
 #include "rll/core/math.h"
 
@@ -21,20 +22,35 @@ struct LightContext {
   uint32_t cell = kNoCell;  // per-point sampler state (an RLL cell), set by prepare()
 };
 
+// What a sampler remembers of one of its draws, for its own record() and resampled NEE's learnt
+// target (light_dispatch.h): four words whose meaning is the drawing sampler's (rll's and ltc's
+// ClusterDraw, lights/cluster_draw.h). The renderers only carry it from the draw to the record.
+struct SamplerRecord {
+  uint32_t word[4] = {0, 0, 0, 0};
+};
+
+// A sampler's answer: the light, its probability, and the sampler's own record of the draw.
 struct SampledLight {
   uint32_t light = 0;
   float pmf = 0;  // 0: nothing was sampled
-  // Filled by samplers that choose a cluster first (rll, oracle), for their own record():
-  uint32_t cluster = 0;   // index of the cluster in the cell's cut
-  float cluster_pmf = 0;  // probability of that cluster
-  float cluster_importance =
-      0;  // rll's guided descent: the tree's importance of the cluster at the point
-  // A factor of resampled NEE's target for this light (nee.target=learnt, docs/nee.md): rll's
-  // learnt visibility factor of the light's cluster in the cell (CutStore::target_factor); 1
-  // for a sampler that learns none. A function of the light and the shading point's cell only
-  // (never of the draw), and > 0 wherever the light can be drawn.
-  float target = 1;
+  SamplerRecord record;
 };
+
+// A sampler's typed record as SamplerRecord's words and back (T trivially copyable, at most four
+// words); memcpy, which host and device compile alike.
+template <class T>
+RLL_HD inline SamplerRecord pack_record(const T& r) {
+  static_assert(sizeof(T) <= sizeof(SamplerRecord), "a sampler's record is four words at most");
+  SamplerRecord out;
+  memcpy(out.word, &r, sizeof(T));
+  return out;
+}
+template <class T>
+RLL_HD inline T unpack_record(const SamplerRecord& r) {
+  T out;
+  memcpy(&out, r.word, sizeof(T));
+  return out;
+}
 
 // What the integrator reports of one next-event sample to a learning sampler. Each learner makes
 // its own reward of these: rll the cluster's contribution (estimate / P(l | cluster)), Fermat's

@@ -19,10 +19,12 @@ class LightTree;
 class Accel;
 class BinaryWriter;
 class BinaryReader;
-struct RhtView;
 
 class LightSampler {
  public:
+  LightSampler();
+  LightSampler(const LightSampler&) = delete;  // its host view points at it
+  LightSampler& operator=(const LightSampler&) = delete;
   virtual ~LightSampler() = default;
   virtual std::string name() const = 0;
 
@@ -60,19 +62,25 @@ class LightSampler {
   virtual void save_state(BinaryWriter& w) const { (void)w; }
   virtual void load_state(BinaryReader& r) { (void)r; }
 
-  // This sampler as data for sample_light / light_pmf (sampler_view.h), valid while the sampler
-  // lives and between changes to it (end_pass, lights_changed, load_state); kind None where it
-  // has no device version (a device renderer refuses it).
-  virtual SamplerView sampler_view() const { return {}; }
-
-  // A sampler that draws several next-event samples per vertex, each with its own shadow ray
-  // (rht, docs/rht.md): its view, which the integrator draws them from (render/rht_nee.h)
-  // instead of calling sample(); its pmf() is then the probability that a draw yields the light
-  // (summing to more than one), for the BSDF strategy's MIS. nullptr for the one-sample samplers.
-  virtual const RhtView* rht_view() const { return nullptr; }
+  // This sampler as data for the dispatch every renderer runs (light_dispatch.h), valid while the
+  // sampler lives and between changes to it (end_pass, lights_changed, load_state). By default
+  // the host kind over this class's calls (a sampler with no device version: a device renderer
+  // refuses it).
+  virtual SamplerView sampler_view() const;
 
   // Name, parameters and statistics for --stats and reports.
   virtual nlohmann::json describe() const { return {{"name", name()}}; }
+
+ protected:
+  // prepares and learns of this sampler's view (its prepares() and learns()).
+  SamplerView with_flags(SamplerView v) const {
+    v.prepares = prepares();
+    v.learns = learns();
+    return v;
+  }
+
+ private:
+  HostSampler m_host;  // this class's calls, for the default sampler_view()
 };
 
 // The sampler names `make_light_sampler` knows, in the order they are listed to users.

@@ -14,6 +14,7 @@
 #include "rll/core/sampling.h"
 #include "rll/core/search.h"
 #include "rll/learn/moments.h"
+#include "rll/lights/cluster_draw.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/scene/scene.h"
 
@@ -352,10 +353,12 @@ SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
     split.size = uint32_t(m_initial.size());
     SampledLight s = sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &split));
     if (!(s.pmf > 0)) return {};
-    s.cluster =
+    ClusterDraw d;
+    d.cluster =
         upper_bound_index(m_initial_ends.data(), 0u, uint32_t(m_initial_ends.size()), s.light);
-    const float within = split.cluster == s.cluster ? split.below : 0.0f;
-    s.cluster_pmf = within > 0 ? s.pmf / within : 0.0f;
+    const float within = split.cluster == d.cluster ? split.below : 0.0f;
+    d.cluster_pmf = within > 0 ? s.pmf / within : 0.0f;
+    set_cluster_draw(s, d);
     return s;
   }
   // A node from the entry's CDF, compared and differenced in double: the interval of u that
@@ -373,9 +376,11 @@ SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
   if (!(w.pmf > 0)) return {};
   SampledLight s;
   s.light = w.light;
-  s.cluster = k;
-  s.cluster_pmf = float(q);
-  s.pmf = s.cluster_pmf * w.pmf;
+  ClusterDraw d;
+  d.cluster = k;
+  d.cluster_pmf = float(q);
+  s.pmf = d.cluster_pmf * w.pmf;
+  set_cluster_draw(s, d);
   return s.pmf > 0 ? s : SampledLight{};
 }
 
@@ -390,18 +395,19 @@ float LtcLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
 
 void LtcLightSampler::record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) {
   const uint32_t e = ctx.cell;
-  if (e == kNoCell || !(s.pmf > 0) || !(s.cluster_pmf > 0)) return;
+  const ClusterDraw d = cluster_draw(s);
+  if (e == kNoCell || !(s.pmf > 0) || !(d.cluster_pmf > 0)) return;
   const float F = r.estimate * r.mis_weight;
   if (!(F >= 0) || !std::isfinite(F)) return;
   // r = F / P(l | node): the node's own estimator, whose second moment the node learns.
-  const double within = double(s.pmf) / double(s.cluster_pmf);
+  const double within = double(s.pmf) / double(d.cluster_pmf);
   const double x = double(F) / within * m_inv_unit[e];
-  const size_t i = size_t(e) * m_m + s.cluster;
+  const size_t i = size_t(e) * m_m + d.cluster;
   m_sum[i].add(x);
   const double xc = std::min(x, kMaxRootOfSquare);
   m_sum2[i].add(xc * xc);
   // The first pass records into the global cut, whose nodes' children are known from the tree.
-  const uint32_t mid = has_cut(e) ? m_mid[i] : m_initial_mid[s.cluster];
+  const uint32_t mid = has_cut(e) ? m_mid[i] : m_initial_mid[d.cluster];
   if (s.light < mid) m_sum2_0[i].add(xc * xc);
   m_count[i].fetch_add(1, std::memory_order_relaxed);
 }

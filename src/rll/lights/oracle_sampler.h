@@ -46,6 +46,8 @@ class OracleLightSampler final : public LightSampler {
   bool prepares() const override { return true; }
   SampledLight sample(const LightContext& ctx, double u) const override { return m_rll->sample(ctx, u); }
   float pmf(const LightContext& ctx, uint32_t light) const override { return m_rll->pmf(ctx, light); }
+  // The frozen rll's: the oracle samples as rll does, with its knowledge, on any renderer.
+  SamplerView sampler_view() const override { return m_rll->sampler_view(); }
   // Lights moved or switched: the knowledge is computed again (outside render time too).
   void lights_changed(const Scene& scene) override;
   nlohmann::json describe() const override;

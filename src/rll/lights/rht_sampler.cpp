@@ -44,7 +44,15 @@ RhtLightSampler::RhtLightSampler(const Scene& scene, const LightTree& tree,
 SampledLight RhtLightSampler::sample(const LightContext&, double) const {
   fail(
       "sampler 'rht' draws several light samples per vertex, with a shadow ray each: this "
-      "renderer draws one (render rht with the CPU megakernel: --device cpu, no --wavefront)");
+      "caller draws one (the renderers draw it through draw_nee, render/nee_draw.h)");
+}
+
+SamplerView RhtLightSampler::sampler_view() const {
+  SamplerView v;
+  v.kind = SamplerKind::Rht;
+  v.rht = m_view;
+  v.tree = m_view.tree;
+  return v;
 }
 
 float RhtLightSampler::pmf(const LightContext& ctx, uint32_t light) const {

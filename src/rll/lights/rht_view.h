@@ -111,52 +111,114 @@ RLL_HD inline double rht_scramble(uint64_t key, uint32_t node) {
 }
 }  // namespace detail
 
+// The state (t, ps) with which the descent enters node `target` (an inner node it reached),
+// replayed from the root along the light ranges with the descent's arithmetic, so that it equals
+// what the descent carried to the bit.
+RLL_HD inline void rht_enter(const RhtView& v, uint32_t target, const Vec3& p, const Vec3& n,
+                             float& t, float& ps) {
+  const uint32_t light = v.tree.node(target).begin;
+  t = 1;
+  ps = 1;
+  for (uint32_t index = LightTree::kRoot; index != target;) {
+    const LightTreeNode& node = v.tree.node(index);
+    const RhtStep s = rht_step(v, index, t, ps, p, n);
+    const bool first = light < v.tree.node(node.child).end;
+    index = node.child + (first ? 0u : 1u);
+    if (s.only >= 0) continue;
+    t = s.t * (first ? s.p0 : 1 - s.p0);
+    ps = s.ps;
+  }
+}
+
 // The split descent from the root (directional lights excluded): calls add(light, pdf,
 // importance) for each candidate, pdf being the probability that a draw yields it times
 // `scale`. u chooses children where a node does not split, u_split decides the splits, `key`
-// scrambles u after each choice. The stack is bounded by the tree's depth.
+// scrambles u after each choice. Depth first, the first child first; where a node splits, the
+// second child waits. On the host the waiting children are a stack bounded by the tree's depth;
+// on a device (a thread's stack is small) a bit trail of the split nodes above, each waiting
+// child's state made again by rht_enter when its turn comes: the same candidates in the same
+// order.
 template <class Add>
 RLL_HD inline void rht_descend(const RhtView& v, const Vec3& p, const Vec3& n, double u,
                                float u_split, uint64_t key, float scale, Add&& add) {
+#if RLL_DEVICE_CODE
+  uint32_t trail[kMaxTreeDepth / 32] = {};  // bit d: the node at depth d split, its second waits
+  int depth = 0;
+#else
   struct Entry {
     uint32_t node;
     float t, ps;
   };
   Entry stack[kMaxTreeDepth];
   int top = 0;
-  Entry e{LightTree::kRoot, 1.0f, 1.0f};
+#endif
+  uint32_t index = LightTree::kRoot;
+  float t = 1, ps = 1;
   for (;;) {
-    const LightTreeNode& node = v.tree.node(e.node);
+    const LightTreeNode& node = v.tree.node(index);
     if (!node.is_leaf()) {
-      const RhtStep s = rht_step(v, e.node, e.t, e.ps, p, n);
+      const RhtStep s = rht_step(v, index, t, ps, p, n);
       if (s.only >= 0) {
-        e.node = node.child + uint32_t(s.only);
+        index = node.child + uint32_t(s.only);
+#if RLL_DEVICE_CODE
+        ++depth;
+#endif
         continue;
       }
       if (!s.drop) {
-        if (u_split <= s.ps) {  // both children: the second waits on the stack
+        if (u_split <= s.ps) {  // both children: the second waits
+#if RLL_DEVICE_CODE
+          trail[depth / 32] |= 1u << (depth % 32);
+#else
           stack[top++] = Entry{node.child + 1, s.t * (1 - s.p0), s.ps};
-          e = Entry{node.child, s.t * s.p0, s.ps};
+#endif
+          index = node.child;
+          t = s.t * s.p0;
         } else if (u < s.p0) {
-          u = std::min(u / s.p0, detail::kBelowOne);
-          e = Entry{node.child, s.t * s.p0, s.ps};
+          u = std::min(u / s.p0, double(detail::kBelowOne));
+          index = node.child;
+          t = s.t * s.p0;
         } else {
-          u = std::min((u - s.p0) / (1 - s.p0), detail::kBelowOne);
-          e = Entry{node.child + 1, s.t * (1 - s.p0), s.ps};
+          u = std::min((u - s.p0) / (1 - s.p0), double(detail::kBelowOne));
+          index = node.child + 1;
+          t = s.t * (1 - s.p0);
         }
+        ps = s.ps;
         if (u_split > s.ps) {
-          u += detail::rht_scramble(key, e.node);
+          u += detail::rht_scramble(key, index);
           if (u >= 1) u -= 1;
         }
+#if RLL_DEVICE_CODE
+        ++depth;
+#endif
         continue;
       }
     } else {
       float importance = 0;
-      const float pdf = rht_leaf_pdf(v, e.node, e.t, e.ps, p, n, scale, &importance);
+      const float pdf = rht_leaf_pdf(v, index, t, ps, p, n, scale, &importance);
       if (pdf > 0) add(node.begin, pdf, importance);
     }
+#if RLL_DEVICE_CODE
+    // The deepest split node above: its second child is next.
+    int d = depth - 1;
+    while (d >= 0 && !(trail[d / 32] >> (d % 32) & 1u)) --d;
+    if (d < 0) return;
+    trail[d / 32] &= ~(1u << (d % 32));
+    uint32_t a = index;
+    for (int k = depth; k > d; --k) a = v.tree.node(a).parent;
+    rht_enter(v, a, p, n, t, ps);
+    const RhtStep s = rht_step(v, a, t, ps, p, n);
+    index = v.tree.node(a).child + 1;
+    t = s.t * (1 - s.p0);
+    ps = s.ps;
+    depth = d + 1;
+#else
     if (top == 0) return;
-    e = stack[--top];
+    --top;
+    index = stack[top].node;
+    t = stack[top].t;
+    ps = stack[top].ps;
+#endif
   }
 }
 
@@ -168,16 +230,13 @@ RLL_HD inline float rht_pmf(const RhtView& v, const Vec3& p, const Vec3& n, uint
   if (light >= v.tree.light_count()) return 0;
   const float p_dir = rht_directional_probability(v);
   if (rht_is_directional(v, light)) return p_dir / float(v.dir_count);
-  uint32_t path[kMaxTreeDepth];
-  int k = 0;
-  for (uint32_t i = v.tree.leaf_of[light]; i != LightTree::kRoot; i = v.tree.node(i).parent)
-    path[k++] = i;
   float t = 1, ps = 1;
   uint32_t index = LightTree::kRoot;
-  while (k-- > 0) {
+  while (!v.tree.node(index).is_leaf()) {  // down the light's path, by the light ranges
+    const LightTreeNode& node = v.tree.node(index);
     const RhtStep s = rht_step(v, index, t, ps, p, n);
-    const bool first = path[k] == v.tree.node(index).child;
-    index = path[k];
+    const bool first = light < v.tree.node(node.child).end;
+    index = node.child + (first ? 0u : 1u);
     if (s.only >= 0) continue;
     if (s.drop) return 0;
     t = s.t * (first ? s.p0 : 1 - s.p0);

@@ -90,7 +90,7 @@ SamplerView RllLightSampler::sampler_view() const {
   v.kind = SamplerKind::Rll;
   v.tree = m_view.tree;
   v.rll = &m_view;
-  return v;
+  return with_flags(v);
 }
 
 size_t RllLightSampler::bytes() const {

@@ -15,6 +15,7 @@
 #include "rll/core/search.h"
 #include "rll/learn/cell_grid.h"
 #include "rll/learn/cut_store.h"
+#include "rll/lights/cluster_draw.h"
 #include "rll/lights/sampler_view.h"
 #include "rll/lighttree/descent.h"
 
@@ -208,10 +209,12 @@ RLL_HD inline SampledLight rll_sample_guided(const RllView& v, const LightContex
   if (importance < 0) importance = tree_importance(v.tree, index, ctx.p, ctx.n);
   SampledLight w = rll_sample_within(v, ctx, index, rll_begin(c, k0), c.ends[k0], u);
   if (!(w.pmf > 0)) return {};
-  w.cluster = k0;
-  w.cluster_pmf = pmf;
-  w.cluster_importance = importance;
-  w.target = v.cuts.vis[base + k0];
+  ClusterDraw d;
+  d.cluster = k0;
+  d.cluster_pmf = pmf;
+  d.importance = importance;
+  d.target = v.cuts.vis[base + k0];
+  set_cluster_draw(w, d);
   w.pmf = pmf * w.pmf;
   return w.pmf > 0 ? w : SampledLight{};
 }
@@ -325,8 +328,10 @@ RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx,
     const double u_within = clamp(u * K - k, 0.0, kBelowOne);
     SampledLight w = rll_sample_within(v, ctx, c.nodes[k], rll_begin(c, k), c.ends[k], u_within);
     if (!(w.pmf > 0)) return {};
-    w.cluster = k;
-    w.cluster_pmf = 1.0f / float(K);
+    ClusterDraw d;
+    d.cluster = k;
+    d.cluster_pmf = 1.0f / float(K);
+    set_cluster_draw(w, d);
     w.pmf = w.pmf / float(K);
     return w;
   }
@@ -336,11 +341,13 @@ RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx,
     // cluster, the tree chose the light with the probability of the path below the cluster.
     SampledLight s = sampled_light(tree_descend(v.tree, LightTree::kRoot, ctx.p, ctx.n, u, &split));
     if (!(s.pmf > 0)) return {};
-    s.cluster = rll_cluster_of(c, s.light);
+    ClusterDraw d;
+    d.cluster = rll_cluster_of(c, s.light);
     // (A cluster the path did not pass: the whole path's product, as the earlier record gave.)
-    const float within = split.cluster == s.cluster ? split.below : s.pmf;
-    s.cluster_pmf = within > 0 ? s.pmf / within : s.pmf;
-    if (v.guided) s.cluster_importance = tree_importance(v.tree, c.nodes[s.cluster], ctx.p, ctx.n);
+    const float within = split.cluster == d.cluster ? split.below : s.pmf;
+    d.cluster_pmf = within > 0 ? s.pmf / within : s.pmf;
+    if (v.guided) d.importance = tree_importance(v.tree, c.nodes[d.cluster], ctx.p, ctx.n);
+    set_cluster_draw(s, d);
     return s;
   }
   if (v.guided) return rll_sample_guided(v, ctx, c, u);
@@ -382,9 +389,11 @@ RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx,
   }
   SampledLight s;
   s.light = l;
-  s.cluster = k;
-  s.pmf = rll_mixture_pmf(v, ctx, c, k, l, within, descent, descent_pmf, &s.cluster_pmf);
-  s.target = v.cuts.vis[size_t(ctx.cell) * v.cuts.m + k];
+  ClusterDraw d;
+  d.cluster = k;
+  s.pmf = rll_mixture_pmf(v, ctx, c, k, l, within, descent, descent_pmf, &d.cluster_pmf);
+  d.target = v.cuts.vis[size_t(ctx.cell) * v.cuts.m + k];
+  set_cluster_draw(s, d);
   return s.pmf > 0 ? s : SampledLight{};
 }
 
@@ -410,7 +419,8 @@ RLL_HD inline void rll_record(const RllView& v, const LightContext& ctx, const S
                               const NeeRecord& r) {
   const float estimate = r.estimate;
   if (ctx.cell == kNoCell || !(s.pmf > 0) || !(estimate >= 0) || !std::isfinite(estimate)) return;
-  const float within = s.pmf / s.cluster_pmf;
+  const ClusterDraw d = cluster_draw(s);
+  const float within = s.pmf / d.cluster_pmf;
   // DESIGN 2: the cluster reward estimates the cluster's total contribution I(s):
   // r = estimate / P(l|s). The original code divided by the full pdf (fixed point P ~ sqrt(I)).
   float reward = 0;
@@ -419,8 +429,8 @@ RLL_HD inline void rll_record(const RllView& v, const LightContext& ctx, const S
       reward = estimate / within;
       if (v.guided) {
         // The ratio of the cluster's contribution to the tree's importance of it at the point.
-        if (!(s.cluster_importance > 0)) return;
-        reward /= s.cluster_importance;
+        if (!(d.importance > 0)) return;
+        reward /= d.importance;
       }
       break;
     case RewardKind::FullPdf:
@@ -432,7 +442,7 @@ RLL_HD inline void rll_record(const RllView& v, const LightContext& ctx, const S
       break;
   }
   if (!(reward >= 0) || !std::isfinite(reward)) return;
-  cut_record(v.cuts, ctx.cell, s.cluster, reward);
+  cut_record(v.cuts, ctx.cell, d.cluster, reward);
 }
 
 }  // namespace rll

@@ -1,7 +1,9 @@
-// The light samplers that have a device version, as data (DESIGN 6): a trivially copyable
-// SamplerView holds a tag and the flat views a sampler reads, and each sampler's RLL_HD sample and
-// pmf functions read them; lights/light_dispatch.h switches on the tag. The samplers' classes call
-// the same functions, so the CPU renderer and a device renderer run one source.
+// Every light sampler as data (DESIGN 6): a trivially copyable SamplerView holds a tag and the
+// flat views a sampler reads, and each sampler's RLL_HD sample and pmf functions read them;
+// lights/light_dispatch.h switches on the tag. Every renderer (the megakernel, the CPU wavefront,
+// the GPU's) reaches every sampler through that switch; the samplers' classes call the same
+// functions, so the renderers run one source. A sampler with no device version is the one
+// host-only kind (HostSampler), which a device renderer refuses.
 #pragma once
 
 #include <cstdint>
@@ -9,22 +11,40 @@
 #include "rll/core/device.h"
 #include "rll/core/sampling.h"
 #include "rll/lights/light_context.h"
+#include "rll/lights/rht_view.h"
 #include "rll/lighttree/descent.h"
 
 namespace rll {
 
-enum class SamplerKind : uint8_t { None, Uniform, Power, Tree, Rll };
+enum class SamplerKind : uint8_t { None, Uniform, Power, Tree, Rll, Rht, Host };
 
 struct RllView;  // lights/rll_view.h
 
+// A sampler with no device version (ltc, the tests' samplers): its calls as plain functions of the
+// sampler object, on the CPU only. LightSampler's default sampler_view() makes one of its class.
+struct HostSampler {
+  const void* self = nullptr;
+  void (*prepare)(const void* self, LightContext& ctx, float u) = nullptr;
+  SampledLight (*sample)(const void* self, const LightContext& ctx, double u) = nullptr;
+  float (*pmf)(const void* self, const LightContext& ctx, uint32_t light) = nullptr;
+  void (*record)(const void* self, const LightContext& ctx, const SampledLight& s,
+                 const NeeRecord& r) = nullptr;
+};
+
 struct SamplerView {
   SamplerKind kind = SamplerKind::None;
+  // Whether prepare_point and record_nee do anything: renderers skip them, and their numbers, if
+  // not (a frozen learner records nothing).
+  bool prepares = false, learns = false;
   uint32_t light_count = 0;  // Uniform
   DistributionView power;    // Power: over the lights by power
   LightTreeView tree;        // Tree
   // Rll: its views, in the memory of the device that runs the dispatch (the sampler's own on the
   // host), held by pointer so that this header need not know them.
   const RllView* rll = nullptr;
+  // Rht: draws several candidates a vertex (render/nee_draw.h); its tree is rht.tree.
+  RhtView rht;
+  const HostSampler* host = nullptr;  // Host
 };
 
 // A descent's choice as a sampler's answer (no cluster).

@@ -2,7 +2,8 @@
 
 #include "rll/core/error.h"
 #include "rll/core/params.h"
-#include "rll/render/rht_nee.h"
+#include "rll/lights/light_dispatch.h"
+#include "rll/render/nee_draw.h"
 
 namespace rll {
 
@@ -76,63 +77,50 @@ PathConstants make_path_constants(const Scene& scene, const SceneView& view,
   return c;
 }
 
+void check_nee_settings(const IntegratorSettings& settings, const SamplerView& view,
+                        const std::string& name) {
+  if (draws_several(view) && settings.nee_candidates != 1)
+    fail("--set nee.candidates={}: sampler '{}' resamples its own candidates (leave it at 1)",
+         settings.nee_candidates, name);
+}
+
 Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sampler,
                        IntegratorSettings settings)
     : m_scene(scene),
       m_accel(accel),
       m_sampler(sampler),
       m_settings(settings),
-      m_learns(sampler.learns()),
-      m_prepares(sampler.prepares()),
-      m_rht(sampler.rht_view()),
+      m_view(sampler.sampler_view()),
       m_data(scene),
       m_constants(make_path_constants(scene, m_data.view(), settings)) {
-  if (m_rht && settings.nee_candidates != 1)
-    fail("--set nee.candidates={}: sampler '{}' resamples its own candidates (leave it at 1)",
-         settings.nee_candidates, sampler.name());
+  check_nee_settings(settings, m_view, sampler.name());
 }
 
 Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
                              const Rgb& beta, SampleStream& stream, RayCounters& counters,
                              CameraVertexSample* camera) const {
-  if (m_rht) {
-    RhtNeeSamples samples;
-    rht_nee(m_constants, *m_rht, ctx, bsdf, wo, stream, depth, samples);
-    Rgb sum(0);
-    for (int i = 0; i < samples.count; ++i) {
-      const RhtNeeSample& s = samples.sample[i];
-      if (s.setup.counts_shadow_ray) ++counters.shadow;
-      const bool occluded = s.setup.traces && m_accel.occluded(s.setup.shadow);
-      if (reaches_light(s.setup, occluded)) ++counters.shadow_visible;
-      if (camera) {
-        camera->shadow += s.setup.counts_shadow_ray;
-        camera->visible += reaches_light(s.setup, occluded);
-      }
-      sum += rht_nee_finish(m_constants, s, occluded, bsdf, wo, beta);
+  Rgb sum(0);
+  float pmf_sum = 0;
+  int count = 0;
+  draw_nee(m_constants, m_view, ctx, bsdf, wo, stream, depth, [&](const NeeDraw& d) {
+    if (d.setup.counts_shadow_ray) ++counters.shadow;
+    const bool occluded = d.setup.traces && m_accel.occluded(d.setup.shadow);
+    if (reaches_light(d.setup, occluded)) ++counters.shadow_visible;
+    if (camera) {
+      camera->shadow += d.setup.counts_shadow_ray;
+      camera->visible += reaches_light(d.setup, occluded);
     }
-    if (camera && samples.count > 0) {  // `probability`: the mean of its samples' rht pmfs
-      float p = 0;
-      for (int i = 0; i < samples.count; ++i) p += samples.sample[i].light.pmf;
-      camera->sampled = true;
-      camera->light_pmf = p / float(samples.count);
-    }
-    return sum;
-  }
-  const NeeChoice ch = resample_nee(m_constants, ctx, bsdf, wo, stream, depth,
-                                    [&](double u) { return m_sampler.sample(ctx, u); });
-  if (!(ch.light.pmf > 0)) return Rgb(0);
-  if (ch.setup.counts_shadow_ray) ++counters.shadow;
-  const bool occluded = ch.setup.traces && m_accel.occluded(ch.setup.shadow);
-  if (reaches_light(ch.setup, occluded)) ++counters.shadow_visible;
-  if (camera) {
+    const NeeResult r = finish_nee_draw(m_constants, d, occluded, bsdf, wo, beta);
+    if (m_view.learns) record_nee(m_view, ctx, d.light, r.record);
+    sum += r.value;
+    pmf_sum += d.light.pmf;
+    ++count;
+  });
+  if (camera && count > 0) {  // `probability`: the mean of its samples' pmfs
     camera->sampled = true;
-    camera->light_pmf = ch.light.pmf;
-    camera->shadow += ch.setup.counts_shadow_ray;
-    camera->visible += reaches_light(ch.setup, occluded);
+    camera->light_pmf = pmf_sum / float(count);
   }
-  const NeeResult r = nee_finish_resampled(m_constants, ch, occluded, bsdf, wo, beta);
-  if (m_learns) m_sampler.record(ctx, ch.light, r.record);
-  return r.value;
+  return sum;
 }
 
 Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters,
@@ -149,7 +137,7 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     Vec3 wo = -ray.d;
     const HitEmission e = hit_emission(c, s, sh, wo, depth);
     add_emission(c, s, sh, e,
-                 e.needs_light_pmf ? m_sampler.pmf(s.prev_ctx, uint32_t(sh.light)) : 0.0f);
+                 e.needs_light_pmf ? light_pmf(m_view, s.prev_ctx, uint32_t(sh.light)) : 0.0f);
     if (depth >= c.max_depth) break;
 
     const BsdfNumbers u = bsdf_numbers(stream, depth);
@@ -157,8 +145,8 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     if (bsdf.is_black()) break;
     LightContext ctx = make_vertex_context(c, s, sh, hit, wo, bsdf);
     const bool light = samples_light(c, bsdf);
-    if (m_prepares && !bsdf.is_delta())
-      m_sampler.prepare(ctx, vertex_number(stream, depth, kPrepare));
+    if (m_view.prepares && !bsdf.is_delta())
+      prepare_point(m_view, ctx, vertex_number(stream, depth, kPrepare));
     CameraVertexSample* vertex = depth == 0 ? camera : nullptr;
     if (vertex) vertex->cell = ctx.cell;
     if (light) s.L += s.beta * sample_light(ctx, bsdf, wo, depth, s.beta, stream, counters, vertex);

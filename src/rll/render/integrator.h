@@ -25,7 +25,7 @@ struct IntegratorSettings {
   LightStrategy strategy = LightStrategy::Mis;
   int rr_depth = 3;        // Russian roulette from this bounce on
   int nee_candidates = 1;  // resampled next-event estimation's M (docs/nee.md)
-  // nee.target=learnt: its target carries the sampler's learnt factor (SampledLight::target)
+  // nee.target=learnt: its target carries the sampler's learnt factor (nee_target)
   bool nee_learnt_target = false;
   // coated.weights: CoatedDiffuse's MIS weight in eval() (scene/bsdf.h); pbrt only to match
   // pbrt-v4's images (docs/materials.md)
@@ -70,12 +70,15 @@ class Integrator {
   Rgb li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters,
          CameraVertexSample* camera = nullptr) const;
   const IntegratorSettings& settings() const { return m_settings; }
+  // The sampler's view again, after a change to it (its end of pass, lights_changed, load_state).
+  void sampler_changed() { m_view = m_sampler.sampler_view(); }
   const PathConstants& constants() const { return m_constants; }
 
  private:
   // The next-event estimate at a vertex: its contribution (MIS-weighted for `path`), already
-  // divided by the light pmf, before the path throughput. One sample (resampled from
-  // nee.candidates), or a multi-sample sampler's several (rht_view()), each with a shadow ray.
+  // divided by the light pmf, before the path throughput: the samples of draw_nee
+  // (render/nee_draw.h), one (resampled from nee.candidates) or a multi-sample sampler's several
+  // (rht), each with a shadow ray.
   Rgb sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
                    const Rgb& beta, SampleStream& stream, RayCounters& counters,
                    CameraVertexSample* camera) const;
@@ -84,11 +87,15 @@ class Integrator {
   const Accel& m_accel;
   LightSampler& m_sampler;
   IntegratorSettings m_settings;
-  bool m_learns, m_prepares;
-  const RhtView* m_rht;  // the sampler's, where it draws several samples per vertex
-  SceneData m_data;  // the hot data the functions below read, as flat views
+  SamplerView m_view;    // the sampler as the dispatch reads it (light_dispatch.h)
+  SceneData m_data;      // the hot data the functions below read, as flat views
   PathConstants m_constants;
 };
+
+// Throws rll::Error where the settings do not fit the sampler (nee.candidates above 1 with a
+// sampler that resamples its own candidates, rht); every renderer asks.
+void check_nee_settings(const IntegratorSettings& settings, const SamplerView& view,
+                        const std::string& name);
 
 // The integrator's settings and the scene's views as every path vertex reads them.
 PathConstants make_path_constants(const Scene& scene, const SceneView& view,

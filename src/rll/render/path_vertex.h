@@ -80,7 +80,7 @@ struct PathConstants {
   int max_depth = 5;  // 1 for `direct`
   int rr_depth = 3;
   int nee_candidates = 1;  // resampled next-event estimation (docs/nee.md): 1 = one light sample
-  bool nee_learnt_target = false;  // its target times the sampler's SampledLight::target
+  bool nee_learnt_target = false;  // its target times the sampler's factor (nee_target)
   CoatedWeights coated_weights = CoatedWeights::Unbiased;  // coated.weights (scene/bsdf.h)
 };
 
@@ -308,12 +308,13 @@ struct NeeChoice {
 // Draws the M = c.nee_candidates candidates with `sample(u)` (the light sampler's
 // sample(ctx, u)) and keeps one by streaming weighted reservoir sampling. With M = 1 the weight
 // is not evaluated (it cancels): one light sample, as before resampling. With
-// c.nee_learnt_target each weight is multiplied by the candidate's SampledLight::target (the
-// target p_hat times that factor; nee_finish_resampled's ratio uses the same weights).
-template <class SampleLight>
+// c.nee_learnt_target each weight is multiplied by `target(candidate)`, the sampler's learnt
+// factor of the candidate (nee_target, lights/light_dispatch.h: the target p_hat times that
+// factor; nee_finish_resampled's ratio uses the same weights).
+template <class SampleLight, class Target>
 RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext& ctx,
                                      const Bsdf& bsdf, const Vec3& wo, SampleStream& stream,
-                                     int depth, const SampleLight& sample) {
+                                     int depth, const SampleLight& sample, const Target& target) {
   NeeChoice ch;
   const bool mis = c.strategy == LightStrategy::Mis;
   for (int i = 0; i < c.nee_candidates; ++i) {
@@ -322,7 +323,7 @@ RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext&
     if (!(sl.pmf > 0)) continue;
     const NeeSetup n = nee_setup(c, ctx, bsdf, wo, sl.light, u.light.u_pos);
     const float w = c.nee_candidates == 1 ? (n.traces ? 1.0f : 0.0f)
-                    : c.nee_learnt_target ? resample_weight(n, bsdf, wo, sl.pmf, mis) * sl.target
+                    : c.nee_learnt_target ? resample_weight(n, bsdf, wo, sl.pmf, mis) * target(sl)
                                           : resample_weight(n, bsdf, wo, sl.pmf, mis);
     if (i == 0) {  // kept even at weight 0: a learning sampler records its zero
       ch.setup = n;
@@ -339,6 +340,17 @@ RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext&
   if (!(ch.weight > 0)) ch.setup.traces = false;
   return ch;
 }
+
+// One next-event sample of a vertex as every sampler's draw yields it (render/nee_draw.h): the
+// light sample before its shadow ray, the light with its pmf (the MIS weight's density), and the
+// factor its contribution is scaled by after the shadow ray: resampled NEE's unbiased
+// contribution weight's ratio (sum w / M) / w_kept, or rht's reservoirs' 1 / (P(first stage kept
+// it) P(second stage kept it)); 1 for a plain light sample.
+struct NeeDraw {
+  NeeSetup setup;
+  SampledLight light;
+  float scale = 1;
+};
 
 // The kept candidate after the shadow ray: nee_finish's value (its contribution over its source
 // pmf, MIS-weighted) times the unbiased contribution weight's ratio (sum w / M) / w_kept; the

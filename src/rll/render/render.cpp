@@ -119,7 +119,7 @@ RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_p
   return progress;
 }
 
-RenderProgress render(const Scene& scene, const Integrator& integrator, LightSampler& sampler,
+RenderProgress render(const Scene& scene, Integrator& integrator, LightSampler& sampler,
                       Film& film, const RenderSettings& settings, const std::atomic<bool>* cancel,
                       const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
   const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
@@ -162,8 +162,14 @@ RenderProgress render(const Scene& scene, const Integrator& integrator, LightSam
       pass_nonfinite += nonfinite;
     });
   };
+  integrator.sampler_changed();
   return run_passes(
-      scene, [&] { sampler.end_pass(); }, film, settings, cancel, after_pass, pass);
+      scene,
+      [&] {
+        sampler.end_pass();
+        integrator.sampler_changed();
+      },
+      film, settings, cancel, after_pass, pass);
 }
 
 }  // namespace rll

@@ -102,9 +102,10 @@ Ray camera_ray(const Scene& scene, int x, int y, SampleStream& stream);
 
 // Renders into `film` (which may already hold samples of this frame). `after_pass` is called
 // after every pass with the film, between passes, and may not touch the sampler; the time it
-// takes is excluded from the render's seconds and time budget.
+// takes is excluded from the render's seconds and time budget. `integrator` reads `sampler`
+// through its view, which it takes again at the start and after each end of pass.
 RenderProgress render(
-    const Scene& scene, const Integrator& integrator, LightSampler& sampler, Film& film,
+    const Scene& scene, Integrator& integrator, LightSampler& sampler, Film& film,
     const RenderSettings& settings, const std::atomic<bool>* cancel = nullptr,
     const std::function<void(const RenderProgress&, const Film&)>& after_pass = {});
 

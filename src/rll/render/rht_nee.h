@@ -1,7 +1,7 @@
 // Next-event estimation with several weighted samples per vertex, each with its own shadow ray:
 // the resampled hierarchical tree's two reservoir stages over the split descent's candidates
-// (lights/rht_view.h; docs/rht.md). RLL_HD, with fixed-size arrays and nothing allocated, for the
-// megakernel (Integrator::sample_light) and any renderer that traces several shadow rays a vertex.
+// (lights/rht_view.h; docs/rht.md). RLL_HD, with fixed-size arrays and nothing allocated: every
+// renderer runs it through draw_nee (render/nee_draw.h).
 #pragma once
 
 #include <bit>
@@ -11,19 +11,6 @@
 #include "rll/render/path_vertex.h"
 
 namespace rll {
-
-// One of the vertex's samples: the light sample before its shadow ray, the light with its
-// candidate probability (the MIS weight's density, rht_pmf), and the reservoirs' factor
-// 1 / (P(first stage kept it) P(second stage kept it)).
-struct RhtNeeSample {
-  NeeSetup setup;
-  SampledLight light;
-  float scale = 1;
-};
-struct RhtNeeSamples {
-  RhtNeeSample sample[kRhtMaxSamples];
-  int count = 0;
-};
 
 // The numbers of rht's draw beyond the vertex's own light numbers (which choose a directional
 // light or the descent's children, and the first light point): the split number and a key for
@@ -82,28 +69,32 @@ struct RhtReservoirs {
 inline constexpr float kR2x = 0.75487767f, kR2y = 0.56984029f;
 }  // namespace detail
 
-// Draws the vertex's samples into `out`: with probability rht_directional_probability a
+// Draws the vertex's samples, calling emit(const NeeDraw&) for each (at most v.samples): with
+// probability rht_directional_probability a
 // directional light (one sample), else the split descent's candidates, kept by the first stage's
 // reservoirs by tree importance over candidate probability, each survivor's light sample weighed
 // by its unshadowed contribution with the MIS weight against BSDF sampling folded in, and kept by
-// the second stage's reservoirs (v.samples of them).
+// the second stage's reservoirs (v.samples of them). The second stage keeps which survivor each
+// reservoir holds and makes its light sample again at the end (the same function of the same
+// numbers): a GPU thread's stack holds no light samples.
+template <class Emit>
 RLL_HD inline void rht_nee(const PathConstants& c, const RhtView& v, const LightContext& ctx,
                            const Bsdf& bsdf, const Vec3& wo, SampleStream& stream, int depth,
-                           RhtNeeSamples& out) {
-  out.count = 0;
+                           Emit&& emit) {
   const RhtNumbers u = rht_numbers(stream, depth);
   const float p_dir = rht_directional_probability(v);
   double u_light = u.light.u_light;
   if (u_light < p_dir) {
     const uint32_t i = std::min(v.dir_count - 1, uint32_t(u_light / p_dir * v.dir_count));
-    RhtNeeSample& s = out.sample[out.count++];
+    NeeDraw s;
     s.light.light = v.dir_begin + i;
     s.light.pmf = p_dir / float(v.dir_count);
     s.setup = nee_setup(c, ctx, bsdf, wo, s.light.light, u.light.u_pos);
+    emit(s);
     return;
   }
   if (!v.has_tree_lights) return;
-  u_light = std::min((u_light - p_dir) / (1 - p_dir), detail::kBelowOne);
+  u_light = std::min((u_light - p_dir) / (1 - p_dir), double(detail::kBelowOne));
 
   // First stage: the descent's candidates by tree importance over candidate probability.
   struct Kept {
@@ -129,7 +120,8 @@ RLL_HD inline void rht_nee(const PathConstants& c, const RhtView& v, const Light
   // strategy draws it + the BSDF's pdf), the balance heuristic's MIS weight folded in.
   const bool mis = c.strategy == LightStrategy::Mis;
   struct Second {
-    RhtNeeSample s;
+    Vec2 u;     // the kept survivor's light point numbers
+    int first;  // its first-stage reservoir
     float weight, sum;
   };
   Second second[kRhtMaxSamples];
@@ -153,28 +145,22 @@ RLL_HD inline void rht_nee(const PathConstants& c, const RhtView& v, const Light
     if (!(w > 0) || !(w < 3e38f)) continue;
     Second& s = second[f.slot()];
     if (f.keeps(w, s.sum)) {
-      s.s.setup = n;
-      s.s.light.light = k.light;
-      s.s.light.pmf = k.pdf;
-      s.s.scale = 1 / h_prob;
+      s.u = u_here;
+      s.first = i;
       s.weight = w;
     }
   }
   for (int i = 0; i < v.samples; ++i) {
     if (!(second[i].weight > 0)) continue;
-    RhtNeeSample& s = out.sample[out.count++];
-    s = second[i].s;
+    const Kept& k = first[second[i].first];
+    NeeDraw s;
+    s.setup = nee_setup(c, ctx, bsdf, wo, k.light, second[i].u);
+    s.light.light = k.light;
+    s.light.pmf = k.pdf;
+    s.scale = 1 / (k.weight / k.sum);
     s.scale /= second[i].weight / second[i].sum;
+    emit(s);
   }
-}
-
-// One sample's contribution after its shadow ray (before the path throughput): nee_finish's
-// value, f Le G V m_L / (candidate probability x pdf of the point), times the reservoirs' factor.
-RLL_HD inline Rgb rht_nee_finish(const PathConstants& c, const RhtNeeSample& s, bool occluded,
-                                 const Bsdf& bsdf, const Vec3& wo, const Rgb& beta) {
-  const NeeResult r = nee_finish(s.setup, occluded, bsdf, wo, beta, s.light.pmf,
-                                 c.strategy == LightStrategy::Mis);
-  return is_black(r.value) ? r.value : r.value * s.scale;
 }
 
 }  // namespace rll

@@ -27,37 +27,41 @@
 
 namespace rll {
 
-// The bytes of one path slot: its state (PathSlots) and its place in each queue. What the slot
+// The bytes of one path slot with `draws` next-event samples (nee_draws_per_vertex): its state
+// (PathSlots) and its place in each queue (`draws` places in the shadow rays'). What the slot
 // count is chosen from (wavefront_slot_count, wavefront/passes.h).
-inline size_t wavefront_slot_bytes() {
+inline size_t wavefront_slot_bytes(size_t draws = 1) {
   size_t bytes = 0;
   auto count = [&]<typename T>(size_t n) {
     bytes += n * sizeof(T);
     return View<T>{};
   };
-  PathSlots::make(count, 1);
-  return bytes + kWavefrontQueues * sizeof(uint32_t);
+  PathSlots::make(count, 1, draws);
+  return bytes + (kWavefrontQueues - 1 + draws) * sizeof(uint32_t);
 }
 
-template <typename Backend, typename Tracer, typename Sampler>
+template <typename Backend, typename Tracer>
 class WavefrontDriver {
  public:
-  using Kernels = WavefrontKernels<Tracer, Sampler>;
+  using Kernels = WavefrontKernels<Tracer>;
 
   // `k` holds the scene, camera, tables, tracer, sampler and film; the driver adds the path slots,
   // queues and tally, n_slots of each, taken from the backend once.
   WavefrontDriver(Backend& backend, const Kernels& k, size_t n_slots)
       : m_backend(backend), m_k(k), m_slots(n_slots) {
     auto take = [&]<typename T>(size_t n) { return m_backend.template take<T>(n); };
-    m_k.p = PathSlots::make(take, n_slots);
-    for (View<uint32_t>& q : m_k.queue_slots) q = m_backend.template take<uint32_t>(n_slots);
+    m_k.draws = uint32_t(nee_draws_per_vertex(m_k.sampler));
+    m_k.p = PathSlots::make(take, n_slots, m_k.draws);
+    for (uint32_t q = 0; q < kWavefrontQueues; ++q)
+      m_k.queue_slots[q] =
+          m_backend.template take<uint32_t>(q == kShadows ? n_slots * m_k.draws : n_slots);
     m_sizes = m_backend.template take<uint32_t>(2 * kWavefrontQueues).data;
     m_k.tally = m_backend.template take<WavefrontTally>(1).data;
   }
 
   size_t slots() const { return m_slots; }
   // A sampler's view after the end of a pass (its tables may have moved).
-  void set_sampler(const Sampler& s) { m_k.sampler = s; }
+  void set_sampler(const SamplerView& s) { m_k.sampler = s; }
   const Kernels& kernels() const { return m_k; }
 
   // Starts a pass: its counts from zero.
@@ -90,7 +94,7 @@ class WavefrontDriver {
       stage<WavefrontStage::Emission>(kHits, b.n);
       if (depth == max_depth) break;
       stage<WavefrontStage::NeeSample>(kNee, b.n);
-      stage<WavefrontStage::Shadow>(kShadows, b.n);
+      stage<WavefrontStage::Shadow>(kShadows, b.n * m_k.draws);
       stage<WavefrontStage::NeeFinish>(kNee, b.n);
       if (m_k.sampler.learns) stage<WavefrontStage::Rewards>(kNee, b.n);
       stage<WavefrontStage::BsdfSample>(kBounces, b.n);

@@ -14,6 +14,7 @@
 #include "rll/core/sobol.h"
 #include "rll/lights/light_dispatch.h"
 #include "rll/render/film.h"
+#include "rll/render/nee_draw.h"
 #include "rll/render/path_vertex.h"
 #include "rll/scene/camera.h"
 #include "rll/wavefront/stages.h"
@@ -43,7 +44,8 @@ enum WavefrontQueueId : uint32_t {
   kWavefrontQueues
 };
 
-// The state of the paths in flight, one element per slot in each array.
+// The state of the paths in flight, one element per slot in each array, but the next-event
+// samples': `draws` per slot (nee_draws_per_vertex), sample j of slot i at i * draws + j.
 struct PathSlots {
   View<SampleStream> stream;
   View<Ray> ray;
@@ -59,17 +61,18 @@ struct PathSlots {
   View<BsdfNumbers> numbers;
   View<Bsdf> bsdf;
   View<LightContext> ctx;
-  // Its next-event sample.
+  // Its next-event samples (draw_nee): how many, and each one's.
+  View<uint8_t> draws;
   View<SampledLight> light;
   View<NeeSetup> nee;
-  View<Vec2> resample;  // the reservoir's kept weight and weight sum (nee.candidates > 1)
+  View<float> scale;  // NeeDraw::scale
   View<uint8_t> occluded;
   View<NeeRecord> record;
 
   // Takes every array from `take(count, tag)`, a function of the memory that holds them (host or
-  // device) called as take.template operator()<T>(n).
+  // device) called as take.template operator()<T>(n); `draws` next-event samples per slot.
   template <typename Take>
-  static PathSlots make(Take& take, size_t n) {
+  static PathSlots make(Take& take, size_t n, size_t draws) {
     PathSlots p;
     p.stream = take.template operator()<SampleStream>(n);
     p.ray = take.template operator()<Ray>(n);
@@ -86,11 +89,12 @@ struct PathSlots {
     p.numbers = take.template operator()<BsdfNumbers>(n);
     p.bsdf = take.template operator()<Bsdf>(n);
     p.ctx = take.template operator()<LightContext>(n);
-    p.light = take.template operator()<SampledLight>(n);
-    p.nee = take.template operator()<NeeSetup>(n);
-    p.resample = take.template operator()<Vec2>(n);
-    p.occluded = take.template operator()<uint8_t>(n);
-    p.record = take.template operator()<NeeRecord>(n);
+    p.draws = take.template operator()<uint8_t>(n);
+    p.light = take.template operator()<SampledLight>(n * draws);
+    p.nee = take.template operator()<NeeSetup>(n * draws);
+    p.scale = take.template operator()<float>(n * draws);
+    p.occluded = take.template operator()<uint8_t>(n * draws);
+    p.record = take.template operator()<NeeRecord>(n * draws);
     return p;
   }
 
@@ -145,38 +149,23 @@ struct BvhTracer {
   RLL_HD bool shadow(const Ray& ray) const { return occluded(bvh, ray); }
 };
 
-// A light sampler with a device version, reached through the tag-dispatched functions of
-// lights/light_dispatch.h.
-struct ViewSampler {
-  SamplerView view;
-  bool prepares = false, learns = false;
-  RLL_HD void prepare(LightContext& ctx, float u) const { prepare_point(view, ctx, u); }
-  RLL_HD SampledLight sample(const LightContext& ctx, double u) const {
-    return sample_light(view, ctx, u);
-  }
-  RLL_HD float pmf(const LightContext& ctx, uint32_t light) const {
-    return light_pmf(view, ctx, light);
-  }
-  RLL_HD void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) const {
-    record_nee(view, ctx, s, r);
-  }
-};
-
 // Everything a stage reads, by value into every launch: the scene and integrator (PathConstants),
-// the camera, the Sobol' tables, a tracer, a light sampler, the path slots, the queues, the tally
-// and the film. Tracer and Sampler are the CPU's or the device's (BvhTracer, ViewSampler).
-template <typename Tracer, typename Sampler>
+// the camera, the Sobol' tables, a tracer, the light sampler's view (lights/light_dispatch.h, in
+// the memory of the device that runs the stages), the path slots, the queues, the tally and the
+// film. Tracer is the CPU's or the device's (AccelTracer, BvhTracer).
+template <typename Tracer>
 struct WavefrontKernels {
   PathConstants c;
   Camera camera;
   SobolView sobol;
   Tracer tracer;
-  Sampler sampler;
+  SamplerView sampler;
   PathSlots p;
-  View<uint32_t> queue_slots[kWavefrontQueues];
-  uint32_t* queue_sizes = nullptr;       // this bounce's block (kWavefrontQueues words)
-  uint32_t* next_queue_sizes = nullptr;  // the next bounce's
-  WavefrontTally* tally = nullptr;       // the pass's counts, summed over its batches
+  uint32_t draws = 1;  // next-event samples per slot (nee_draws_per_vertex)
+  View<uint32_t> queue_slots[kWavefrontQueues];  // kShadows holds sample indices
+  uint32_t* queue_sizes = nullptr;               // this bounce's block (kWavefrontQueues words)
+  uint32_t* next_queue_sizes = nullptr;          // the next bounce's
+  WavefrontTally* tally = nullptr;               // the pass's counts, summed over its batches
   FilmView film;
 
   RLL_HD WavefrontQueue queue(WavefrontQueueId q) const {
@@ -214,7 +203,7 @@ struct WavefrontKernels {
     const Vec3 wo = -p.ray[i].d;
     const HitEmission e = hit_emission(c, s, sh, wo, depth);
     add_emission(c, s, sh, e,
-                 e.needs_light_pmf ? sampler.pmf(s.prev_ctx, uint32_t(sh.light)) : 0.0f);
+                 e.needs_light_pmf ? light_pmf(sampler, s.prev_ctx, uint32_t(sh.light)) : 0.0f);
     if (depth >= c.max_depth) return p.store(i, s);
     SampleStream& stream = p.stream[i];
     const BsdfNumbers u = bsdf_numbers(stream, depth);
@@ -222,7 +211,7 @@ struct WavefrontKernels {
     if (bsdf->is_black()) return p.store(i, s);
     LightContext ctx = make_vertex_context(c, s, sh, p.hit[i], wo, *bsdf);
     if (sampler.prepares && !bsdf->is_delta())
-      sampler.prepare(ctx, vertex_number(stream, depth, kPrepare));
+      prepare_point(sampler, ctx, vertex_number(stream, depth, kPrepare));
     p.store(i, s);
     p.surface[i] = sh;
     p.numbers[i] = u;
@@ -231,44 +220,49 @@ struct WavefrontKernels {
     queue(kBounces).push(i);
   }
 
-  // Next-event estimation: the light, the point on it, the unoccluded contribution; with
-  // nee.candidates > 1 the candidate a weighted reservoir keeps of several (render/path_vertex.h).
+  // Next-event estimation: the vertex's samples (draw_nee: one, resampled with nee.candidates > 1,
+  // or a multi-sample sampler's several), each's light, point and unoccluded contribution; those
+  // that trace join the shadow queue.
   RLL_HD void nee_sample_stage(uint32_t i) const {
     const LightContext& ctx = p.ctx[i];
-    const NeeChoice ch = resample_nee(c, ctx, p.bsdf[i], -p.ray[i].d, p.stream[i], p.depth[i],
-                                      [&](double u) { return sampler.sample(ctx, u); });
-    p.light[i] = ch.light;
-    if (!(ch.light.pmf > 0)) return;
-    p.nee[i] = ch.setup;
-    p.resample[i] = Vec2{ch.weight, ch.weight_sum};  // clang 14 has no Vec2(a, b)
-    p.occluded[i] = 0;
-    if (ch.setup.counts_shadow_ray) atomic_add(&tally->shadow, uint64_t(1));
-    if (ch.setup.traces) queue(kShadows).push(i);
+    uint32_t n = 0;
+    draw_nee(c, sampler, ctx, p.bsdf[i], -p.ray[i].d, p.stream[i], p.depth[i],
+             [&](const NeeDraw& d) {
+               const uint32_t j = i * draws + n++;
+               p.light[j] = d.light;
+               p.nee[j] = d.setup;
+               p.scale[j] = d.scale;
+               p.occluded[j] = 0;
+               if (d.setup.counts_shadow_ray) atomic_add(&tally->shadow, uint64_t(1));
+               if (d.setup.traces) queue(kShadows).push(j);
+             });
+    p.draws[i] = uint8_t(n);
   }
 
-  RLL_HD void shadow_stage(uint32_t i) const { p.occluded[i] = tracer.shadow(p.nee[i].shadow); }
+  // Shadow ray of next-event sample j.
+  RLL_HD void shadow_stage(uint32_t j) const { p.occluded[j] = tracer.shadow(p.nee[j].shadow); }
 
-  // The next-event sample's contribution after the shadow ray's verdict.
+  // The next-event samples' contributions after their shadow rays' verdicts.
   RLL_HD void nee_finish_stage(uint32_t i) const {
     Rgb value(0);
-    if (p.light[i].pmf > 0) {
-      NeeChoice ch;
-      ch.setup = p.nee[i];
-      ch.light = p.light[i];
-      ch.weight = p.resample[i].x;
-      ch.weight_sum = p.resample[i].y;
-      const bool occluded = ch.setup.traces && p.occluded[i] != 0;
-      if (reaches_light(ch.setup, occluded)) atomic_add(&tally->shadow_visible, uint64_t(1));
-      const NeeResult r = nee_finish_resampled(c, ch, occluded, p.bsdf[i], -p.ray[i].d, p.beta[i]);
-      p.record[i] = r.record;
-      value = r.value;
+    for (uint32_t j = i * draws, end = j + p.draws[i]; j < end; ++j) {
+      NeeDraw d;
+      d.setup = p.nee[j];
+      d.light = p.light[j];
+      d.scale = p.scale[j];
+      const bool occluded = d.setup.traces && p.occluded[j] != 0;
+      if (reaches_light(d.setup, occluded)) atomic_add(&tally->shadow_visible, uint64_t(1));
+      const NeeResult r = finish_nee_draw(c, d, occluded, p.bsdf[i], -p.ray[i].d, p.beta[i]);
+      p.record[j] = r.record;
+      value += r.value;
     }
     p.L[i] += p.beta[i] * value;
   }
 
   // Rewards to a learning sampler.
   RLL_HD void rewards_stage(uint32_t i) const {
-    if (p.light[i].pmf > 0) sampler.record(p.ctx[i], p.light[i], p.record[i]);
+    for (uint32_t j = i * draws, end = j + p.draws[i]; j < end; ++j)
+      record_nee(sampler, p.ctx[i], p.light[j], p.record[j]);
   }
 
   // BSDF sampling, the throughput, Russian roulette: the next bounce's rays.

@@ -48,29 +48,29 @@ inline int largest_pass_spp(const RenderSettings& s) {
 
 // The path slots of a render: as many as its largest pass has paths, at most `max_slots` (the
 // device's: kMaxPathSlots on the GPU, kHostMaxPathSlots on the CPU), at most `path_slots` where
-// that is not 0, and as many as `budget_bytes` hold at wavefront_slot_bytes() each. Throws
+// that is not 0, and as many as `budget_bytes` hold at wavefront_slot_bytes(draws) each. Throws
 // rll::Error if not one slot fits.
 inline size_t wavefront_slot_count(uint32_t path_slots, const Film& film,
                                    const RenderSettings& settings, size_t budget_bytes,
-                                   size_t max_slots = kMaxPathSlots) {
+                                   size_t max_slots = kMaxPathSlots, size_t draws = 1) {
   const size_t pixels = size_t(film.width()) * film.height();
   size_t n = std::min(max_slots, pixels * size_t(largest_pass_spp(settings)));
   if (path_slots > 0) n = std::min<size_t>(n, path_slots);
-  const size_t fit = budget_bytes / wavefront_slot_bytes();
+  const size_t fit = budget_bytes / wavefront_slot_bytes(draws);
   if (fit < 1)
     fail("the wavefront renderer's path slots take {} each, more than the {} they may use",
-         format_bytes(double(wavefront_slot_bytes())), format_bytes(double(budget_bytes)));
+         format_bytes(double(wavefront_slot_bytes(draws))), format_bytes(double(budget_bytes)));
   return std::max<size_t>(1, std::min(n, fit));
 }
 
 // What every stage of a render reads, on either device: `scene_view`, `film`, `sobol`, `tracer` and
 // `sampler` in the memory of the device that runs the stages.
-template <typename Tracer, typename Sampler>
-WavefrontKernels<Tracer, Sampler> wavefront_kernels(const Scene& scene, const SceneView& scene_view,
-                                                    const IntegratorSettings& integrator,
-                                                    const FilmView& film, const SobolView& sobol,
-                                                    const Tracer& tracer, const Sampler& sampler) {
-  WavefrontKernels<Tracer, Sampler> k;
+template <typename Tracer>
+WavefrontKernels<Tracer> wavefront_kernels(const Scene& scene, const SceneView& scene_view,
+                                           const IntegratorSettings& integrator,
+                                           const FilmView& film, const SobolView& sobol,
+                                           const Tracer& tracer, const SamplerView& sampler) {
+  WavefrontKernels<Tracer> k;
   k.c = make_path_constants(scene, scene_view, integrator);
   k.camera = scene.camera;
   k.sobol = sobol;

@@ -13,7 +13,6 @@
 #include "rll/core/memory_budget.h"
 #include "rll/scene/scene_view.h"
 #include "rll/wavefront/driver.h"
-#include "rll/wavefront/light_sampler_adapter.h"
 #include "rll/wavefront/passes.h"
 #include "rll/wavefront/trace.h"
 
@@ -117,23 +116,26 @@ RenderProgress render_with(
     const std::function<void(const RenderProgress&, const Film&)>& after_pass,
     const WavefrontSettings& wavefront) {
   const SceneData data(scene);
+  const SamplerView view = light_sampler.sampler_view();
+  check_nee_settings(integrator, view, light_sampler.name());
   const auto k = wavefront_kernels(scene, data.view(), integrator, film.view(), host_sobol_view(),
-                                   tracer, HostLightSampler::of(light_sampler));
+                                   tracer, view);
+  const size_t draws = size_t(nee_draws_per_vertex(view));
   HostBackend backend(wavefront.times, wavefront.memory);
   // A quarter of the memory budget for the path slots (the scene, its accel and the sampler's
   // tables take the rest).
   const size_t budget = memory_budget_bytes() / 4;
   const size_t slots =
-      wavefront_slot_count(wavefront.path_slots, film, settings, budget, kHostMaxPathSlots);
-  WavefrontDriver<HostBackend, Tracer, HostLightSampler> driver(backend, k, slots);
+      wavefront_slot_count(wavefront.path_slots, film, settings, budget, kHostMaxPathSlots, draws);
+  WavefrontDriver<HostBackend, Tracer> driver(backend, k, slots);
   if (wavefront.work) {
     wavefront.work->path_slots = slots;
-    wavefront.work->slot_bytes = slots * wavefront_slot_bytes();
+    wavefront.work->slot_bytes = slots * wavefront_slot_bytes(draws);
     wavefront.work->budget_bytes = budget;
   }
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] { light_sampler.end_pass(); });
-    driver.set_sampler(HostLightSampler::of(light_sampler));
+    driver.set_sampler(light_sampler.sampler_view());
   };
   return run_wavefront_passes(
       scene, driver, end_pass, {}, film, settings, cancel, after_pass,
@@ -166,13 +168,6 @@ RenderProgress render_wavefront(
     const std::atomic<bool>* cancel,
     const std::function<void(const RenderProgress&, const Film&)>& after_pass,
     const WavefrontSettings& wavefront) {
-  // Its next-event stages trace one shadow ray a vertex (docs/rht.md).
-  if (sampler.rht_view())
-    fail(
-        "sampler '{}' draws several light samples per vertex, with a shadow ray each: the "
-        "wavefront renderer traces one; render it with the megakernel (no --wavefront, --device "
-        "cpu)",
-        sampler.name());
   const auto t_start = std::chrono::steady_clock::now();
   RenderProgress progress;
   if (wavefront.tracer == WavefrontTracer::Bvh) {

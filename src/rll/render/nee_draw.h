@@ -1,0 +1,62 @@
+// The one next-event contract every renderer runs for every sampler (DESIGN 6): draw_nee yields a
+// vertex's light samples, each with its own shadow ray, and finish_nee_draw weighs each after its
+// ray. A one-sample sampler yields at most one (resampled from nee.candidates, resample_nee); a
+// sampler that draws several candidates a vertex and keeps several (rht: rht_nee, docs/rht.md)
+// yields up to nee_draws_per_vertex. The megakernel traces each sample's ray as it comes; the
+// wavefront keeps nee_draws_per_vertex sample slots per path slot and traces them in its shadow
+// stage.
+#pragma once
+
+#include "rll/lights/light_dispatch.h"
+#include "rll/render/path_vertex.h"
+#include "rll/render/rht_nee.h"
+
+namespace rll {
+
+// The most samples (shadow rays) a vertex draws with sampler s.
+RLL_HD inline int nee_draws_per_vertex(const SamplerView& s) {
+  return s.kind == SamplerKind::Rht ? s.rht.samples : 1;
+}
+
+// Whether the sampler draws its own several candidates (then nee.candidates must stay 1).
+RLL_HD inline bool draws_several(const SamplerView& s) {
+  return s.kind == SamplerKind::Rht;
+}
+
+// Draws the vertex's next-event samples with sampler s, calling emit(const NeeDraw&) for each
+// that has a light (pmf > 0), at most nee_draws_per_vertex(s).
+template <class Emit>
+RLL_HD inline void draw_nee(const PathConstants& c, const SamplerView& s, const LightContext& ctx,
+                            const Bsdf& bsdf, const Vec3& wo, SampleStream& stream, int depth,
+                            Emit&& emit) {
+#if !RLL_DEVICE_CODE
+  // rht's draw holds its reservoirs on the thread's stack: 1968 bytes and 136 registers in the
+  // GPU's next-event stage (sm_90), over its budgets (tests/unit/kernel_budgets.h), so the
+  // device build leaves it out and --device cuda refuses rht (require_device_version) until the
+  // reservoirs live in the path slots' memory.
+  if (s.kind == SamplerKind::Rht) return rht_nee(c, s.rht, ctx, bsdf, wo, stream, depth, emit);
+#endif
+  const NeeChoice ch = resample_nee(
+      c, ctx, bsdf, wo, stream, depth, [&](double u) { return sample_light(s, ctx, u); },
+      [&](const SampledLight& l) { return nee_target(s, l); });
+  if (!(ch.light.pmf > 0)) return;
+  NeeDraw d;
+  d.setup = ch.setup;
+  d.light = ch.light;
+  // nee_finish_resampled's ratio (sum w / M) / w_kept, where a candidate was kept.
+  if (ch.weight > 0) d.scale = (ch.weight_sum / float(c.nee_candidates)) / ch.weight;
+  emit(d);
+}
+
+// One sample's contribution after its shadow ray (before the path throughput): nee_finish's
+// value, f Le G V m_L / (pmf x pdf of the point), times the draw's scale; the record is the
+// sample's with its pmf, for a learning sampler (record_nee).
+RLL_HD inline NeeResult finish_nee_draw(const PathConstants& c, const NeeDraw& d, bool occluded,
+                                        const Bsdf& bsdf, const Vec3& wo, const Rgb& beta) {
+  NeeResult r =
+      nee_finish(d.setup, occluded, bsdf, wo, beta, d.light.pmf, c.strategy == LightStrategy::Mis);
+  if (!is_black(r.value)) r.value *= d.scale;
+  return r;
+}
+
+}  // namespace rll
