@@ -355,14 +355,8 @@ RenderProgress GpuRenderer::render(
   CudaWavefrontBackend& backend = m.backend;
   backend.begin(wavefront.times);
   const size_t budget = device_slot_budget();
-  const size_t slots =
-      wavefront_slot_count(wavefront.path_slots, film, settings, budget, kMaxPathSlots, draws);
+  const size_t slots = render_path_slots(wavefront, film, settings, budget, kMaxPathSlots, draws);
   WavefrontDriver<CudaWavefrontBackend, BvhTracer> driver(backend, k, slots);
-  if (wavefront.work) {
-    wavefront.work->path_slots = slots;
-    wavefront.work->slot_bytes = slots * wavefront_slot_bytes(draws);
-    wavefront.work->budget_bytes = budget;
-  }
   m.render_bytes = 0;
   auto note_bytes = [&] {
     m.render_bytes = std::max(m.render_bytes, backend.bytes() + device_sampler.bytes() +

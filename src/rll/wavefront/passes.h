@@ -18,6 +18,7 @@
 #include "rll/scene/scene.h"
 #include "rll/wavefront/driver.h"
 #include "rll/wavefront/kernels.h"
+#include "rll/wavefront/wavefront.h"
 
 namespace rll {
 
@@ -61,6 +62,21 @@ inline size_t wavefront_slot_count(uint32_t path_slots, const Film& film,
     fail("the wavefront renderer's path slots take {} each, more than the {} they may use",
          format_bytes(double(wavefront_slot_bytes(draws))), format_bytes(double(budget_bytes)));
   return std::max<size_t>(1, std::min(n, fit));
+}
+
+// wavefront_slot_count for a render with `wavefront`'s settings, recorded in its work record
+// (--stats' path_slots) where the caller keeps one.
+inline size_t render_path_slots(const WavefrontSettings& wavefront, const Film& film,
+                                const RenderSettings& settings, size_t budget_bytes,
+                                size_t max_slots, size_t draws) {
+  const size_t slots =
+      wavefront_slot_count(wavefront.path_slots, film, settings, budget_bytes, max_slots, draws);
+  if (wavefront.work) {
+    wavefront.work->path_slots = slots;
+    wavefront.work->slot_bytes = slots * wavefront_slot_bytes(draws);
+    wavefront.work->budget_bytes = budget_bytes;
+  }
+  return slots;
 }
 
 // What every stage of a render reads, on either device: `scene_view`, `film`, `sobol`, `tracer` and

@@ -126,13 +126,8 @@ RenderProgress render_with(
   // tables take the rest).
   const size_t budget = memory_budget_bytes() / 4;
   const size_t slots =
-      wavefront_slot_count(wavefront.path_slots, film, settings, budget, kHostMaxPathSlots, draws);
+      render_path_slots(wavefront, film, settings, budget, kHostMaxPathSlots, draws);
   WavefrontDriver<HostBackend, Tracer> driver(backend, k, slots);
-  if (wavefront.work) {
-    wavefront.work->path_slots = slots;
-    wavefront.work->slot_bytes = slots * wavefront_slot_bytes(draws);
-    wavefront.work->budget_bytes = budget;
-  }
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] { light_sampler.end_pass(); });
     driver.set_sampler(light_sampler.sampler_view());
