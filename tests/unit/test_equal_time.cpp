@@ -39,9 +39,11 @@ RunResult timed_run(const std::string& sampler, int repeat, double seconds, doub
 }  // namespace
 
 TEST(EqualTime, CompareReportsSecondsAgainstTheBudgetAndTheSamplesTaken) {
-  const auto s =
-      summarize({"a", "b"}, {timed_run("a", 0, 10.1, 10, 37.5), timed_run("b", 0, 10.5, 10, 20.25),
-                             timed_run("a", 1, 9.9, 10, 36.0), timed_run("b", 1, 9.6, 10, 19.0)});
+  // (The summaries point into the runs: they are kept.)
+  const std::vector<RunResult> runs = {
+      timed_run("a", 0, 10.1, 10, 37.5), timed_run("b", 0, 10.5, 10, 20.25),
+      timed_run("a", 1, 9.9, 10, 36.0), timed_run("b", 1, 9.6, 10, 19.0)};
+  const auto s = summarize({"a", "b"}, runs);
   EXPECT_DOUBLE_EQ(s[0].budget_ratio.median, 1.0);
   EXPECT_DOUBLE_EQ(s[1].budget_ratio.max, 1.05);
   EXPECT_DOUBLE_EQ(s[0].mean_spp.median, 36.75);
@@ -61,7 +63,8 @@ TEST(EqualTime, CompareReportsSecondsAgainstTheBudgetAndTheSamplesTaken) {
   EXPECT_NE(w[1].find("b (repeat 2) took 9.600 s of a 10 s budget (-4.0%"), std::string::npos)
       << w[1];
   // Without a budget (equal spp) nothing is said, and no ratio is kept.
-  const auto spp = summarize({"a"}, {timed_run("a", 0, 3, 0, 16)});
+  const std::vector<RunResult> spp_runs = {timed_run("a", 0, 3, 0, 16)};
+  const auto spp = summarize({"a"}, spp_runs);
   EXPECT_TRUE(budget_warnings(spp).empty());
   EXPECT_TRUE(spp[0].budget_ratio.values.empty());
   EXPECT_TRUE(sampler_summary_json(spp[0])["seconds_per_budget"].is_null());
