@@ -137,6 +137,18 @@ void expect_clean_failure(const std::vector<std::string>& args,
   for (const auto& m : mentions) EXPECT_NE(r.output.find(m), std::string::npos) << "missing: " << m;
 }
 
+std::string render_refused(const TempDir& dir, const std::filesystem::path& scene,
+                           std::initializer_list<std::string> mentions, const std::string& output) {
+  const std::filesystem::path out = dir / output;
+  auto r = run_rll({"render", scene.string(), "-o", out.string(), "--quiet", "--spp", "1"});
+  EXPECT_GE(r.exit_code, 1) << r.output;
+  EXPECT_LT(r.exit_code, 128) << r.output;  // 128 + signal: a crash
+  for (const auto& m : mentions)
+    EXPECT_NE(r.output.find(m), std::string::npos) << "'" << m << "' not in: " << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  return r.output;
+}
+
 double image_mean(const Image& image) {
   double s = 0;
   for (const auto& p : image.pixels()) s += double(p.x) + p.y + p.z;

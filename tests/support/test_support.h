@@ -14,8 +14,8 @@
 #include "rll/core/image.h"
 #include "rll/core/memory_budget.h"
 #include "rll/core/rng.h"
-#include "rll/render/integrator.h"
 #include "rll/lighttree/light_tree.h"
+#include "rll/render/integrator.h"
 #include "rll/scene/scene.h"
 
 namespace rll::test {
@@ -78,6 +78,12 @@ std::string read_text(const std::filesystem::path& p);
 // every one of `mentions` in the output.
 void expect_clean_failure(const std::vector<std::string>& args,
                           std::initializer_list<std::string> mentions);
+// Runs `rll render <scene> -o <dir>/<output> --quiet --spp 1` and checks a clean failure (an
+// exit code in [1, 127]) naming every one of `mentions`, with no image written; returns the
+// output for further checks.
+std::string render_refused(const TempDir& dir, const std::filesystem::path& scene,
+                           std::initializer_list<std::string> mentions,
+                           const std::string& output = "out.png");
 
 struct RenderRequest {
   std::string sampler = "power";

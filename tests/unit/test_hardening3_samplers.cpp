@@ -212,7 +212,8 @@ TEST(Hardening3Samplers, LtcTablesBeyondTheBudgetAreRefusedBeforeAllocating) {
   {
     rll::test::BudgetScope budget(size_t(1) << 30);
     const std::string msg = error_of([&] {
-      make_light_sampler("ltc", s, tree, Params::parse({"ltc.clusters=131072", "ltc.bins=32"}), nullptr);
+      make_light_sampler("ltc", s, tree, Params::parse({"ltc.clusters=131072", "ltc.bins=32"}),
+                         nullptr);
     });
     expect_mentions(msg, {"ltc.bins=32", "spatial clusters", "more than", "lower ltc.capacity"});
   }
@@ -225,6 +226,16 @@ TEST(Hardening3Samplers, LtcTablesBeyondTheBudgetAreRefusedBeforeAllocating) {
 }
 
 namespace {
+
+// The camera of the wall scenes below, 5 in front of the wall, looking at it; finalizes the scene.
+void look_at_wall(Scene& s) {
+  s.camera.position = Vec3(0, 0, 5);
+  s.camera.target = Vec3(0, 0, 0);
+  s.camera.up = Vec3(0, 1, 0);
+  s.camera.fov = 45;
+  s.has_camera = true;
+  s.finalize();
+}
 
 // A wall lit by an ordinary area light, and a 1 x 1 area light of radiance `huge` (3e38: a power
 // of 4.7e38 per triangle, beyond a float) at its right, facing away from it (+x): it lights
@@ -245,12 +256,7 @@ Scene huge_light_scene(float huge, bool facing_wall = false) {
     b.quad(Vec3(0.5f, -0.5f, 0.5f), Vec3(0, 1, 0), Vec3(1, 0, 0), big);
   else  // at x = 2.5, facing +x: the wall is behind it
     b.quad(Vec3(2.5f, -0.5f, -0.5f), Vec3(0, 1, 0), Vec3(0, 0, 1), big);
-  s.camera.position = Vec3(0, 0, 5);
-  s.camera.target = Vec3(0, 0, 0);
-  s.camera.up = Vec3(0, 1, 0);
-  s.camera.fov = 45;
-  s.has_camera = true;
-  s.finalize();
+  look_at_wall(s);
   return s;
 }
 
@@ -312,12 +318,7 @@ Scene four_huge_lights_scene() {
   const uint32_t big = b.emitter(Rgb(1e38f), false, "sun");
   for (int k = 0; k < 4; ++k)  // each 0.2 x 1.5: a power of 4.7e37 per triangle
     b.quad(Vec3(0.5f + 0.3f * float(k), -0.75f, 0.5f), Vec3(0, 1.5f, 0), Vec3(0.2f, 0, 0), big);
-  s.camera.position = Vec3(0, 0, 5);
-  s.camera.target = Vec3(0, 0, 0);
-  s.camera.up = Vec3(0, 1, 0);
-  s.camera.fov = 45;
-  s.has_camera = true;
-  s.finalize();
+  look_at_wall(s);
   return s;
 }
 }  // namespace
