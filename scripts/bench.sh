@@ -10,7 +10,10 @@
 # cores; BENCH_QUICK=1 checks the pipeline in a few minutes (its figures mean nothing);
 # BENCH_V1=0 skips the first version; BENCH_RES, BENCH_SECONDS, BENCH_REF_DIRECT, BENCH_REF_PATH and
 # BENCH_REF_SAMPLER (default rll) override the resolution, the budget and the references;
-# BENCH_SAMPLERS the equal-time comparisons' samplers.
+# BENCH_SAMPLERS the equal-time comparisons' samplers; BENCH_SCENES limits the equal-time,
+# resampling and equal-spp comparisons to some of the paper's scenes and BENCH_NEW_SCENES the new
+# scenes' (default: all; a scene left out keeps its previous figures only where its part did not
+# run, so a partial run says so in RESULTS.md's settings line).
 set -euo pipefail
 build=${1:-build}
 rll="$build/rll"
@@ -29,7 +32,12 @@ parts=${BENCH_PARTS:-"equal-time ris long new-scenes equal-spp ablation seed-to-
 want() { [[ " $parts " == *" $1 "* ]]; }
 ref_direct=${BENCH_REF_DIRECT:-$ref_direct}; ref_path=${BENCH_REF_PATH:-$ref_path}
 res=${BENCH_RES:-$res}; seconds=${BENCH_SECONDS:-$seconds}; ref_sampler=${BENCH_REF_SAMPLER:-rll}
-samplers=${BENCH_SAMPLERS:-power,tree,fermat,ltc,rht,rll,oracle}
+# rht twice: rll's tuned setting (docs/rht.md) and the study's own (gamma 0.025, 16 first-stage
+# reservoirs, 1 shadow ray, as the study's README states); the report takes the better as the peer.
+rht_study=rht:gamma=0.025:reservoirs=16:samples=1
+samplers=${BENCH_SAMPLERS:-power,tree,fermat,ltc,rht,$rht_study,rll,oracle}
+paper_scenes=${BENCH_SCENES:-"cornell-boxes-room arch-interior many-lights-open cornell-boxes-dynamic"}
+new_scenes=${BENCH_NEW_SCENES:-"spot-hall screen-hall"}
 V1_COMMIT=a3cbdd4
 v1="build-v1/rll"
 if [ "${BENCH_V1:-1}" = 1 ] && [ ! -x "$v1" ]; then
@@ -75,7 +83,7 @@ run_v1() {  # name of a finished comparison, then compare arguments: v1's tree o
     --reference "$out/$name/reference.exr" --out "$out/$name-v1" > "$out/$name-v1.txt" 2>&1 ||
     { cat "$out/$name-v1.txt"; exit 1; }
 }
-for scene in cornell-boxes-room arch-interior many-lights-open cornell-boxes-dynamic; do
+for scene in $paper_scenes; do
   f=1; [ $scene = cornell-boxes-dynamic ] && f=$frames
   if want equal-time; then
   run "$scene-direct" builtin:$scene --integrator direct --samplers $samplers --time $seconds --frames $f --reference-spp $ref_direct
@@ -88,7 +96,7 @@ for scene in cornell-boxes-room arch-interior many-lights-open cornell-boxes-dyn
   # candidates, beside rht, in one interleaved compare on the same cached reference.
   # BENCH_RIS_SCENES limits it to some scenes (default: all four).
   if want ris && [[ " ${BENCH_RIS_SCENES:-$scene} " == *" $scene "* ]]; then
-  ris=tree,tree:nee.candidates=4,rll,rll:nee.candidates=4,rll:nee.candidates=4:nee.target=learnt,rll:nee.candidates=2:nee.target=learnt,rht
+  ris=tree,tree:nee.candidates=4,rll,rll:nee.candidates=4,rll:nee.candidates=4:nee.target=learnt,rll:nee.candidates=2:nee.target=learnt,rht,$rht_study
   run "$scene-direct-ris" builtin:$scene --integrator direct --samplers $ris --time $seconds --frames $f --reference-spp $ref_direct
   run "$scene-path-ris" builtin:$scene --integrator path --samplers $ris --time $seconds --frames $f --reference-spp $ref_path
   fi
@@ -99,12 +107,12 @@ done
 # Long renders: the study's winner (rht) against tree and rll over $long_seconds s per sampler, one
 # run each, path, on the two scenes where visibility matters most (the same cached references).
 want long && for scene in cornell-boxes-room arch-interior; do
-  RUN_REPEATS=1 run "long-$scene-path" builtin:$scene --integrator path --samplers tree,rht,rll --time $long_seconds --reference-spp $ref_path
+  RUN_REPEATS=1 run "long-$scene-path" builtin:$scene --integrator path --samplers tree,rht,$rht_study,rll --time $long_seconds --reference-spp $ref_path
 done
 # The scenes of issue 32: 102,400 spot lights in occluded rooms (spot-hall) and large textured
 # emitters beside small lamps (screen-hall), equal time, path.
-want new-scenes && for scene in spot-hall screen-hall; do
-  run "$scene-path" builtin:$scene --integrator path --samplers power,tree,ltc,rht,rll --time $seconds --reference-spp $ref_path
+want new-scenes && for scene in $new_scenes; do
+  run "$scene-path" builtin:$scene --integrator path --samplers power,tree,ltc,rht,$rht_study,rll --time $seconds --reference-spp $ref_path
 done
 # Ablation: from the published RLL (`fermat`, docs/fermat.md) to rll's defaults, each row
 # adding one of rll's changes to the row above; the last row differs from rll's defaults only
@@ -143,5 +151,5 @@ if want samplers; then
     --benchmark_report_aggregates_only=true --benchmark_format=json > "$out/samplers.json"
 fi
 python3 scripts/bench_report.py "$out" bench/RESULTS.md \
-  "res=$res seconds=$seconds repeats=$repeats references=${ref_direct}/${ref_path} spp (direct/path) parts=$parts"
+  "res=$res seconds=$seconds repeats=$repeats references=${ref_direct}/${ref_path} spp (direct/path) scenes=${paper_scenes// /,}+${new_scenes// /,} parts=$parts"
 echo "bench: wrote bench/RESULTS.md"
