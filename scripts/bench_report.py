@@ -147,6 +147,21 @@ def keep_previous(title):
     if not body.startswith("*Not re-measured"):
         body = note + "\n\n" + body
     P(body + "\n")
+def keep_previous_subsections(title, shown):
+    """The subsections (### scene, integrator) of a section that this run did not measure (a scene
+    left out by BENCH_SCENES or BENCH_NEW_SCENES) keep their previous figures, marked as such."""
+    for part in re.split(r"(?m)^### ", previous.get(title, ""))[1:]:
+        sub, _, body = part.partition("\n")
+        if sub.strip() in shown or sub.strip().endswith("(quiet machine)"):
+            continue
+        body = body.strip()
+        note = f"*Not re-measured in this run (`BENCH_SCENES`): the figures below are from the previous run{previous_run}.*"
+        if not body.startswith("*Not re-measured"):
+            body = note + "\n\n" + body
+        P(f"### {sub.strip()}\n")
+        P(body + "\n")
+
+
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
 cpu = "unknown CPU"
 try:
@@ -193,6 +208,10 @@ for scene, integ, s in comparisons():
     goal_rows.append((scene, integ, s, b, r))
 P("")
 
+missing = [sc for sc in scenes if sc not in {row[0] for row in goal_rows}]
+if goal_rows and missing:
+    P(f"*Not re-measured in this run (`BENCH_SCENES`): {', '.join(missing)}; their previous figures are kept "
+      "under Equal time, marked.*\n")
 P("## Goals\n")
 P("| goal | measured | |")
 P("|---|---|---|")
@@ -265,6 +284,16 @@ for scene, integ, s, b, r in goal_rows:
     goal(f"{scene}, {integ}, {s['budget'].get('time', '?'):g} s: best rll ({label}) relMSE and trimmed "
          f"<= {RHT_GOAL[scene]:.2g}x rht's", " / ".join(f"{x:.2f}x" for x in ratios),
          max(ratios) <= RHT_GOAL[scene])
+# Issue 45's goal on the new scenes: rll at most 0.5x the better rht.
+for scene in ("spot-hall", "screen-hall"):
+    s = load(f"{scene}-path")
+    b = by_name(s) if s else {}
+    if "rll" in b and "rht" in b:
+        rr = [med(b["rll"], "relmse") / med(b["rht"], "relmse")]
+        if trimmed(b["rll"]) and trimmed(b["rht"]):
+            rr.append(trimmed(b["rll"]) / trimmed(b["rht"]))
+        goal(f"{scene}, path, {s['budget']['time']:g} s: rll relMSE and trimmed <= 0.5x the better rht's",
+             " / ".join(f"{x:.2f}x" for x in rr), max(rr) <= 0.5)
 for scene in ("cornell-boxes-room", "arch-interior"):
     s = load(f"long-{scene}-path", any_time=True)
     if not s:
@@ -306,21 +335,24 @@ P("")
 
 # --- Seed to seed ------------------------------------------------------------------------------
 P("## Per-sample noise of tree (seed to seed)\n")
-P("The relMSE of a render against another seed's render of the same settings (1024 spp, 160x120, "
-  "direct lighting, `tree`), as pbrt-v4's BVH light sampler was measured in `shared/PEERS.md` "
-  "(pbrt-v4: path integrator with max depth 1, its default Owen-scrambled Sobol' sampler). "
-  "`scripts/seed_to_seed.sh`; seconds are one render's on 2 threads.\n")
-P("| scene | pbrt-v4 | rll v1 (its binary) | light sampling only, independent | MIS, independent | MIS, Sobol' (default) | default: trimmed relMSE | seconds (v1 / default) |")
-P("|---|---|---|---|---|---|---|---|")
-for scene, target in PBRT_SEED_TO_SEED.items():
-    c = {k: seed_to_seed(scene, k) for k in ("v1", "nee", "independent", "default")}
-    if not c["default"]:
-        continue
-    g = lambda k: fmt(c[k]["relmse"]) if c[k] else "—"
-    secs = f"{c['v1']['seconds']:.1f} / " if c["v1"] else ""
-    P(f"| {scene} | {target} | {g('v1')} | {g('nee')} | {g('independent')} | **{g('default')}** | "
-      f"{fmt(c['default']['trimmed'])} | {secs}{c['default']['seconds']:.1f} |")
-P("")
+if not any(seed_to_seed(scene, "default") for scene in PBRT_SEED_TO_SEED):
+    keep_previous("Per-sample noise of tree (seed to seed)")
+else:
+    P("The relMSE of a render against another seed's render of the same settings (1024 spp, 160x120, "
+      "direct lighting, `tree`), as pbrt-v4's BVH light sampler was measured in `shared/PEERS.md` "
+      "(pbrt-v4: path integrator with max depth 1, its default Owen-scrambled Sobol' sampler). "
+      "`scripts/seed_to_seed.sh`; seconds are one render's on 2 threads.\n")
+    P("| scene | pbrt-v4 | rll v1 (its binary) | light sampling only, independent | MIS, independent | MIS, Sobol' (default) | default: trimmed relMSE | seconds (v1 / default) |")
+    P("|---|---|---|---|---|---|---|---|")
+    for scene, target in PBRT_SEED_TO_SEED.items():
+        c = {k: seed_to_seed(scene, k) for k in ("v1", "nee", "independent", "default")}
+        if not c["default"]:
+            continue
+        g = lambda k: fmt(c[k]["relmse"]) if c[k] else "—"
+        secs = f"{c['v1']['seconds']:.1f} / " if c["v1"] else ""
+        P(f"| {scene} | {target} | {g('v1')} | {g('nee')} | {g('independent')} | **{g('default')}** | "
+          f"{fmt(c['default']['trimmed'])} | {secs}{c['default']['seconds']:.1f} |")
+    P("")
 
 # --- Full tables -------------------------------------------------------------------------------
 P("## Equal time\n")
@@ -344,6 +376,8 @@ for scene, integ, s, b, r in goal_rows:
           f"{fmt(rel['max'])}] | {fmt(trimmed(x))} | {ratio('power')} | {ratio('tree')} | {ratio('ltc')} | {ratio('rht')} | "
           f"{ratio('oracle')} | {fmt(visible(x))} | {x['memory']['peak_rss_bytes'] / 2**20:.0f} MiB |")
     P("")
+
+keep_previous_subsections("Equal time", {f"{sc}, {ig}" for sc, ig, _, _, _ in goal_rows})
 
 P("## Resampled next-event estimation at equal time\n")
 ris_rows = list(comparisons("-ris"))
@@ -417,7 +451,7 @@ else:
         P("|---|---|---|---|---|---|---|")
         shown = row_order(b)
         shown += [x["name"] for x in s["samplers"]
-                  if x["name"] not in shown and not (x["name"] == RHT_STUDY and "rht (study)" in b)]
+                  if x["name"] not in shown and not (x["name"] in ("rht", RHT_STUDY) and "rht (study)" in b)]
         for name in shown:
             x = b[name]
             rel = x["relmse"]
@@ -427,6 +461,8 @@ else:
         P("")
         if os.path.exists(os.path.join("docs", "images", f"compare-{scene}.png")):
             P(f"![{scene}: every sampler's first repeat and the reference](../docs/images/compare-{scene}.png)\n")
+
+keep_previous_subsections("The new scenes at equal time", {f"{sc}, {ig}" for sc, ig, _ in new_rows})
 
 P("## Equal samples per pixel\n")
 spp_rows = list(comparisons("-spp"))
@@ -529,7 +565,8 @@ elif os.path.exists(p):
 
 P("## How these figures were made\n")
 P("`make bench` runs `scripts/bench.sh`: for each scene and integrator one `rll compare` at equal time "
-  "(`--samplers power,tree,rll,oracle --repeats 3`, runs interleaved, starting sampler rotated), then the "
+  f"(`--samplers power,tree,fermat,ltc,rht,{RHT_STUDY},rll,oracle --repeats 3`, runs interleaved, starting "
+  "sampler rotated, each run ending at the budget: the last pass sized from the measured rate), then the "
   "first version's binary (`build-v1/rll`, built from commit a3cbdd4) on the same reference and budget "
   "with `--samplers tree` (a separate process, run right after, so its timing shares the machine's state "
   "less closely than the interleaved runs do), one at equal spp, and for the ablation one compare of rll "
