@@ -147,8 +147,10 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     const Bsdf bsdf = make_vertex_bsdf(c, sh, wo, u, depth);
     if (bsdf.is_black()) break;
     LightContext ctx = make_vertex_context(c, s, sh, hit, wo, bsdf);
-    if (cut && cut->key == 0 && psf_cuts_here(c, s, bsdf, hit.t, depth))
-      psf_cut(c, s, ctx, bsdf, wo, depth, stream, *cut);
+    if (cut && cut->key == 0 && psf_cuts_here(c, s, bsdf, hit.t, depth)) {
+      psf_cut(s, *cut);
+      cut->key = psf_cut_key(c, ctx, bsdf, wo, depth, stream);
+    }
     const bool light = samples_light(c, bsdf);
     if (m_view.prepares && !bsdf.is_delta())
       prepare_point(m_view, ctx, vertex_number(stream, depth, kPrepare));

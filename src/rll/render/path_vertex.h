@@ -407,19 +407,25 @@ RLL_HD inline bool psf_cuts_here(const PathConstants& c, const PathState& s, con
   return depth == 0 || (!s.prev_delta && s.prev_bsdf_pdf < f.max_prob);
 }
 
-// Cuts the path at this vertex: its cell's key (jittered by numbers of its own), its throughput,
-// and what it gathered so far, which the film takes unfiltered; what it gathers from here on is
-// the radiance its cell averages (s.L starts again from 0).
-RLL_HD inline void psf_cut(const PathConstants& c, PathState& s, const LightContext& ctx,
-                           const Bsdf& bsdf, const Vec3& wo, int depth, SampleStream& stream,
-                           PsfCut& cut) {
-  stream.seek(kPsfJitterDimension);
-  float u[5];
-  for (float& x : u) x = stream.next();
-  cut.key = psf_key(c.psf, ctx.p, bsdf.shading_normal(), wo, ctx.footprint, depth, u);
+// Cuts the path at this vertex: its throughput and what it gathered so far, which the film takes
+// unfiltered; what it gathers from here on is the radiance its cell averages (s.L starts again
+// from 0). Its cell's key is psf_cut_key's, `pending` until then (the wavefront computes it in a
+// later stage, where registers are to spare).
+RLL_HD inline void psf_cut(PathState& s, PsfCut& cut) {
+  cut.key = kPsfKeyPending;
   cut.weight = s.beta;
   cut.before = s.L;
   s.L = Rgb(0);
+}
+
+// The key of the cell of the path's cut at this vertex, jittered by numbers of its own.
+RLL_HD inline uint64_t psf_cut_key(const PathConstants& c, const LightContext& ctx,
+                                   const Bsdf& bsdf, const Vec3& wo, int depth,
+                                   SampleStream& stream) {
+  stream.seek(kPsfJitterDimension);
+  float u[5];
+  for (float& x : u) x = stream.next();
+  return psf_key(c.psf, ctx.p, bsdf.shading_normal(), wo, ctx.footprint, depth, u);
 }
 
 // Russian roulette with the number drawn at the vertex's kRoulette dimension.

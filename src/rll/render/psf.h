@@ -69,6 +69,8 @@ struct PsfCut {
   uint64_t key = 0;
   Rgb weight{0}, before{0};
 };
+// A cut whose key is still to be computed (keys are odd: CellKeyer::key).
+inline constexpr uint64_t kPsfKeyPending = 2;
 
 // The cell of the cut vertex at point p with shading normal ns (either side: turned toward wo),
 // footprint `footprint`, `depth` its depth; u: 5 uniform numbers. As Fermat's jittered hash: the

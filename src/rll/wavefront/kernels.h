@@ -219,8 +219,9 @@ struct WavefrontKernels {
     const Bsdf* bsdf = new (&p.bsdf[i]) Bsdf(make_vertex_bsdf(c, sh, wo, u, depth));
     if (bsdf->is_black()) return p.store(i, s);
     LightContext ctx = make_vertex_context(c, s, sh, p.hit[i], wo, *bsdf);
+    // (The cut's key is the BSDF sampling stage's: this stage is the one short of registers.)
     if (c.psf.on && p.cut[i].key == 0 && psf_cuts_here(c, s, *bsdf, p.hit[i].t, depth))
-      psf_cut(c, s, ctx, *bsdf, wo, depth, stream, p.cut[i]);
+      psf_cut(s, p.cut[i]);
     if (sampler.prepares && !bsdf->is_delta())
       prepare_point(sampler, ctx, vertex_number(stream, depth, kPrepare));
     p.store(i, s);
@@ -280,6 +281,8 @@ struct WavefrontKernels {
   RLL_HD void bsdf_sample_stage(uint32_t i) const {
     const int depth = p.depth[i];
     const Bsdf& bsdf = p.bsdf[i];
+    if (c.psf.on && p.cut[i].key == kPsfKeyPending)  // (the key of a cut at this vertex)
+      p.cut[i].key = psf_cut_key(c, p.ctx[i], bsdf, -p.ray[i].d, depth, p.stream[i]);
     if (!continues_after_light(c, bsdf, depth)) return;
     PathState s = p.load(i);
     Ray next;
