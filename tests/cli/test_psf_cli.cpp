@@ -59,7 +59,7 @@ TEST(PsfCli, BadValuesAndMisplacedKeysAreRefusedNamingThem) {
     std::vector<std::string> mentions;
   };
   for (const Case& c : std::vector<Case>{
-           {{"--filter", "psf", "--set", "psf.width=0"}, {"psf.width", "positive"}},
+           {{"--filter", "psf", "--set", "psf.width=0"}, {"psf.width", "(0, 1000000]"}},
            {{"--filter", "psf", "--set", "psf.clamp=-1"}, {"psf.clamp"}},
            {{"--filter", "psf", "--set", "psf.max_prob=x"}, {"psf.max_prob"}},
            {{"--filter", "psf", "--set", "psf.depth=5"}, {"psf.depth", "--max-depth"}},

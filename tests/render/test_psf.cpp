@@ -162,7 +162,7 @@ TEST(PsfFurnace, FilteredImageIsTheAnalyticRadiance) {
     }
     // The filter ran: most paths were cut, and cells were shared.
     EXPECT_GT(counts.paths, samples / 2);
-    EXPECT_LT(counts.cells * 4, counts.paths);
+    EXPECT_LT(counts.cells * 2, counts.paths);
     const double expected = furnace_value(c.max_depth);
     const SeedEstimates e = over_seeds(renders);
     EXPECT_NEAR(e.image.mean, expected, 5.5 * e.image.stderr_ + 1e-5)
