@@ -13,7 +13,8 @@
 # Usage: scripts/psf_study.sh RLL OUT_DIR [--tiny]
 #   --tiny: 64x48, 4 spp, 2 seeds, 1 s, reference 64 spp (checks that the script works; its
 #   figures mean nothing). Env: RES, SPP, SEEDS, TIME, REF_SPP override; PYTHONPATH must reach
-#   the rll module (build/python) for step 2.
+#   the rll module (build/python) for step 2, run by $PYTHON (default /usr/bin/python3, which
+#   has numpy).
 set -euo pipefail
 rll=$(realpath "$1") out=$2
 tiny=${3:-}
@@ -64,7 +65,7 @@ for width in none 3 1.5 0.75; do
       --quiet -o "$bias/w$width.s$s.exr" "${flags[@]}"
   done
 done
-python3 - "$bias" "$seeds" <<'PY' | tee "$out/bias.md"
+"${PYTHON:-/usr/bin/python3}" - "$bias" "$seeds" <<'PY' | tee "$out/bias.md"
 import sys
 import numpy as np
 import rll
