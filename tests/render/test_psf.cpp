@@ -99,13 +99,8 @@ SeedEstimates over_seeds(const std::vector<Image>& renders) {
   for (const Image& img : renders) {
     values[0].push_back(image_mean(img));
     for (int ry = 0; ry < n; ++ry)
-      for (int rx = 0; rx < n; ++rx) {
-        Image region(img.width() / n, img.height() / n);
-        for (int y = 0; y < region.height(); ++y)
-          for (int x = 0; x < region.width(); ++x)
-            region.at(x, y) = img.at(rx * region.width() + x, ry * region.height() + y);
-        values[1 + ry * n + rx].push_back(image_mean(region));
-      }
+      for (int rx = 0; rx < n; ++rx)
+        values[1 + ry * n + rx].push_back(image_mean(image_region(img, rx, ry, n, n)));
   }
   std::vector<Estimate> e;
   for (const std::vector<double>& v : values) {
