@@ -141,7 +141,8 @@ nlohmann::json session_stats(const RenderSession& session) {
                         {"max_depth", is.max_depth},
                         {"strategy", strategy_name(is.strategy)}}},
                       {"renderer", session.renderer_name()},
-                      {"points", point_set_name(session.points())}};
+                      {"points", point_set_name(session.points())},
+                      {"filter", filter_json(is.psf)}};
   // The wavefront's path slots and what its device did, pass by pass (frame by frame in
   // interactive): docs/gpu.md.
   if (session.settings().wavefront || session.gpu()) {

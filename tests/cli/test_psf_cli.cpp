@@ -51,6 +51,19 @@ TEST(PsfCli, FilteredRenderReportsItsCellsAndPaths) {
   EXPECT_EQ(nlohmann::json::parse(read_text(stats)).at("filter").at("name"), "none");
 }
 
+// `rll interactive --filter psf`: its frames filtered, its --stats naming the filter.
+TEST(PsfCli, InteractiveFiltersItsFrames) {
+  TempDir dir;
+  const fs::path stats = dir / "frames.json";
+  const CommandResult r =
+      run_rll({"interactive", "builtin:cornell-box", "--res", "24x16", "--frames", "2", "--quiet",
+               "--filter", "psf", "--sampler", "power", "--stats", stats.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(read_text(stats));
+  EXPECT_EQ(j.at("filter").at("name"), "psf");
+  EXPECT_EQ(j.at("filter").at("width"), 3.0);
+}
+
 TEST(PsfCli, BadValuesAndMisplacedKeysAreRefusedNamingThem) {
   TempDir dir;
   const fs::path out = dir / "x.png";
