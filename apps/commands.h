@@ -16,6 +16,7 @@ namespace rll::cli {
 void add_render_command(CLI::App& app);
 void add_scenes_command(CLI::App& app);
 void add_samplers_command(CLI::App& app);
+void add_filters_command(CLI::App& app);
 void add_reference_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_convert_command(CLI::App& app);

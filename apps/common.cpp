@@ -100,6 +100,13 @@ void add_session_options(CLI::App* cmd, SessionSettings& s) {
   cmd->add_option("--set", s.set,
                   "Sampler/integrator parameter key=value (repeatable), e.g. rll.alpha=0.1")
       ->take_all();
+  cmd->add_option("--filter", s.filter,
+                  "none, or psf: path-space filtering (Fermat's psfpt, the paper's teaser): paths "
+                  "cut at a vertex share the radiance of the vertices in their cell of a jittered "
+                  "spatial hash; biased, far less noisy (docs/psf.md; --set psf.KEY=VALUE, see "
+                  "`rll filters --params psf`)")
+      ->capture_default_str()
+      ->check(CLI::IsMember(filter_names()));
 }
 
 void add_wavefront_option(CLI::App* cmd, SessionSettings& s) {
@@ -134,7 +141,8 @@ nlohmann::json session_stats(const RenderSession& session) {
                         {"max_depth", is.max_depth},
                         {"strategy", strategy_name(is.strategy)}}},
                       {"renderer", session.renderer_name()},
-                      {"points", point_set_name(session.points())}};
+                      {"points", point_set_name(session.points())},
+                      {"filter", filter_json(is.psf)}};
   // The wavefront's path slots and what its device did, pass by pass (frame by frame in
   // interactive): docs/gpu.md.
   if (session.settings().wavefront || session.gpu()) {

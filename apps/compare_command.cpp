@@ -246,8 +246,11 @@ LogLogPlot convergence_plot(const Scene& scene, const std::vector<SamplerSummary
 }
 
 std::string integrator_text(const IntegratorSettings& is) {
-  return fmt::format("{} (max depth {}, {})", integrator_name(is.type), is.max_depth,
-                     strategy_name(is.strategy));
+  return fmt::format(
+      "{} (max depth {}, {}){}", integrator_name(is.type), is.max_depth, strategy_name(is.strategy),
+      is.psf.on
+          ? fmt::format(", path-space filtered (--filter psf: {})", filter_json(is.psf).dump())
+          : "");
 }
 
 // Every file that compare writes into --out (a new file written there must be listed here: a

@@ -146,6 +146,7 @@ int main(int argc, char** argv) {
   rll::cli::add_render_command(app);
   rll::cli::add_scenes_command(app);
   rll::cli::add_samplers_command(app);
+  rll::cli::add_filters_command(app);
   rll::cli::add_reference_command(app);
   rll::cli::add_compare_command(app);
   rll::cli::add_convert_command(app);

@@ -39,6 +39,11 @@ void run(const ReferenceOptions& o) {
   ThreadLimit limit(o.threads);
   // The numbers were checked as they were parsed.
   parse_resolution(o.session.resolution);
+  if (o.session.filter != "none")
+    fail(
+        "--filter {}: a reference is the unfiltered estimate the filtered renders are measured "
+        "against (their bias included); leave --filter out",
+        o.session.filter);
   const std::vector<fs::path> inputs = scene_inputs(o.session.scene);
   const ReferenceCache cache(o.cache_dir.empty() ? default_cache_dir() : fs::path(o.cache_dir));
   if (!o.output.empty()) {
@@ -54,9 +59,10 @@ void run(const ReferenceOptions& o) {
       // The cache's files are its own: a copy written over an entry would corrupt it for good.
       const fs::path folder = write_target(path).parent_path();
       if (same_file(folder.empty() ? fs::path(".") : folder, cache.dir()))
-        fail("{} {} is in the reference cache folder '{}', whose files are the cache's own: "
-             "write it elsewhere",
-             flag, path.string(), cache.dir().string());
+        fail(
+            "{} {} is in the reference cache folder '{}', whose files are the cache's own: "
+            "write it elsewhere",
+            flag, path.string(), cache.dir().string());
     }
   }
 
@@ -108,7 +114,8 @@ void run(const ReferenceOptions& o) {
     set_activity(fmt::format("writing '{}'", o.output));
     write_image(o.output, ref.image, o.exposure);
     fmt::print(stderr, "wrote {}\n", o.output);
-    if (const fs::path var = variance_path(o.output); !var.empty() && ref.variance.pixel_count() > 0) {
+    if (const fs::path var = variance_path(o.output);
+        !var.empty() && ref.variance.pixel_count() > 0) {
       write_image(var, ref.variance);
       fmt::print(stderr, "wrote {} (its per-pixel variance: rll error --reference-variance)\n",
                  var.string());
@@ -149,9 +156,10 @@ void add_reference_command(CLI::App& app) {
   cmd->add_option("--cache-dir", o->cache_dir,
                   "Reference cache folder (default: $RLL_CACHE_DIR, else out/cache)");
   cmd->add_flag("--force", o->request.force, "Render even when the cache holds a reference");
-  cmd->add_option("-o,--output", o->output,
-                  "Also write the reference here, .exr (linear) or .png (sRGB), any case; beside an "
-                  ".exr, NAME.variance.exr holds its per-pixel variance (from its two halves)");
+  cmd->add_option(
+      "-o,--output", o->output,
+      "Also write the reference here, .exr (linear) or .png (sRGB), any case; beside an "
+      ".exr, NAME.variance.exr holds its per-pixel variance (from its two halves)");
   cmd->add_option("--exposure", o->exposure, "Exposure in stops for a .png -o")
       ->capture_default_str()
       ->check(number_in(-kMaxExposure, kMaxExposure));

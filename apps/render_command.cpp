@@ -52,18 +52,21 @@ nlohmann::json share_settings(const RenderOptions& o, const RenderSession& sessi
   const IntegratorSettings& is = session.integrator();
   std::vector<std::string> set = o.session.set;
   std::sort(set.begin(), set.end());
-  return {{"scene_fingerprint", fmt::format("{:016x}", fingerprint)},
-          {"resolution", fmt::format("{}x{}", scene.width, scene.height)},
-          {"integrator", integrator_name(is.type)},
-          {"max_depth", is.max_depth},
-          {"strategy", strategy_name(is.strategy)},
-          {"sampler", o.sampler},
-          {"set", set},
-          {"points", point_set_name(session.points())},
-          {"seed", std::to_string(o.seed)},
-          {"pass_spp", o.pass_spp},
-          {"max_pass_spp", o.max_pass_spp},
-          {"rll_state", o.state.empty() ? "none" : o.state_mode}};
+  nlohmann::json j = {{"scene_fingerprint", fmt::format("{:016x}", fingerprint)},
+                      {"resolution", fmt::format("{}x{}", scene.width, scene.height)},
+                      {"integrator", integrator_name(is.type)},
+                      {"max_depth", is.max_depth},
+                      {"strategy", strategy_name(is.strategy)},
+                      {"sampler", o.sampler},
+                      {"set", set},
+                      {"points", point_set_name(session.points())},
+                      {"seed", std::to_string(o.seed)},
+                      {"pass_spp", o.pass_spp},
+                      {"max_pass_spp", o.max_pass_spp},
+                      {"rll_state", o.state.empty() ? "none" : o.state_mode}};
+  // (Only where on: the shares of an unfiltered render keep the settings they always had.)
+  if (is.psf.on) j["filter"] = filter_json(is.psf);
+  return j;
 }
 
 std::string default_output(const std::string& scene) {
@@ -189,6 +192,7 @@ void run(const RenderOptions& o) {
     total.spp_done = p.spp_done;
     total.cancelled = total.cancelled || p.cancelled;
     total.nonfinite += p.nonfinite;
+    total.filter += p.filter;
     // Interrupted before any sample, or (a .png, which cannot tell a pixel without a sample from
     // a black one) before every pixel had one: nothing worth writing, and writing a huge film
     // would take long after the user asked to stop. An .exr keeps each pixel's sample count.
@@ -256,6 +260,7 @@ void run(const RenderOptions& o) {
     j["rll_state"] = {{"file", o.state}, {"mode", o.state_mode}, {"loaded", state_loaded}};
     j["interrupted"] = total.cancelled;
     j["nonfinite_samples"] = total.nonfinite;
+    j["filter"] = filter_json(integrator.psf, &total.filter, total.samples);
     j["memory"] = {{"peak_rss_bytes", peak_rss_bytes()}};
     write_file_atomic(o.stats, j.dump(2) + "\n");
   }

@@ -91,6 +91,7 @@ def render(
     device: str = "cpu",
     pass_spp: int = 1,
     max_pass_spp: int = 8,
+    filter: str = "none",
 ) -> Render: ...
 def load_state(
     path: _Path, scene: Scene, sampler: str = "rll", params: dict[str, Any] = {}

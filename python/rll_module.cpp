@@ -5,6 +5,7 @@
 
 #include <dlfcn.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -28,6 +29,7 @@
 #include "rll/lights/light_sampler.h"
 #include "rll/render/aov.h"
 #include "rll/render/film.h"
+#include "rll/render/psf.h"
 #include "rll/render/render.h"
 #include "rll/render/share.h"
 #include "rll/scene/builtin.h"
@@ -273,7 +275,8 @@ std::shared_ptr<RenderSession> session_for(PyScene& scene, const SessionSettings
   const SessionSettings& own = scene.settings;
   const bool same = settings.integrator == own.integrator && settings.max_depth == own.max_depth &&
                     settings.resolution == own.resolution && settings.set == own.set &&
-                    settings.wavefront == own.wavefront && settings.device == own.device;
+                    settings.wavefront == own.wavefront && settings.device == own.device &&
+                    settings.filter == own.filter;
   return same ? scene.session : make_session(settings);
 }
 
@@ -428,7 +431,8 @@ PyRender py_render(const Arg<PyScene>& scene_arg, const Arg<std::string>& sample
                    const Arg<py::dict>& params_arg, const Arg<int>& threads_arg,
                    const Arg<Callback>& progress_arg, const Arg<NameList>& aov_arg,
                    const Arg<bool>& wavefront_arg, const Arg<std::string>& device_arg,
-                   const Arg<long long>& pass_spp_arg, const Arg<long long>& max_pass_spp_arg) {
+                   const Arg<long long>& pass_spp_arg, const Arg<long long>& max_pass_spp_arg,
+                   const Arg<std::string>& filter_arg) {
   const Call c{"render"};
   const std::shared_ptr<PyScene> scene_ptr = c.scene(scene_arg, "scene");
   PyScene& scene = *scene_ptr;
@@ -447,6 +451,7 @@ PyRender py_render(const Arg<PyScene>& scene_arg, const Arg<std::string>& sample
   const std::string device = c.get(device_arg, "device");
   const long long pass_spp = c.get(pass_spp_arg, "pass_spp");
   const long long max_pass_spp = c.get(max_pass_spp_arg, "max_pass_spp");
+  const std::string filter = c.get(filter_arg, "filter");
 
   std::vector<Aov> aovs;
   if (!aov_arg.obj.is_none()) aovs = parse_aovs(aov_list, "aov");
@@ -462,7 +467,11 @@ PyRender py_render(const Arg<PyScene>& scene_arg, const Arg<std::string>& sample
     fail("max_pass_spp: {} is not in [1, {}]", max_pass_spp, kMaxSpp);
   if (threads < 0 || threads > kMaxThreads)
     fail("threads: {} is not in [0, {}] (0: all cores)", threads, kMaxThreads);
+  const std::vector<std::string>& filters = filter_names();
+  if (std::find(filters.begin(), filters.end(), filter) == filters.end())
+    fail("filter: '{}' is not one of none, psf", shown_text(filter));
   SessionSettings settings = settings_with(scene, params);
+  settings.filter = filter;
   settings.integrator = integrator;
   settings.max_depth = max_depth;
   settings.wavefront = wavefront;
@@ -538,6 +547,7 @@ PyRender py_render(const Arg<PyScene>& scene_arg, const Arg<std::string>& sample
   r.stats["interrupted"] = r.interrupted;
   r.stats["out_of_time"] = p.out_of_time;
   r.stats["nonfinite_samples"] = p.nonfinite;
+  r.stats["filter"] = to_python(filter_json(session->integrator().psf, &p.filter, p.samples));
   return r;
 }
 
@@ -811,7 +821,7 @@ PYBIND11_MODULE(rll, m) {
         py::arg("time") = py::none(), py::arg("res") = py::none(), py::arg("seed") = 1,
         py::arg("params") = py::dict(), py::arg("threads") = 0, py::arg("progress") = py::none(),
         py::arg("aov") = py::none(), py::arg("wavefront") = false, py::arg("device") = "cpu",
-        py::arg("pass_spp") = 1, py::arg("max_pass_spp") = 8,
+        py::arg("pass_spp") = 1, py::arg("max_pass_spp") = 8, py::arg("filter") = "none",
         "Renders `scene` with a light sampler (see samplers()) as `rll render` does with the\n"
         "same settings, to the same image: `spp` samples per pixel, or fewer when `time`\n"
         "seconds run out; `max_depth` bounds the path length (`--max-depth`); `params` are `--set` "
@@ -825,7 +835,8 @@ PYBIND11_MODULE(rll, m) {
         "returned in Render.aov; the image is the same with or without. `wavefront` and\n"
         "`device` ('cpu' or 'cuda') as `--wavefront` and `--device`; `pass_spp` and\n"
         "`max_pass_spp` as `--pass-spp` and `--max-pass-spp` (the first passes' size, the\n"
-        "largest pass).");
+        "largest pass). `filter`: 'none', or 'psf' as `--filter psf` (path-space filtering;\n"
+        "its keys in `params` as psf.KEY; Render.stats['filter'] counts its cells and paths).");
   m.def("error", &py_error, py::arg("img"), py::arg("ref"),
         py::arg("reference_variance") = py::none(),
         "Errors of an HxWx3 image against a reference as `rll error` measures them: a dict of\n"

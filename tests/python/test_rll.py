@@ -635,6 +635,23 @@ def test_wavefront_from_python_equals_the_cli(tmp_path):
     assert np.array_equal(r.image, rll.read_exr(out))
 
 
+def test_filter_psf_from_python_equals_the_cli(tmp_path):
+    out = tmp_path / "psf.exr"
+    cli("render", BOX, "--res", "24x16", "--spp", "3", "--sampler", "power", "--filter", "psf",
+        "--set", "psf.width=2", "--quiet", "-o", str(out))
+    box = rll.load(BOX, res=(24, 16))
+    r = rll.render(box, sampler="power", spp=3, filter="psf", params={"psf.width": 2})
+    assert np.array_equal(r.image, rll.read_exr(out))
+    f = r.stats["filter"]
+    assert f["name"] == "psf" and f["width"] == 2 and f["batches"] == 3
+    assert 0 < f["cells_used"] < f["paths_filtered"]
+    assert rll.render(box, sampler="power", spp=3).stats["filter"] == {"name": "none"}
+    with pytest.raises(rll.Error, match="filter"):
+        rll.render(box, spp=1, filter="bilateral")
+    with pytest.raises(rll.Error, match="psf.width"):
+        rll.render(box, spp=1, filter="psf", params={"psf.width": 0})
+
+
 @pytest.mark.parametrize("script,args,says", [
     ("convergence.py", ["builtin:cornell-box", "--samplers", "power,rll", "--spp", "4",
                         "--res", "32x24", "--reference-spp", "16"], "rll: 4 spp"),

@@ -139,11 +139,7 @@ Estimate expect_furnace_value(const Image& img, double expected, const std::stri
   const int n = 4;
   for (int ry = 0; ry < n; ++ry)
     for (int rx = 0; rx < n; ++rx) {
-      Image region(img.width() / n, img.height() / n);
-      for (int y = 0; y < region.height(); ++y)
-        for (int x = 0; x < region.width(); ++x)
-          region.at(x, y) = img.at(rx * region.width() + x, ry * region.height() + y);
-      Estimate r = block_estimate(region, 16);
+      Estimate r = block_estimate(image_region(img, rx, ry, n, n), 16);
       EXPECT_NEAR(r.mean, expected, 4.5 * r.stderr_ + 1e-4)
           << what << " region (" << rx << ", " << ry << "): " << r.mean << " +- " << r.stderr_;
       regions_seeing += 4.5 * r.stderr_ + 1e-4 < 0.05 * expected;

@@ -201,20 +201,21 @@ bool agree(const Estimate& a, const Estimate& b, double z, double abs_tol) {
   return std::abs(a.mean - b.mean) <= z * se + abs_tol;
 }
 
+Image image_region(const Image& image, int rx, int ry, int nx, int ny) {
+  const int x0 = rx * image.width() / nx, x1 = (rx + 1) * image.width() / nx;
+  const int y0 = ry * image.height() / ny, y1 = (ry + 1) * image.height() / ny;
+  Image region(x1 - x0, y1 - y0);
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) region.at(x - x0, y - y0) = image.at(x, y);
+  return region;
+}
+
 std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx, int ny) {
   std::vector<Estimate> out;
   for (int ry = 0; ry < ny; ++ry)
-    for (int rx = 0; rx < nx; ++rx) {
-      const int x0 = rx * a.width() / nx, x1 = (rx + 1) * a.width() / nx;
-      const int y0 = ry * a.height() / ny, y1 = (ry + 1) * a.height() / ny;
-      Image ra(x1 - x0, y1 - y0), rb(x1 - x0, y1 - y0);
-      for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x) {
-          ra.at(x - x0, y - y0) = a.at(x, y);
-          rb.at(x - x0, y - y0) = b.at(x, y);
-        }
-      out.push_back(difference_estimate(ra, rb));
-    }
+    for (int rx = 0; rx < nx; ++rx)
+      out.push_back(
+          difference_estimate(image_region(a, rx, ry, nx, ny), image_region(b, rx, ry, nx, ny)));
   return out;
 }
 

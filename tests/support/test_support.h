@@ -138,6 +138,8 @@ Estimate difference_estimate(const Image& a, const Image& b);
 std::string region_disagreement(const Image& a, const Image& b);
 
 void expect_images_agree(const Image& a, const Image& b, const std::string& what);
+// Region (rx, ry) of the image cut into nx x ny regions (row by row: region_differences' regions).
+Image image_region(const Image& image, int rx, int ry, int nx, int ny);
 std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx, int ny);
 
 // A small memory budget (core/memory_budget.h) for as long as it lives, so that readers' size

@@ -295,6 +295,10 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
   out.complete = true;
   out.info.seconds = 0;
   out.info.spp = 0;
+  // A reference is never filtered (render/psf.h): the filtered renders are measured against
+  // the unbiased estimate, their bias included (its key leaves the filter out).
+  IntegratorSettings unfiltered = session.integrator();
+  unfiltered.psf = PsfSettings{};
   for (int h = 0; h < 2 && out.complete; ++h) {
     auto sampler = session.make_sampler(request.sampler);  // each half learns from scratch
     Film film(width, height);
@@ -303,8 +307,9 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
     rs.seed = request.seed + uint64_t(h);
     rs.pass_spp = request.pass_spp;
     rs.max_pass_spp = request.max_pass_spp;
-    const RenderProgress p = session.render(
-        *sampler, film, rs, fmt::format("reference {}/2", h + 1), show_progress, cancel);
+    const RenderProgress p =
+        session.render(*sampler, film, rs, fmt::format("reference {}/2", h + 1), show_progress,
+                       cancel, {}, nullptr, &unfiltered);
     halves[h] = film.resolve();
     counts[h] = film.counts();
     out.info.spp += p.spp_done;

@@ -37,10 +37,14 @@ struct FilmView {
 
   // Not thread-safe per pixel: one thread adds a pixel's samples, in their order.
   RLL_HD void add(size_t pixel, const Rgb& v) const {
+    add_sum(pixel, v);
+    ++count[pixel];
+  }
+  // Adds to the sums of a sample already counted (a filtered path's share, render/psf.h).
+  RLL_HD void add_sum(size_t pixel, const Rgb& v) const {
     sum[3 * pixel] += v.x;
     sum[3 * pixel + 1] += v.y;
     sum[3 * pixel + 2] += v.z;
-    ++count[pixel];
   }
 };
 

@@ -33,7 +33,7 @@ const std::vector<ParamSpec<IntegratorSettings>>& coated_params() {
 }
 
 IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
-                                            const Params& params) {
+                                            const Params& params, const std::string& filter) {
   IntegratorSettings s;
   if (name == "direct")
     s.type = IntegratorType::Direct;
@@ -58,6 +58,8 @@ IntegratorSettings make_integrator_settings(const std::string& name, int max_dep
   s.nee_learnt_target =
       params.get_choice("nee.target", "unshadowed", {"unshadowed", "learnt"}) == "learnt";
   read_params(coated_params(), params, "coated", s);
+  s.psf = make_psf_settings(filter, s.type == IntegratorType::Direct ? 1 : s.max_depth,
+                            s.type == IntegratorType::Path, params);
   return s;
 }
 
@@ -74,6 +76,7 @@ PathConstants make_path_constants(const Scene& scene, const SceneView& view,
   c.nee_candidates = settings.nee_candidates;
   c.nee_learnt_target = settings.nee_learnt_target;
   c.coated_weights = settings.coated_weights;
+  c.psf = make_psf_constants(settings.psf, scene.bounds);
   return c;
 }
 
@@ -124,7 +127,7 @@ Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Ve
 }
 
 Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters,
-                   CameraVertexSample* camera) const {
+                   CameraVertexSample* camera, PsfCut* cut) const {
   const PathConstants& c = m_constants;
   PathState s = start_path(c);
   Ray ray = camera_ray;
@@ -144,6 +147,10 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     const Bsdf bsdf = make_vertex_bsdf(c, sh, wo, u, depth);
     if (bsdf.is_black()) break;
     LightContext ctx = make_vertex_context(c, s, sh, hit, wo, bsdf);
+    if (cut && cut->key == 0 && psf_cuts_here(c, s, bsdf, hit.t, depth)) {
+      psf_cut(s, *cut);
+      cut->key = psf_cut_key(c, ctx, bsdf, wo, depth, stream);
+    }
     const bool light = samples_light(c, bsdf);
     if (m_view.prepares && !bsdf.is_delta())
       prepare_point(m_view, ctx, vertex_number(stream, depth, kPrepare));

@@ -12,6 +12,7 @@
 #include "rll/lights/light_sampler.h"
 #include "rll/render/film.h"
 #include "rll/render/path_vertex.h"
+#include "rll/render/psf.h"
 #include "rll/scene/scene.h"
 #include "rll/scene/scene_view.h"
 
@@ -30,12 +31,15 @@ struct IntegratorSettings {
   // coated.weights: CoatedDiffuse's MIS weight in eval() (scene/bsdf.h); pbrt only to match
   // pbrt-v4's images (docs/materials.md)
   CoatedWeights coated_weights = CoatedWeights::Unbiased;
+  PsfSettings psf;  // --filter psf and its psf.* keys (render/psf.h)
 };
 
 // Parses --integrator and the integrator's `--set` keys (path.strategy, path.rr_depth,
-// nee.candidates, nee.target, coated.*).
+// nee.candidates, nee.target, coated.*), and with `filter` (--filter: none or psf) the filter's
+// (psf.*, make_psf_settings).
 IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
-                                            const Params& params);
+                                            const Params& params,
+                                            const std::string& filter = "none");
 // The coated.* keys (core/param_table.h): coated.weights=unbiased|pbrt.
 const std::vector<ParamSpec<IntegratorSettings>>& coated_params();
 const char* integrator_name(IntegratorType t);
@@ -66,9 +70,11 @@ class Integrator {
              IntegratorSettings settings);
   // Radiance along a camera ray; `stream` supplies the per-sample random numbers. With `camera`,
   // also what the camera vertex saw of the light sampler (the per-pixel diagnostics); the
-  // radiance is the same with or without.
+  // radiance is the same with or without. With `cut` (path-space filtering, render/psf.h), the
+  // path is cut where psf_cuts_here says: `cut` then holds the cut and the radiance returned is
+  // what the path gathered after it.
   Rgb li(const Ray& camera_ray, SampleStream& stream, RayCounters& counters,
-         CameraVertexSample* camera = nullptr) const;
+         CameraVertexSample* camera = nullptr, PsfCut* cut = nullptr) const;
   const IntegratorSettings& settings() const { return m_settings; }
   // The sampler's view again, after a change to it (its end of pass, lights_changed, load_state).
   void sampler_changed() { m_view = m_sampler.sampler_view(); }
@@ -87,8 +93,8 @@ class Integrator {
   const Accel& m_accel;
   LightSampler& m_sampler;
   IntegratorSettings m_settings;
-  SamplerView m_view;    // the sampler as the dispatch reads it (light_dispatch.h)
-  SceneData m_data;      // the hot data the functions below read, as flat views
+  SamplerView m_view;  // the sampler as the dispatch reads it (light_dispatch.h)
+  SceneData m_data;    // the hot data the functions below read, as flat views
   PathConstants m_constants;
 };
 

@@ -12,6 +12,7 @@
 #include "rll/core/rng.h"
 #include "rll/core/sampling.h"
 #include "rll/lights/light_context.h"
+#include "rll/render/psf.h"
 #include "rll/scene/bsdf.h"
 #include "rll/scene/camera.h"
 #include "rll/scene/interaction.h"
@@ -82,6 +83,7 @@ struct PathConstants {
   int nee_candidates = 1;  // resampled next-event estimation (docs/nee.md): 1 = one light sample
   bool nee_learnt_target = false;  // its target times the sampler's factor (nee_target)
   CoatedWeights coated_weights = CoatedWeights::Unbiased;  // coated.weights (scene/bsdf.h)
+  PsfConstants psf;  // path-space filtering (render/psf.h); off unless --filter psf
 };
 
 // What a path carries from one vertex to the next.
@@ -391,6 +393,39 @@ RLL_HD inline bool sample_bounce(const PathConstants& c, PathState& s, const Bsd
   roulette = !last && depth + 1 >= c.rr_depth;
   next = spawn_ray(sh.p, sh.ng, bs.wi);
   return true;
+}
+
+// Path-space filtering (render/psf.h): whether a path not yet cut is cut at this vertex, reached
+// by a segment of length t. As Fermat's psfpt: from vertex psf.depth on, where the bounce before
+// was rough (sampled with a pdf below psf.max_prob: no Dirac lobe, no sharp glossy lobe; the
+// camera's "bounce" to vertex 0 always counts as rough) and the segment at least psf.min_dist
+// long; and (rll's) not at a vertex of Dirac lobes only, whose radiance is the one direction's.
+RLL_HD inline bool psf_cuts_here(const PathConstants& c, const PathState& s, const Bsdf& bsdf,
+                                 float t, int depth) {
+  const PsfConstants& f = c.psf;
+  if (!f.on || depth < f.depth || bsdf.is_delta() || !(t >= f.min_dist)) return false;
+  return depth == 0 || (!s.prev_delta && s.prev_bsdf_pdf < f.max_prob);
+}
+
+// Cuts the path at this vertex: its throughput and what it gathered so far, which the film takes
+// unfiltered; what it gathers from here on is the radiance its cell averages (s.L starts again
+// from 0). Its cell's key is psf_cut_key's, `pending` until then (the wavefront computes it in a
+// later stage, where registers are to spare).
+RLL_HD inline void psf_cut(PathState& s, PsfCut& cut) {
+  cut.key = kPsfKeyPending;
+  cut.weight = s.beta;
+  cut.before = s.L;
+  s.L = Rgb(0);
+}
+
+// The key of the cell of the path's cut at this vertex, jittered by numbers of its own.
+RLL_HD inline uint64_t psf_cut_key(const PathConstants& c, const LightContext& ctx,
+                                   const Bsdf& bsdf, const Vec3& wo, int depth,
+                                   SampleStream& stream) {
+  stream.seek(kPsfJitterDimension);
+  float u[5];
+  for (float& x : u) x = stream.next();
+  return psf_key(c.psf, ctx.p, bsdf.shading_normal(), wo, ctx.footprint, depth, u);
 }
 
 // Russian roulette with the number drawn at the vertex's kRoulette dimension.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <mutex>
 
 #include "rll/core/error.h"
@@ -82,7 +83,7 @@ RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_p
     }
     const auto w0 = Clock::now();
     const uint64_t camera0 = progress.rays.camera;
-    work(first, count, frame_seed, stop, progress.rays, progress.nonfinite);
+    work(first, count, frame_seed, stop, progress.rays, progress.nonfinite, progress.filter);
     if (progress.rays.camera > camera0)
       seconds_per_spp = seconds_since(w0) * pixels / double(progress.rays.camera - camera0);
     // A stopped pass leaves some pixels with fewer samples; the film's counts keep it unbiased.
@@ -119,48 +120,102 @@ RenderProgress run_passes(const Scene& scene, const std::function<void()>& end_p
   return progress;
 }
 
-RenderProgress render(const Scene& scene, Integrator& integrator, LightSampler& sampler,
-                      Film& film, const RenderSettings& settings, const std::atomic<bool>* cancel,
-                      const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
-  const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
+namespace {
+
+// The pixels of the image, tile by tile in parallel, each tile's in its order:
+// `sample(x, y, rays, nonfinite, stop_now)` takes samples of pixel (x, y), asking stop_now()
+// before each (which asks `stop` every kSamplesPerStopCheck samples of the tile), and returns
+// false where stop_now() said to stop; the tiles' counts are added up.
+template <typename Sample>
+void for_each_tile(int w, int h, int ts, const PassStop& stop, RayCounters& pass_rays,
+                   uint64_t& pass_nonfinite, const Sample& sample) {
   const int tiles_x = (w + ts - 1) / ts, tiles_y = (h + ts - 1) / ts;
   std::mutex merge_mutex;
+  parallel_for_each(size_t(tiles_x) * tiles_y, [&](size_t tile) {
+    if (stop()) return;
+    RayCounters rays;
+    uint64_t nonfinite = 0;
+    const int x0 = int(tile % tiles_x) * ts, y0 = int(tile / tiles_x) * ts;
+    // `stop` is asked again every kSamplesPerStopCheck samples, so that a cancel (Ctrl-C) or
+    // the end of the time budget ends even a long pass's tile soon; the pixel it ends in keeps
+    // the samples it took (each pixel's first n, counted by the film).
+    bool stopped = false;
+    int unchecked = 0;
+    for (int y = y0; y < std::min(h, y0 + ts) && !stopped; ++y)
+      for (int x = x0; x < std::min(w, x0 + ts) && !stopped; ++x)
+        stopped = !sample(x, y, rays, nonfinite, [&] {
+          if (++unchecked < kSamplesPerStopCheck) return false;
+          unchecked = 0;
+          return stop();
+        });
+    std::lock_guard lock(merge_mutex);
+    pass_rays += rays;
+    pass_nonfinite += nonfinite;
+  });
+}
+
+}  // namespace
+
+RenderProgress render(const Scene& scene, Integrator& integrator, LightSampler& sampler, Film& film,
+                      const RenderSettings& settings, const std::atomic<bool>* cancel,
+                      const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
+  const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
   const bool tracks_vertex = film.camera_vertex() != nullptr;
+  auto trace = [&](int x, int y, int s, uint64_t frame_seed, RayCounters& rays, PsfCut* cut) {
+    SampleStream stream(frame_seed, uint64_t(y) * w + x, settings.first_sample + uint64_t(s),
+                        settings.points);
+    CameraVertexSample vertex;
+    const Rgb L = integrator.li(camera_ray(scene, x, y, stream), stream, rays,
+                                tracks_vertex ? &vertex : nullptr, cut);
+    if (tracks_vertex) film.add_camera_vertex(x, y, vertex);
+    return L;
+  };
   auto pass = [&](int first, int count, uint64_t frame_seed, const PassStop& stop,
-                  RayCounters& pass_rays, uint64_t& pass_nonfinite) {
-    parallel_for_each(size_t(tiles_x) * tiles_y, [&](size_t tile) {
-      if (stop()) return;
-      RayCounters rays;
-      uint64_t nonfinite = 0;
-      const int x0 = int(tile % tiles_x) * ts, y0 = int(tile / tiles_x) * ts;
-      // `stop` is asked again every kSamplesPerStopCheck samples, so that a cancel (Ctrl-C) or
-      // the end of the time budget ends even a long pass's tile soon; the pixel it ends in keeps
-      // the samples it took (each pixel's first n, counted by the film).
-      bool stopped = false;
-      int unchecked = 0;
-      for (int y = y0; y < std::min(h, y0 + ts) && !stopped; ++y)
-        for (int x = x0; x < std::min(w, x0 + ts) && !stopped; ++x)
-          for (int s = first; s < first + count; ++s) {
-            if (++unchecked == kSamplesPerStopCheck) {
-              unchecked = 0;
-              if ((stopped = stop())) break;
-            }
-            SampleStream stream(frame_seed, uint64_t(y) * w + x,
-                                settings.first_sample + uint64_t(s), settings.points);
-            CameraVertexSample vertex;
-            Rgb L = integrator.li(camera_ray(scene, x, y, stream), stream, rays,
-                                  tracks_vertex ? &vertex : nullptr);
-            if (!is_finite(L)) {
-              ++nonfinite;
-              L = Rgb(0);
-            }
-            film.add(x, y, L);
-            if (tracks_vertex) film.add_camera_vertex(x, y, vertex);
-          }
-      std::lock_guard lock(merge_mutex);
-      pass_rays += rays;
-      pass_nonfinite += nonfinite;
-    });
+                  RayCounters& pass_rays, uint64_t& pass_nonfinite, PsfCounts&) {
+    for_each_tile(w, h, ts, stop, pass_rays, pass_nonfinite,
+                  [&](int x, int y, RayCounters& rays, uint64_t& nonfinite, const auto& stop_now) {
+                    for (int s = first; s < first + count; ++s) {
+                      if (stop_now()) return false;
+                      Rgb L = trace(x, y, s, frame_seed, rays, nullptr);
+                      if (!is_finite(L)) {
+                        ++nonfinite;
+                        L = Rgb(0);
+                      }
+                      film.add(x, y, L);
+                    }
+                    return true;
+                  });
+  };
+  // Path-space filtering: a batch per sample index (render/psf.h), its cells in `table`.
+  std::unique_ptr<PsfTable> table;
+  const PsfConstants& psf = integrator.constants().psf;
+  if (psf.on) table = std::make_unique<PsfTable>(size_t(w) * h);
+  auto filtered_pass = [&](int first, int count, uint64_t frame_seed, const PassStop& stop,
+                           RayCounters& pass_rays, uint64_t& pass_nonfinite, PsfCounts& filter) {
+    const FilmView fv = film.view();
+    for (int s = first; s < first + count && !stop.stopped(); ++s) {
+      table->clear();
+      const PsfTableView t = table->view();
+      const View<PsfRecord> records = table->records();
+      std::atomic<uint64_t> paths{0};
+      for_each_tile(
+          w, h, ts, stop, pass_rays, pass_nonfinite,
+          [&](int x, int y, RayCounters& rays, uint64_t& nonfinite, const auto& stop_now) {
+            if (stop_now()) return false;
+            PsfCut cut;
+            const Rgb L = trace(x, y, s, frame_seed, rays, &cut);
+            const PsfEnd end = psf_end_path(psf, t, fv, records, size_t(y) * w + x, cut, L);
+            nonfinite += end == PsfEnd::NonFinite;
+            if (end == PsfEnd::Filtered) paths.fetch_add(1, std::memory_order_relaxed);
+            return true;
+          });
+      parallel_for(size_t(w) * h, 4096, [&](size_t begin, size_t end) {
+        for (size_t p = begin; p < end; ++p) psf_resolve_pixel(psf, t, fv, records, p);
+      });
+      filter.batches += 1;
+      filter.cells += table->used();
+      filter.paths += paths.load();
+    }
   };
   integrator.sampler_changed();
   return run_passes(
@@ -169,7 +224,7 @@ RenderProgress render(const Scene& scene, Integrator& integrator, LightSampler& 
         sampler.end_pass();
         integrator.sampler_changed();
       },
-      film, settings, cancel, after_pass, pass);
+      film, settings, cancel, after_pass, psf.on ? PassWork(filtered_pass) : PassWork(pass));
 }
 
 }  // namespace rll

@@ -11,6 +11,7 @@
 #include "rll/core/rng.h"
 #include "rll/render/film.h"
 #include "rll/render/integrator.h"
+#include "rll/render/psf.h"
 
 namespace rll {
 
@@ -43,6 +44,7 @@ struct RenderProgress {
   uint64_t samples = 0;    // camera samples taken
   uint64_t nonfinite = 0;  // samples that came out NaN/inf and were dropped
   RayCounters rays;
+  PsfCounts filter;        // path-space filtering's batches, cells and cut paths (render/psf.h)
   bool cancelled = false;  // stopped by the cancel flag
   bool out_of_time = false;
 };
@@ -81,10 +83,13 @@ int pass_size_for_budget(int size, double left, double seconds_per_spp);
 // film, each as the seeded stream of (frame_seed, pixel, settings.first_sample + sample) gives
 // them, checking `stop` often enough to end soon after it turns true (within a pass: every 64
 // samples of a tile in the megakernel, every batch of path slots in the wavefront), and adds up
-// its rays and dropped non-finite samples. A stopped pass leaves each pixel its first n samples
-// of the pass, n possibly 0; the film counts them.
+// its rays, dropped non-finite samples and the filter's counts. A stopped pass leaves each pixel
+// its first n samples of the pass, n possibly 0; the film counts them. With path-space filtering
+// (render/psf.h) a pass is a batch per sample index: each sample of every pixel is traced, then
+// its cut paths get their cells' means, before the next sample's (so that a pass's size changes
+// no filtered image).
 using PassWork = std::function<void(int first, int count, uint64_t frame_seed, const PassStop& stop,
-                                    RayCounters& rays, uint64_t& nonfinite)>;
+                                    RayCounters& rays, uint64_t& nonfinite, PsfCounts& filter)>;
 
 // The pass loop of every renderer (the megakernel's render() below, the wavefront's): pass sizes,
 // the spp and time budgets, cancel, `end_pass` (the sampler's) between passes, `after_pass` and

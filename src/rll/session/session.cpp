@@ -62,7 +62,12 @@ RenderSession::RenderSession(const SessionSettings& settings)
   check_film_memory(kRenderBytesPerPixel);
   // Reorders the lights: everything keyed by their order (fingerprint, learnt states) follows.
   m_tree = build_light_tree(m_scene);
-  m_integrator = make_integrator_settings(settings.integrator, settings.max_depth, m_params);
+  m_integrator =
+      make_integrator_settings(settings.integrator, settings.max_depth, m_params, settings.filter);
+  // The filter's cells and records are kept beside the film: checked with it.
+  if (m_integrator.psf.on)
+    check_film_memory(kRenderBytesPerPixel + kPsfBytesPerPixel,
+                      fmt::format("{}, and {}", kRenderPixelText, kPsfPixelText));
   m_accel = std::make_unique<Accel>(m_scene.mesh);
   if (settings.device == "cuda") m_gpu = std::make_unique<cuda::GpuRenderer>(m_scene);
 }
@@ -131,7 +136,7 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::str
   Params params = variant_params(spec, name, own);
   auto sampler = make_light_sampler(name, m_scene, m_tree, params, m_accel.get());
   // The integrator's keys (nee.candidates, ...) are a variant's too: integrator_for reads them.
-  make_integrator_settings(m_settings.integrator, m_settings.max_depth, params);
+  make_integrator_settings(m_settings.integrator, m_settings.max_depth, params, m_settings.filter);
   // A variant's own keys must all be known, and are reported as the spec wrote them (not as
   // --set keys, which the user may never have given).
   std::vector<std::string> unknown;
@@ -181,7 +186,7 @@ IntegratorSettings RenderSession::integrator_for(const std::string& spec) const 
   std::string name;
   std::vector<std::string> own;
   return make_integrator_settings(m_settings.integrator, m_settings.max_depth,
-                                  variant_params(spec, name, own));
+                                  variant_params(spec, name, own), m_settings.filter);
 }
 
 void RenderSession::set_frame(int frame, LightSampler* sampler) {
@@ -215,11 +220,10 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   wavefront.film_stays_on_device = m_film_on_device;
   wavefront.tracer = m_settings.tracer == "bvh" ? WavefrontTracer::Bvh : WavefrontTracer::Embree;
   auto run = [&](const RenderSettings& r, const AfterPass& after) {
-    if (m_gpu)
-      return m_gpu->render(m_scene, sampler, is, film, r, cancel, after, wavefront);
-    return m_settings.wavefront ? render_wavefront(m_scene, *m_accel, sampler, is, film,
-                                                   r, cancel, after, wavefront)
-                                : rll::render(m_scene, integrator, sampler, film, r, cancel, after);
+    if (m_gpu) return m_gpu->render(m_scene, sampler, is, film, r, cancel, after, wavefront);
+    return m_settings.wavefront
+               ? render_wavefront(m_scene, *m_accel, sampler, is, film, r, cancel, after, wavefront)
+               : rll::render(m_scene, integrator, sampler, film, r, cancel, after);
   };
   RenderProgress p = run(rs, [&](const RenderProgress& pr, const Film& f) {
     bar.update(pr);

@@ -34,6 +34,7 @@ struct SessionSettings {
   bool wavefront = false;        // --wavefront: render with rll/wavefront instead of the megakernel
   std::string device = "cpu";    // --device: cpu, or cuda (the wavefront renderer on the GPU)
   std::string tracer = "embree";  // --tracer: the CPU wavefront's tracer, embree or bvh
+  std::string filter = "none";    // --filter: none, or psf (path-space filtering, render/psf.h)
 };
 
 // Film size limits of --res: a larger film would exhaust the memory of most machines.

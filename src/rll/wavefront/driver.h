@@ -51,12 +51,43 @@ class WavefrontDriver {
       : m_backend(backend), m_k(k), m_slots(n_slots) {
     auto take = [&]<typename T>(size_t n) { return m_backend.template take<T>(n); };
     m_k.draws = uint32_t(nee_draws_per_vertex(m_k.sampler));
-    m_k.p = PathSlots::make(take, n_slots, m_k.draws);
+    m_k.p = PathSlots::make(take, n_slots, m_k.draws, filters());
     for (uint32_t q = 0; q < kWavefrontQueues; ++q)
       m_k.queue_slots[q] =
           m_backend.template take<uint32_t>(q == kShadows ? n_slots * m_k.draws : n_slots);
     m_sizes = m_backend.template take<uint32_t>(2 * kWavefrontQueues).data;
     m_k.tally = m_backend.template take<WavefrontTally>(1).data;
+    if (filters()) {
+      // Path-space filtering: a sample of every pixel at a time (render/psf.h).
+      const size_t pixels = m_k.film.count.size, cells = psf_capacity(pixels);
+      m_k.psf_table.keys = m_backend.template take<uint64_t>(cells);
+      m_k.psf_table.sums = m_backend.template take<ExactSum>(6 * cells);
+      m_k.psf_table.used = m_backend.template take<uint32_t>(1).data;
+      m_k.psf_records = m_backend.template take<PsfRecord>(pixels);
+    }
+  }
+
+  // Whether the render filters its paths (--filter psf): its passes then run a sample of every
+  // pixel at a time, begin_filter_batch() before and resolve_filter() after each.
+  bool filters() const { return m_k.c.psf.on; }
+  // Every cell free, every record empty (a stopped batch leaves pixels it did not reach empty).
+  void begin_filter_batch() {
+    m_backend.timed(WavefrontStage::Accumulate, [&] {
+      const PsfTableView& t = m_k.psf_table;
+      m_backend.zero(t.keys.data, t.keys.size * sizeof(uint64_t));
+      m_backend.zero(t.sums.data, t.sums.size * sizeof(ExactSum));
+      m_backend.zero(t.used, sizeof(uint32_t));
+      m_backend.zero(m_k.psf_records.data, m_k.psf_records.size * sizeof(PsfRecord));
+    });
+  }
+  // After the batches of a sample: every cut path gets its cell's mean; the cells are counted.
+  void resolve_filter() {
+    m_backend.timed(WavefrontStage::Accumulate, [&] {
+      const Kernels k = m_k;
+      m_backend.launch(k.psf_records.size,
+                       [k] RLL_HD(size_t pixel) { k.psf_resolve_stage(uint64_t(pixel)); });
+      m_backend.launch(1, [k] RLL_HD(size_t) { k.psf_count_stage(); });
+    });
   }
 
   size_t slots() const { return m_slots; }

@@ -68,11 +68,14 @@ struct PathSlots {
   View<float> scale;  // NeeDraw::scale
   View<uint8_t> occluded;
   View<NeeRecord> record;
+  // Path-space filtering (render/psf.h): each path's cut; none unless the render filters.
+  View<PsfCut> cut;
 
   // Takes every array from `take(count, tag)`, a function of the memory that holds them (host or
-  // device) called as take.template operator()<T>(n); `draws` next-event samples per slot.
+  // device) called as take.template operator()<T>(n); `draws` next-event samples per slot; the
+  // cuts where `filters`.
   template <typename Take>
-  static PathSlots make(Take& take, size_t n, size_t draws) {
+  static PathSlots make(Take& take, size_t n, size_t draws, bool filters = false) {
     PathSlots p;
     p.stream = take.template operator()<SampleStream>(n);
     p.ray = take.template operator()<Ray>(n);
@@ -95,6 +98,7 @@ struct PathSlots {
     p.scale = take.template operator()<float>(n * draws);
     p.occluded = take.template operator()<uint8_t>(n * draws);
     p.record = take.template operator()<NeeRecord>(n * draws);
+    if (filters) p.cut = take.template operator()<PsfCut>(n);
     return p;
   }
 
@@ -123,6 +127,7 @@ struct PathSlots {
 // Counts of a batch, added to by the stages with integer atomics.
 struct WavefrontTally {
   uint64_t bounce = 0, shadow = 0, shadow_visible = 0, nonfinite = 0;
+  PsfCounts filter;  // path-space filtering's batches, cells and cut paths
 };
 
 // The batch of paths a launch works on: items [first_item, first_item + n) of a pass, item k being
@@ -167,6 +172,9 @@ struct WavefrontKernels {
   uint32_t* next_queue_sizes = nullptr;          // the next bounce's
   WavefrontTally* tally = nullptr;               // the pass's counts, summed over its batches
   FilmView film;
+  // Path-space filtering (render/psf.h; c.psf.on): the batch's cells, and a record per pixel.
+  PsfTableView psf_table;
+  View<PsfRecord> psf_records;
 
   RLL_HD WavefrontQueue queue(WavefrontQueueId q) const {
     return {queue_slots[q], q == kNextRays ? &next_queue_sizes[kRays] : &queue_sizes[q]};
@@ -184,6 +192,7 @@ struct WavefrontKernels {
     p.stream[i] = stream;
     p.depth[i] = 0;
     p.store(i, start_path(c));
+    if (c.psf.on) p.cut[i] = PsfCut{};
     queue_slots[kRays][i] = i;
   }
 
@@ -210,6 +219,9 @@ struct WavefrontKernels {
     const Bsdf* bsdf = new (&p.bsdf[i]) Bsdf(make_vertex_bsdf(c, sh, wo, u, depth));
     if (bsdf->is_black()) return p.store(i, s);
     LightContext ctx = make_vertex_context(c, s, sh, p.hit[i], wo, *bsdf);
+    // (The cut's key is the BSDF sampling stage's: this stage is the one short of registers.)
+    if (c.psf.on && p.cut[i].key == 0 && psf_cuts_here(c, s, *bsdf, p.hit[i].t, depth))
+      psf_cut(s, p.cut[i]);
     if (sampler.prepares && !bsdf->is_delta())
       prepare_point(sampler, ctx, vertex_number(stream, depth, kPrepare));
     p.store(i, s);
@@ -269,6 +281,8 @@ struct WavefrontKernels {
   RLL_HD void bsdf_sample_stage(uint32_t i) const {
     const int depth = p.depth[i];
     const Bsdf& bsdf = p.bsdf[i];
+    if (c.psf.on && p.cut[i].key == kPsfKeyPending)  // (the key of a cut at this vertex)
+      p.cut[i].key = psf_cut_key(c, p.ctx[i], bsdf, -p.ray[i].d, depth, p.stream[i]);
     if (!continues_after_light(c, bsdf, depth)) return;
     PathState s = p.load(i);
     Ray next;
@@ -309,6 +323,7 @@ struct WavefrontKernels {
   // order, so that the film's sums do not depend on the threads or the device.
   RLL_HD void accumulate_stage(const WavefrontBatch& b, uint64_t j) const {
     const uint64_t pixel = b.first_pixel() + j, count = uint64_t(b.count);
+    if (c.psf.on) return psf_accumulate(pixel, uint32_t(pixel - b.first_item));
     const uint64_t begin = pixel * count > b.first_item ? pixel * count : b.first_item;
     const uint64_t end_item = b.first_item + b.n, pixel_end = (pixel + 1) * count;
     const uint64_t end = pixel_end < end_item ? pixel_end : end_item;
@@ -320,6 +335,26 @@ struct WavefrontKernels {
       }
       film.add(size_t(pixel), L);
     }
+  }
+
+  // A filtering render's batches hold one sample of each pixel (item = pixel): the end of the
+  // pixel's path in `slot` (psf_end_path), its counts in the tally.
+  RLL_HD void psf_accumulate(uint64_t pixel, uint32_t slot) const {
+    const PsfEnd end =
+        psf_end_path(c.psf, psf_table, film, psf_records, size_t(pixel), p.cut[slot], p.L[slot]);
+    if (end == PsfEnd::NonFinite) atomic_add(&tally->nonfinite, uint64_t(1));
+    if (end == PsfEnd::Filtered) atomic_add(&tally->filter.paths, uint64_t(1));
+  }
+
+  // After every path of the sample: pixel's cut path gets its cell's mean (psf_resolve_pixel).
+  RLL_HD void psf_resolve_stage(uint64_t pixel) const {
+    psf_resolve_pixel(c.psf, psf_table, film, psf_records, size_t(pixel));
+  }
+
+  // ... and the sample's cells counted (one thread).
+  RLL_HD void psf_count_stage() const {
+    tally->filter.batches += 1;
+    tally->filter.cells += *psf_table.used;
   }
 };
 

@@ -135,11 +135,10 @@ RenderProgress run_wavefront_passes(
     mark = now;
   };
   bool first_pass = true;
-  auto pass = [&](int first, int count, uint64_t frame_seed, const PassStop& stop,
-                  RayCounters& rays, uint64_t& nonfinite) {
-    if (!first_pass) close_entry();
-    first_pass = false;
-    driver.begin_pass();
+  // Samples [first, first + count) of every pixel, in batches of the driver's slots; true if
+  // every one was taken (no stop came first).
+  auto run_items = [&](int first, int count, uint64_t frame_seed, const PassStop& stop,
+                       RayCounters& rays) {
     const uint64_t items = pixels * uint64_t(count);
     uint64_t item = 0;
     for (; item < items && !stop(); item += driver.slots()) {
@@ -154,7 +153,29 @@ RenderProgress run_wavefront_passes(
       driver.run_batch(b);
       rays.camera += b.n;
     }
-    const bool complete = item >= items;
+    return item >= items;
+  };
+  auto pass = [&](int first, int count, uint64_t frame_seed, const PassStop& stop,
+                  RayCounters& rays, uint64_t& nonfinite, PsfCounts& filter) {
+    if (!first_pass) close_entry();
+    first_pass = false;
+    driver.begin_pass();
+    bool complete = true;
+    if (!driver.filters()) {
+      complete = run_items(first, count, frame_seed, stop, rays);
+    } else {
+      // Path-space filtering: a sample of every pixel at a time, its cut paths resolved before
+      // the next sample's (render/psf.h).
+      for (int s = 0; s < count && complete; ++s) {
+        if (stop.stopped()) {
+          complete = false;
+          break;
+        }
+        driver.begin_filter_batch();
+        complete = run_items(first + s, 1, frame_seed, stop, rays);
+        driver.resolve_filter();
+      }
+    }
     bool copied = false;
     if (film_elsewhere) {
       // The pass loop ends after this pass where it was stopped or reaches the spp.
@@ -168,6 +189,7 @@ RenderProgress run_wavefront_passes(
     rays.shadow += t.shadow;
     rays.shadow_visible += t.shadow_visible;
     nonfinite += t.nonfinite;
+    filter += t.filter;
     if (film_elsewhere)
       min_count = complete ? min_count + uint32_t(count) : film.min_count();  // (copied)
   };

@@ -127,6 +127,7 @@ RenderProgress render_with(
   const size_t budget = memory_budget_bytes() / 4;
   const size_t slots =
       render_path_slots(wavefront, film, settings, budget, kHostMaxPathSlots, draws);
+  if (integrator.psf.on) check_psf_memory(size_t(film.width()) * film.height());
   WavefrontDriver<HostBackend, Tracer> driver(backend, k, slots);
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] { light_sampler.end_pass(); });

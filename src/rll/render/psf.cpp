@@ -1,0 +1,128 @@
+#include "rll/render/psf.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <nlohmann/json.hpp>
+
+#include "rll/core/error.h"
+#include "rll/core/memory_budget.h"
+#include "rll/core/parallel.h"
+#include "rll/core/params.h"
+
+namespace rll {
+
+const std::vector<ParamSpec<PsfSettings>>& psf_params() {
+  using S = PsfSettings;
+  static const std::vector<ParamSpec<S>> table = {
+      int_param("depth", ParamRange::closed(0, 10000).or_value(-1), field<S, &S::depth>(),
+                "-1 is Fermat's default: the first bounce for path, the camera vertex for direct"),
+      float_param("width", ParamRange::open_closed(0, 1e6), field<S, &S::width>(),
+                  "the cell radius in ray footprints"),
+      float_param("max_prob", ParamRange::positive(), field<S, &S::max_prob>(),
+                  "the largest pdf of the bounce before a cut"),
+      float_param("min_dist", ParamRange::at_least(0), field<S, &S::min_dist>()),
+      float_param("clamp", ParamRange::at_least(0), field<S, &S::clamp>(), "0 clamps nothing"),
+  };
+  return table;
+}
+
+const std::vector<std::string>& filter_names() {
+  static const std::vector<std::string> names = {"none", "psf"};
+  return names;
+}
+
+PsfSettings make_psf_settings(const std::string& filter, int max_depth, bool path,
+                              const Params& params) {
+  PsfSettings s;
+  if (filter != "none" && filter != "psf")
+    fail("--filter '{}': expected none or psf", shown_text(filter));
+  if (filter == "none") {
+    // A psf.* key without the filter would silently do nothing.
+    for (const auto& [key, value] : params.values())
+      if (key.rfind("psf.", 0) == 0)
+        fail("--set {}: a parameter of the path-space filter, which renders only with --filter psf",
+             shown_text(key));
+    return s;
+  }
+  s.on = true;
+  read_params(psf_params(), params, "psf", s);
+  if (s.depth < 0) s.depth = path ? std::min(1, max_depth - 1) : 0;  // (path at depth 1: 0)
+  // Vertices 0 .. max_depth - 1 sample light and bounce; a cut further along filters nothing.
+  if (s.depth >= max_depth)
+    fail(
+        "--set psf.depth={}: past the last vertex the {} integrator shades ({} with --max-depth "
+        "{}): the filter would filter nothing",
+        s.depth, path ? "path" : "direct", max_depth - 1, max_depth);
+  return s;
+}
+
+PsfConstants make_psf_constants(const PsfSettings& s, const Bounds3& scene_bounds) {
+  PsfConstants c;
+  if (!s.on) return c;
+  c.on = true;
+  c.depth = s.depth;
+  c.max_prob = s.max_prob;
+  c.min_dist = s.min_dist;
+  c.clamp = s.clamp;
+  // Fermat's hash: a cell of `width` footprints in radius, at most the scene's extent across,
+  // the level of detail rounded at random, 4 bins per axis of the normal's square map; the
+  // jitter is each path's own (psf_key), never the pass's.
+  CellGridSettings g;
+  g.footprint_scale = s.width;
+  g.max_cell = 0.5f;
+  g.normal_bins = 4;
+  g.jitter = 0;
+  g.level_rounding = CellGridSettings::LevelRounding::Stochastic;
+  c.keyer = CellKeyer(g, scene_bounds);
+  return c;
+}
+
+nlohmann::json filter_json(const PsfSettings& s, const PsfCounts* counts, uint64_t samples) {
+  if (!s.on) return {{"name", "none"}};
+  nlohmann::json j = {{"name", "psf"}};
+  params_json(psf_params(), s, j);
+  if (counts) {
+    j["batches"] = counts->batches;
+    j["cells_used"] = counts->cells;
+    j["cells_per_batch"] =
+        counts->batches > 0 ? double(counts->cells) / double(counts->batches) : 0.0;
+    j["paths_filtered"] = counts->paths;
+    j["filtered_share"] = samples > 0 ? double(counts->paths) / double(samples) : 0.0;
+  }
+  return j;
+}
+
+void check_psf_memory(size_t pixels) {
+  check_memory_budget(double(pixels) * kPsfBytesPerPixel,
+                      fmt::format("the path-space filter's cells and path records for {} pixels "
+                                  "({} bytes a pixel)",
+                                  pixels, kPsfBytesPerPixel));
+}
+
+PsfTable::PsfTable(size_t pixels) {
+  check_psf_memory(pixels);
+  const size_t cells = psf_capacity(pixels);
+  m_keys.resize(cells);
+  m_sums.resize(6 * cells);
+  m_records.resize(pixels);
+}
+
+void PsfTable::clear() {
+  // Large tables are cleared in parallel: a 1080p frame's are 450 MB, cleared every sample.
+  auto zero = [](void* data, size_t bytes) {
+    constexpr size_t kChunk = size_t(1) << 20;
+    unsigned char* p = static_cast<unsigned char*>(data);
+    parallel_for((bytes + kChunk - 1) / kChunk, 1, [&](size_t begin, size_t end) {
+      const size_t from = begin * kChunk, to = std::min(bytes, end * kChunk);
+      std::memset(p + from, 0, to - from);
+    });
+  };
+  zero(m_keys.data(), m_keys.size() * sizeof(uint64_t));
+  zero(m_sums.data(), m_sums.size() * sizeof(ExactSum));
+  zero(m_records.data(), m_records.size() * sizeof(PsfRecord));
+  m_used = 0;
+}
+
+}  // namespace rll

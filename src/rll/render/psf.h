@@ -1,0 +1,236 @@
+// Path-space filtering (`--filter psf`; Binder, Fricke & Keller 2018, as Fermat's psfpt renders
+// the paper's teaser; docs/psf.md): each camera path is cut at one vertex, the radiance the rest of
+// the path brings back to that vertex is averaged over the paths whose vertices share a cell of a
+// jittered spatial hash (learn/cell_grid.h's keys: position by the ray footprint, normal), and
+// each cut path gets its cell's mean times its own throughput. The cell table and everything a
+// path does with it are RLL_HD functions over flat views (DESIGN 6): the megakernel, the CPU
+// wavefront and the GPU run the same ones. Cells sum in integer words (ExactSum), so the image of
+// a seed does not depend on the threads, their order or the device.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
+
+#include "rll/core/device.h"
+#include "rll/core/math.h"
+#include "rll/core/param_table.h"
+#include "rll/core/sampling.h"
+#include "rll/learn/cell_grid.h"
+#include "rll/learn/moments.h"
+#include "rll/render/film.h"
+
+namespace rll {
+
+// The filter's settings (`--set psf.KEY=VALUE`, psf_params()); the defaults are Fermat's psfpt's.
+struct PsfSettings {
+  bool on = false;  // --filter psf
+  // The first vertex that may be cut, counted from the camera vertex (0). -1: Fermat's default,
+  // its first bounce (1) for `path`, the camera vertex for `direct` (its only vertex).
+  int depth = -1;
+  float width = 3;      // cell radius in ray footprints (Fermat's psf_width)
+  float max_prob = 32;  // a cut needs the bounce before it sampled with a pdf below this (rough)
+  // ... and the segment to the vertex at least this long (scene units; Fermat declares 0.1 but
+  // its test is commented out, so its renders use none: 0)
+  float min_dist = 0;
+  float clamp = 100;  // firefly clamp of every contribution to the film, per channel; 0: none
+};
+
+// The psf.* keys as one table (core/param_table.h): read, checked, listed by `rll filters`.
+const std::vector<ParamSpec<PsfSettings>>& psf_params();
+// `--filter NAME` ("none" or "psf") and the psf.* keys in `params` (refused without
+// --filter psf); `max_depth` the integrator's vertices (1 for direct): a depth past the last
+// vertex is refused, -1 resolved. Throws rll::Error naming the key.
+PsfSettings make_psf_settings(const std::string& filter, int max_depth, bool path,
+                              const Params& params);
+// The filters `--filter` takes, "none" first.
+const std::vector<std::string>& filter_names();
+
+// What every path vertex reads of the filter (in PathConstants): the settings and the keyer of
+// its cells, whose cell radius is `width` footprints.
+struct PsfConstants {
+  bool on = false;
+  int depth = 1;
+  float max_prob = 32, min_dist = 0, clamp = 0;
+  CellKeyer keyer;
+};
+PsfConstants make_psf_constants(const PsfSettings& s, const Bounds3& scene_bounds);
+
+// The jitter of a path's cell is drawn at dimensions of its own, far past every decision of the
+// path and its resampled light candidates (render/path_vertex.h), so that filtering changes none
+// of the numbers the path draws.
+inline constexpr uint32_t kPsfJitterDimension = 1u << 25;
+
+// A path's cut: the key of its cell (0: not cut), its throughput at the cut vertex and what it
+// had gathered before it (the emission up to and at the cut vertex, the light sampled before it),
+// which goes to the film unfiltered.
+struct PsfCut {
+  uint64_t key = 0;
+  Rgb weight{0}, before{0};
+};
+// A cut whose key is still to be computed (keys are odd: CellKeyer::key).
+inline constexpr uint64_t kPsfKeyPending = 2;
+
+// The cell of the cut vertex at point p with shading normal ns (either side: turned toward wo),
+// footprint `footprint`, `depth` its depth; u: 5 uniform numbers. As Fermat's jittered hash: the
+// cell radius is `width` footprints, rounded to a power of two at random in proportion to the
+// fraction (u[4]); the position is jittered by a disk in the tangent plane of one cell edge at the
+// camera vertex and half of one deeper (Fermat's filter_scale 2 and 1, in cell radii), the normal
+// by up to one bin.
+RLL_HD inline uint64_t psf_key(const PsfConstants& f, const Vec3& p, Vec3 ns, const Vec3& wo,
+                               float footprint, int depth, const float u[5]) {
+  if (dot(ns, wo) < 0) ns = -ns;
+  const Vec2 d = sample_uniform_disk_concentric({u[0], u[1]});
+  const float disk = depth == 0 ? 1.0f : 0.5f;
+  return f.keyer.key(
+      f.keyer.locate_jittered(p, ns, footprint, u[4], {d.x * disk, d.y * disk}, {u[2], u[3]}));
+}
+
+// A component-wise clamp of a contribution to the film or to a cell (0: none).
+RLL_HD inline Rgb psf_clamp(const Rgb& v, float clamp) {
+  return clamp > 0 ? min(v, Rgb(clamp)) : v;
+}
+
+// The cells of one batch of paths: an open-addressed table of keys (linear probing), and per cell
+// the sums of what its paths brought back after their cuts and of their throughputs at the cuts,
+// per channel. The table holds more cells than a batch has paths (each cuts once), so that an
+// insert always finds its key or a free slot: which cells a batch has never depends on the order
+// of its threads (a table that could fill would drop different cells each run).
+struct PsfTableView {
+  View<uint64_t> keys;       // 0: free
+  View<ExactSum> sums;       // 6 per cell: radiance after the cut (r, g, b), throughput (r, g, b)
+  uint32_t* used = nullptr;  // cells taken in this batch
+};
+
+// The cells for a batch of `paths` paths: twice as many, plus one.
+RLL_HD inline size_t psf_capacity(size_t paths) {
+  return 2 * paths + 1;
+}
+
+// The cell of `key` (!= 0), taken if free; thread-safe.
+RLL_HD inline uint32_t psf_cell(const PsfTableView& t, uint64_t key) {
+  const uint32_t n = uint32_t(t.keys.size);
+  uint32_t slot = uint32_t((key >> 1) % n);
+  for (;;) {
+    const uint64_t seen = atomic_cas(&t.keys[slot], 0, key);
+    if (seen == 0) {
+      atomic_add(t.used, 1u);
+      return slot;
+    }
+    if (seen == key) return slot;
+    if (++slot == n) slot = 0;
+  }
+}
+
+// What a pixel's path of the batch left for the resolve: 1 + its cell (0: not filtered) and its
+// throughput at the cut.
+struct PsfRecord {
+  uint32_t cell = 0;
+  Rgb weight{0};
+};
+
+// How a path ended, for the caller's counts.
+enum class PsfEnd { Unfiltered, Filtered, NonFinite };
+
+// The end of a pixel's path of the batch: what goes to the film now (clamped; a non-finite path
+// adds 0, as every renderer drops them) and, for a cut path, its radiance after the cut (`L`, then
+// the path's radiance gathered after the cut) and its throughput added to its cell and recorded
+// for the resolve. `L` is the whole path's radiance where it was not cut.
+RLL_HD inline PsfEnd psf_end_path(const PsfConstants& f, const PsfTableView& t,
+                                  const FilmView& film, View<PsfRecord> records, size_t pixel,
+                                  const PsfCut& cut, Rgb L) {
+  PsfRecord r;
+  PsfEnd end = PsfEnd::Unfiltered;
+  if (cut.key == 0) {
+    if (!is_finite(L)) {
+      end = PsfEnd::NonFinite;
+      L = Rgb(0);
+    }
+    film.add(pixel, psf_clamp(L, f.clamp));
+  } else if (!is_finite(L) || !is_finite(cut.before) || !is_finite(cut.weight)) {
+    end = PsfEnd::NonFinite;
+    film.add(pixel, Rgb(0));
+  } else {
+    end = PsfEnd::Filtered;
+    film.add(pixel, psf_clamp(cut.before, f.clamp));
+    const uint32_t cell = psf_cell(t, cut.key);
+    const Rgb after = psf_clamp(L, f.clamp);
+    ExactSum* s = &t.sums[6 * size_t(cell)];
+    for (int ch = 0; ch < 3; ++ch) {
+      s[ch].add(double(after[ch]));
+      s[3 + ch].add(double(cut.weight[ch]));
+    }
+    r.cell = cell + 1;
+    r.weight = cut.weight;
+  }
+  records[pixel] = r;
+  return end;
+}
+
+// After every path of the batch ended: the pixel's cut path gets its cell's mean, the ratio of
+// the cell's radiance to its throughput (which weighs each path by its throughput and gives a
+// path alone in its cell exactly its own radiance), times its own throughput, clamped; added to
+// the film's sums (the sample was counted by psf_end_path).
+RLL_HD inline void psf_resolve_pixel(const PsfConstants& f, const PsfTableView& t,
+                                     const FilmView& film, View<const PsfRecord> records,
+                                     size_t pixel) {
+  const PsfRecord r = records[pixel];
+  if (r.cell == 0) return;
+  const ExactSum* s = &t.sums[6 * size_t(r.cell - 1)];
+  Rgb v(0);
+  for (int ch = 0; ch < 3; ++ch) {
+    const double after = s[ch].value(), weight = s[3 + ch].value();
+    if (weight > 0) v[ch] = float(double(r.weight[ch]) * (after / weight));
+  }
+  film.add_sum(pixel, psf_clamp(v, f.clamp));
+}
+
+// The bytes the filter takes per pixel of the film: a record, psf_capacity cells of a key and six
+// sums for its batch of one path per pixel, and (the wavefront's) a path slot's cut.
+inline constexpr double kPsfBytesPerPixel =
+    sizeof(PsfRecord) + 2.0 * (sizeof(uint64_t) + 6 * sizeof(ExactSum)) + sizeof(PsfCut);
+inline constexpr const char* kPsfPixelText = "the path-space filter's cells and path records";
+
+// Throws rll::Error where the filter's table and records for `pixels` pixels do not fit the
+// memory budget (core/memory_budget.h), before they are allocated.
+void check_psf_memory(size_t pixels);
+
+// A batch's counts, summed over the batches of a render: --stats' `filter`.
+struct PsfCounts {
+  uint64_t batches = 0;  // batches resolved (one per sample of each pixel)
+  uint64_t cells = 0;    // cells used, summed over the batches
+  uint64_t paths = 0;    // paths filtered (cut), over all batches
+  PsfCounts& operator+=(const PsfCounts& o) {
+    batches += o.batches;
+    cells += o.cells;
+    paths += o.paths;
+    return *this;
+  }
+};
+
+// What --stats and summaries say of the filter: {"name": "none"}, or "psf" with its settings and,
+// where `counts` is given, the cells used per batch, the paths filtered and their share of the
+// `samples` camera paths.
+nlohmann::json filter_json(const PsfSettings& s, const PsfCounts* counts = nullptr,
+                           uint64_t samples = 0);
+
+// The host's table and records, for the megakernel: one batch of one path per pixel at a time.
+class PsfTable {
+ public:
+  // Checks the memory (check_psf_memory) before allocating.
+  explicit PsfTable(size_t pixels);
+  // Starts a batch: every cell free, every record empty.
+  void clear();
+  PsfTableView view() { return {view_of(m_keys), {m_sums.data(), m_sums.size()}, &m_used}; }
+  View<PsfRecord> records() { return view_of(m_records); }
+  uint32_t used() const { return m_used; }
+
+ private:
+  std::vector<uint64_t> m_keys;
+  std::vector<ExactSum> m_sums;
+  std::vector<PsfRecord> m_records;
+  uint32_t m_used = 0;
+};
+
+}  // namespace rll
