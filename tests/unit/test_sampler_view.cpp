@@ -199,40 +199,47 @@ INSTANTIATE_TEST_SUITE_P(Samplers, SamplerViewDispatch,
                          });
 
 // The host kind reaches its class's own calls: ltc's prepare finds entries, its samples carry
-// their pmf, and what it records is learnt (its pmfs move at the end of the pass).
+// their pmf, and what record_nee gives it is learnt (against a twin prepared and sampled alike
+// that records nothing, its pmfs move at the end of the pass).
 TEST(SamplerView, HostKindRunsTheClassesCalls) {
   Fixture& f = fixture("cornell-boxes-room");
   auto ltc = make_light_sampler("ltc", f.scene, *f.tree, Params{});
-  const SamplerView v = ltc->sampler_view();
+  auto twin = make_light_sampler("ltc", f.scene, *f.tree, Params{});
+  const SamplerView v = ltc->sampler_view(), vt = twin->sampler_view();
   ASSERT_EQ(v.kind, SamplerKind::Host);
   ASSERT_TRUE(v.prepares && v.learns);
-  std::vector<LightContext> ctx = f.contexts;
   size_t with_cell = 0;
-  for (LightContext& c : ctx) {
-    prepare_point(v, c, 0.5f);
-    with_cell += c.cell != kNoCell;
-  }
-  EXPECT_GT(with_cell, ctx.size() / 2) << "prepare_point did not reach ltc's prepare";
-  std::vector<float> before;
   Pcg32 rng(5);
-  for (const LightContext& c : ctx) {
-    before.push_back(light_pmf(v, c, 0));
-    for (int k = 0; k < 16; ++k) {
-      const SampledLight s = sample_light(v, c, rng.next_double());
-      ASSERT_GT(s.pmf, 0);
-      ASSERT_EQ(s.pmf, light_pmf(v, c, s.light));
-      NeeRecord r;
-      r.estimate = r.unoccluded = r.max_rgb = s.light % 2 ? 1.0f : 0.0f;
-      record_nee(v, c, s, r);
+  for (int pass = 0; pass < 2; ++pass) {
+    for (const LightContext& c0 : f.contexts) {
+      LightContext c = c0, ct = c0;
+      prepare_point(v, c, 0.5f);
+      prepare_point(vt, ct, 0.5f);
+      with_cell += c.cell != kNoCell;
+      for (int k = 0; k < 16; ++k) {
+        const double u = rng.next_double();
+        const SampledLight s = sample_light(v, c, u), st = sample_light(vt, ct, u);
+        ASSERT_GT(st.pmf, 0);
+        ASSERT_GT(s.pmf, 0);
+        ASSERT_EQ(s.pmf, light_pmf(v, c, s.light));
+        if (pass == 0) ASSERT_EQ(s.light, st.light);  // (then what the first learnt differs)
+        NeeRecord r;
+        r.estimate = r.unoccluded = r.max_rgb = s.light % 2 ? 1.0f : 0.0f;
+        record_nee(v, c, s, r);
+      }
     }
+    ltc->end_pass();
+    twin->end_pass();
   }
-  ltc->end_pass();
+  EXPECT_GT(with_cell, f.contexts.size()) << "prepare_point did not reach ltc's prepare";
   size_t moved = 0;
-  const SamplerView after = ltc->sampler_view();
-  for (size_t i = 0; i < ctx.size(); ++i) {
-    LightContext c = f.contexts[i];
+  const SamplerView after = ltc->sampler_view(), twin_after = twin->sampler_view();
+  for (const LightContext& c0 : f.contexts) {
+    LightContext c = c0, ct = c0;
     prepare_point(after, c, 0.5f);
-    moved += light_pmf(after, c, 0) != before[i];
+    prepare_point(twin_after, ct, 0.5f);
+    for (uint32_t l = 0; l < f.scene.lights.size(); l += 3)
+      moved += light_pmf(after, c, l) != light_pmf(twin_after, ct, l);
   }
   EXPECT_GT(moved, 0u) << "record_nee did not reach ltc's record";
 }
