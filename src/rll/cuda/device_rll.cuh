@@ -96,8 +96,7 @@ class DeviceRll final : public DeviceCopy {
     m_device_view.upload(&m_view, 1);
     const RllPoolState<HostBackend>& pool = *state.pool;
     m_pool = {upload(pool.keys), upload(pool.q), upload(pool.m2), upload(pool.n)};
-    learner.lend_to(*this);
-    m_learner = &learner;
+    lend(learner);
   }
   // Hands the state back to the learner that holds it here.
   ~DeviceRll() {
@@ -108,6 +107,12 @@ class DeviceRll final : public DeviceCopy {
 
   // Whether it holds `learner`'s state (not since the learner took it back).
   bool holds(const ResidentLearner& learner) const { return m_learner == &learner; }
+  // The learner's state is here (made from it, or taken back by the host since and changed
+  // there by nothing but what this copy still holds).
+  void lend(ResidentLearner& learner) {
+    learner.lend_to(*this);
+    m_learner = &learner;
+  }
 
   // The sampler's view with its arrays here.
   SamplerView sampler_view() const {

@@ -372,8 +372,10 @@ RenderProgress GpuRenderer::render(
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] {
       if (rll) {
-        sampler.end_pass();  // (on the host where an after_pass took the state back: then again)
-        hold_learner();
+        // An after_pass that read the state took it back: this copy is still that state with
+        // this pass's records on top (the host changed nothing since), so it is lent as it is.
+        if (!m.rll->holds(*rll)) m.rll->lend(*rll);
+        sampler.end_pass();
       } else if (learns) {
         device_sampler.copy_back();
         sampler.end_pass();
