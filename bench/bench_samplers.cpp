@@ -1,5 +1,6 @@
-// Per-call cost of each light sampler (ns per sample and per pmf) and light-tree build time,
-// on open fields of 10k, 100k and 1M emissive triangles.
+// Per-call cost of each light sampler (ns per sample and per pmf, through the dispatch every
+// renderer runs: lights/light_dispatch.h) and light-tree build time, on open fields of 10k, 100k
+// and 1M emissive triangles.
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -8,6 +9,7 @@
 #include "rll/accel/accel.h"
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
+#include "rll/lights/light_dispatch.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/render/render.h"
@@ -74,7 +76,7 @@ LightSampler& sampler(Setup& s, const std::string& name) {
   if (!p) {
     Params params;
     p = make_light_sampler(name, s.scene, s.tree, params, s.accel.get());
-    if (p->learns()) {  // train on a few passes so that cells hold learnt cuts
+    if (p->sampler_view().learns) {  // train on a few passes so that cells hold learnt cuts
       IntegratorSettings is;
       is.type = IntegratorType::Direct;
       Integrator integrator(s.scene, *s.accel, *p, is);
@@ -83,30 +85,31 @@ LightSampler& sampler(Setup& s, const std::string& name) {
       rs.spp = 8;
       render(s.scene, integrator, *p, film, rs);
     }
-    for (auto& c : s.contexts) p->prepare(c, 0.5f);
+    const SamplerView v = p->sampler_view();
+    for (auto& c : s.contexts) prepare_point(v, c, 0.5f);
   }
   return *p;
 }
 
 void BM_Sample(benchmark::State& state, const std::string& name) {
   Setup& s = setup(int(state.range(0)));
-  LightSampler& smp = sampler(s, name);
+  const SamplerView v = sampler(s, name).sampler_view();
   Pcg32 rng(1);
   size_t i = 0;
   for (auto _ : state) {
-    SampledLight l = smp.sample(s.contexts[i++ & 4095], rng.next_double());
+    SampledLight l = sample_light(v, s.contexts[i++ & 4095], rng.next_double());
     benchmark::DoNotOptimize(l);
   }
 }
 
 void BM_Pmf(benchmark::State& state, const std::string& name) {
   Setup& s = setup(int(state.range(0)));
-  LightSampler& smp = sampler(s, name);
+  const SamplerView v = sampler(s, name).sampler_view();
   Pcg32 rng(2);
   const uint32_t n = uint32_t(s.scene.lights.size());
   size_t i = 0;
   for (auto _ : state) {
-    float p = smp.pmf(s.contexts[i++ & 4095], rng.next_bounded(n));
+    float p = light_pmf(v, s.contexts[i++ & 4095], rng.next_bounded(n));
     benchmark::DoNotOptimize(p);
   }
 }

@@ -7,6 +7,7 @@
 
 #include "module.h"
 #include "rll/core/error.h"
+#include "rll/lights/light_dispatch.h"
 #include "rll/lights/rll_sampler.h"
 #include "rll/lights/rll_view.h"
 #include "rll/lights/sampler_state.h"
@@ -171,19 +172,19 @@ py::object pmf(const PyState& s, const Arg<long long>& cell_arg,
   const auto point = c.point(point_arg, "point"), normal = c.point(normal_arg, "normal");
   s.check_cell(cell);
   const LightContext ctx = s.context(uint32_t(cell), point, normal);
-  const LightSampler& sampler = *s.handle.sampler;
+  const SamplerView view = s.handle.sampler->sampler_view();
   const uint32_t lights = uint32_t(s.tree().light_count());
   if (!light) {
     std::vector<float> all(lights);
     {
       py::gil_scoped_release release;
-      for (uint32_t l = 0; l < lights; ++l) all[l] = sampler.pmf(ctx, l);
+      for (uint32_t l = 0; l < lights; ++l) all[l] = light_pmf(view, ctx, l);
     }
     return numpy_of(std::move(all));
   }
   const long long l = *light;
   if (l < 0 || l >= (long long)lights) fail("light: {} is not in [0, {})", l, lights);
-  return py::float_(sampler.pmf(ctx, uint32_t(l)));
+  return py::float_(light_pmf(view, ctx, uint32_t(l)));
 }
 
 }  // namespace

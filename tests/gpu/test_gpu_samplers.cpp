@@ -49,7 +49,7 @@ TEST_P(GpuSamplers, DispatchMatchesTheCpu) {
         p.estimate = rng.next_float();
         // Every probe's cell made on the CPU first, so that both devices find the same ones.
         LightContext c = ctx;
-        sampler->prepare(c, p.u_prepare);
+        prepare_point(sampler->sampler_view(), c, p.u_prepare);
         probes.push_back(p);
       }
     const std::vector<SamplerProbeResult> gpu = sampler_probe_gpu(view, probes);

@@ -107,10 +107,11 @@ TEST(GpuWavefront, RllLearntOnTheGpuPassesTheSamplerChecks) {
     int differ = 0;
     for (size_t i = 0; i < contexts.size(); ++i) {
       LightContext cold = contexts[i];
-      sampler->prepare(contexts[i], float(i % 97) / 97.0f);
-      untrained->prepare(cold, float(i % 97) / 97.0f);
+      prepare_point(sampler->sampler_view(), contexts[i], float(i % 97) / 97.0f);
+      prepare_point(untrained->sampler_view(), cold, float(i % 97) / 97.0f);
       for (uint32_t l = 0; l < n; l += 7)
-        differ += sampler->pmf(contexts[i], l) != untrained->pmf(cold, l);
+        differ += light_pmf(sampler->sampler_view(), contexts[i], l) !=
+                  light_pmf(untrained->sampler_view(), cold, l);
     }
     EXPECT_GT(differ, 0) << "nothing was learnt on the GPU";
     test::expect_sampler_contract(*sampler, contexts, n);

@@ -10,6 +10,7 @@
 
 #include "rll/accel/accel.h"
 #include "rll/core/params.h"
+#include "rll/lights/light_dispatch.h"
 #include "rll/lights/oracle_sampler.h"
 #include "rll/scene/builtin.h"
 #include "rll/wavefront/wavefront.h"
@@ -79,26 +80,27 @@ namespace {
 // the shared initial cut's power prior instead of knowledge, and in `path` they made fireflies.
 class OracleCoverage final : public LightSampler {
  public:
-  explicit OracleCoverage(const OracleLightSampler& oracle) : m_oracle(oracle) {}
-  std::string name() const override { return "oracle-coverage"; }
-  void prepare(LightContext& ctx, float u) const override {
-    m_oracle.prepare(ctx, u);
+  explicit OracleCoverage(const OracleLightSampler& oracle)
+      : LightSampler("oracle-coverage"), m_oracle(oracle), m_view(oracle.sampler_view()) {
+    set_host_calls(*this);
+  }
+  SamplerView sampler_view() const override { return host_view(true, false); }
+  void prepare(LightContext& ctx, float u) const {
+    prepare_point(m_view, ctx, u);
     ++m_vertices;
     if (ctx.cell == kNoCell || !m_oracle.rll().cuts().active(ctx.cell)) ++m_missed;
   }
-  bool prepares() const override { return true; }
-  SampledLight sample(const LightContext& ctx, double u) const override {
-    return m_oracle.sample(ctx, u);
+  SampledLight sample(const LightContext& ctx, double u) const {
+    return sample_light(m_view, ctx, u);
   }
-  float pmf(const LightContext& ctx, uint32_t light) const override {
-    return m_oracle.pmf(ctx, light);
-  }
+  float pmf(const LightContext& ctx, uint32_t light) const { return light_pmf(m_view, ctx, light); }
   double missed_share() const {
     return double(m_missed) / double(std::max<uint64_t>(m_vertices, 1));
   }
 
  private:
   const OracleLightSampler& m_oracle;
+  const SamplerView m_view;  // the oracle's
   mutable std::atomic<uint64_t> m_vertices{0}, m_missed{0};
 };
 

@@ -301,13 +301,14 @@ TEST(Wavefront, RllLearntByTheWavefrontPassesTheSamplerChecks) {
     int differ_from_untrained = 0;
     for (size_t i = 0; i < contexts.size(); ++i) {
       LightContext mk = contexts[i], cold = contexts[i];
-      sampler->prepare(contexts[i], float(i % 97) / 97.0f);
-      by_megakernel->prepare(mk, float(i % 97) / 97.0f);
-      untrained->prepare(cold, float(i % 97) / 97.0f);
+      prepare_point(sampler->sampler_view(), contexts[i], float(i % 97) / 97.0f);
+      prepare_point(by_megakernel->sampler_view(), mk, float(i % 97) / 97.0f);
+      prepare_point(untrained->sampler_view(), cold, float(i % 97) / 97.0f);
       for (uint32_t l = 0; l < n; l += 7) {
-        const float p = sampler->pmf(contexts[i], l);
-        ASSERT_EQ(p, by_megakernel->pmf(mk, l)) << "context " << i << " light " << l;
-        differ_from_untrained += p != untrained->pmf(cold, l);
+        const float p = light_pmf(sampler->sampler_view(), contexts[i], l);
+        ASSERT_EQ(p, light_pmf(by_megakernel->sampler_view(), mk, l))
+            << "context " << i << " light " << l;
+        differ_from_untrained += p != light_pmf(untrained->sampler_view(), cold, l);
       }
     }
     EXPECT_GT(differ_from_untrained, 0) << "nothing was learnt";

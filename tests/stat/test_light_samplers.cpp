@@ -1,9 +1,10 @@
-// The four checks every light sampler passes, on several built-in scenes and several hundred
-// shading contexts each: sample's pmf equals pmf(); pmfs sum to one; sampled counts fit N*pmf
-// (chi-square, pooled small bins, Sidak-corrected); each light that can contribute has pmf > 0;
-// and with stratified u each light is drawn N*pmf times to within one draw. Every check runs
-// twice: learning samplers trained, and u drawn, with Owen-scrambled Sobol' points and with
-// independent points (the renderer's two point sets).
+// The four checks every light sampler passes, through the dispatch every renderer runs
+// (lights/light_dispatch.h over the sampler's view), on several built-in scenes and several
+// hundred shading contexts each: sample_light's pmf equals light_pmf; pmfs sum to one; sampled
+// counts fit N*pmf (chi-square, pooled small bins, Sidak-corrected); each light that can contribute
+// has pmf > 0; and with stratified u each light is drawn N*pmf times to within one draw. Every
+// check runs twice: learning samplers trained, and u drawn, with Owen-scrambled Sobol' points and
+// with independent points (the renderer's two point sets).
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
@@ -67,17 +68,24 @@ constexpr int kChiSamples = 20000;
 const int kChiTests = int(kScenes.size() * sampler_cases().size()) * kChiContexts * 2;
 using Param = std::tuple<size_t, std::string, PointSet>;
 
+// The sampler reached as every renderer reaches it: the dispatch over its view.
 struct Fixture : SamplerScene {
   std::vector<LightContext> contexts;
+  SamplerView view;
+  SampledLight sample(const LightContext& ctx, double u) const {
+    return sample_light(view, ctx, u);
+  }
+  float pmf(const LightContext& ctx, uint32_t light) const { return light_pmf(view, ctx, light); }
 };
 
 Fixture make_fixture(const SamplerCase& c, const std::string& scene_name, PointSet points) {
-  Fixture f{sampler_scene(scene_name, c.sampler, c.set), {}};
+  Fixture f{sampler_scene(scene_name, c.sampler, c.set), {}, {}};
   train_sampler(f.scene, *f.accel, *f.sampler, 32,
                 points);  // RLL: strongly non-uniform cells (test_rll_learning)
+  f.view = f.sampler->sampler_view();
   f.contexts = make_contexts(f.scene, *f.accel, kContexts, 1234);
   for (size_t i = 0; i < f.contexts.size(); ++i)
-    f.sampler->prepare(f.contexts[i], float(i % 97) / 97.0f);
+    prepare_point(f.view, f.contexts[i], float(i % 97) / 97.0f);
   return f;
 }
 
@@ -105,10 +113,9 @@ TEST_P(LightSamplerStat, SampledPmfEqualsPmf) {
   for (size_t c = 0; c < f.contexts.size(); ++c)
     for (int k = 0; k < 64; ++k) {
       const LightContext& ctx = f.contexts[c];
-      SampledLight s =
-          f.sampler->sample(ctx, SampleStream(99, c, uint64_t(k), points()).next_double());
+      SampledLight s = f.sample(ctx, SampleStream(99, c, uint64_t(k), points()).next_double());
       ASSERT_GT(s.pmf, 0) << "sample returned no light";
-      ASSERT_EQ(s.pmf, f.sampler->pmf(ctx, s.light)) << "light " << s.light;
+      ASSERT_EQ(s.pmf, f.pmf(ctx, s.light)) << "light " << s.light;
     }
 }
 
@@ -117,7 +124,7 @@ TEST_P(LightSamplerStat, PmfsSumToOne) {
   const uint32_t n = uint32_t(f.scene.lights.size());
   for (size_t i = 0; i < f.contexts.size(); ++i) {
     double sum = 0;
-    for (uint32_t l = 0; l < n; ++l) sum += f.sampler->pmf(f.contexts[i], l);
+    for (uint32_t l = 0; l < n; ++l) sum += f.pmf(f.contexts[i], l);
     ASSERT_NEAR(sum, 1.0, 1e-4) << "context " << i;
   }
 }
@@ -130,7 +137,7 @@ TEST_P(LightSamplerStat, ContributingLightsHavePositivePmf) {
   for (size_t i = 0; i < f.contexts.size(); i += 2)
     for (uint32_t l = uint32_t(i % stride); l < n; l += stride) {
       if (!light_can_contribute(f.scene.lights[l], f.contexts[i].p, f.contexts[i].n)) continue;
-      ASSERT_GT(f.sampler->pmf(f.contexts[i], l), 0) << "context " << i << " light " << l;
+      ASSERT_GT(f.pmf(f.contexts[i], l), 0) << "context " << i << " light " << l;
     }
 }
 
@@ -142,11 +149,9 @@ TEST_P(LightSamplerStat, ChiSquareOfSampledCounts) {
     const LightContext& ctx = f.contexts[size_t(c) * f.contexts.size() / kChiContexts];
     std::vector<double> observed(n, 0), expected(n, 0);
     for (int k = 0; k < kChiSamples; ++k)
-      observed[f.sampler
-                   ->sample(ctx,
-                            SampleStream(4242, uint64_t(c), uint64_t(k), points()).next_double())
+      observed[f.sample(ctx, SampleStream(4242, uint64_t(c), uint64_t(k), points()).next_double())
                    .light] += 1;
-    for (uint32_t l = 0; l < n; ++l) expected[l] = double(kChiSamples) * f.sampler->pmf(ctx, l);
+    for (uint32_t l = 0; l < n; ++l) expected[l] = double(kChiSamples) * f.pmf(ctx, l);
     ChiSquareResult r = chi_square(observed, expected);
     EXPECT_FALSE(r.sample_in_zero_bin) << "context " << c << ": a light with pmf 0 was sampled";
     EXPECT_GT(r.p_value, alpha) << "context " << c << ": chi2 " << r.chi2 << " dof " << r.dof;
@@ -164,9 +169,9 @@ TEST_P(LightSamplerStat, StratifiedCountsMatchPmf) {
   for (int c = 0; c < 3; ++c) {
     const LightContext& ctx = f.contexts[size_t(c) * 37 % f.contexts.size()];
     std::vector<double> count(n, 0);
-    for (int k = 0; k < N; ++k) count[f.sampler->sample(ctx, (k + 0.5) / N).light] += 1;
+    for (int k = 0; k < N; ++k) count[f.sample(ctx, (k + 0.5) / N).light] += 1;
     for (uint32_t l = 0; l < n; ++l) {
-      double p = f.sampler->pmf(ctx, l);
+      double p = f.pmf(ctx, l);
       if (p == 0) {
         ASSERT_EQ(count[l], 0) << "light " << l << " drawn with pmf 0";
         continue;

@@ -90,7 +90,7 @@ TEST_P(RhtDescent, YieldedPdfEqualsReplayedPmfAndWeightIsImportance) {
                     ASSERT_FALSE(rht_is_directional(v, light));
                     ASSERT_GT(pdf, 0);
                     ASSERT_EQ(pdf, rht_pmf(v, ctx.p, ctx.n, light)) << "light " << light;
-                    ASSERT_EQ(pdf, f.sampler->pmf(ctx, light));
+                    ASSERT_EQ(pdf, light_pmf(f.sampler->sampler_view(), ctx, light));
                     ASSERT_EQ(importance,
                               light_importance(t.importance[t.leaf_of[light]], ctx.p, ctx.n));
                     ASSERT_GT(importance, 0);

@@ -87,7 +87,7 @@ LightContext floor_point(const Scene& scene, const RllLightSampler& sampler, int
   c.p = Vec3(0.5f + 3.0f * float(k % 8) / 7, 0, 0.5f + 3.0f * float(k / 8) / 4);
   c.n = c.ns = Vec3(0, 1, 0);
   c.footprint = 6 * scene.camera.pixel_angle();
-  sampler.prepare(c, 0.5f);
+  prepare_point(sampler.sampler_view(), c, 0.5f);
   return c;
 }
 
@@ -117,7 +117,7 @@ TEST(RllLearning, OccludedLampFallsToTheDefensiveFloor) {
         continue;
       float p_b = 0;
       for (uint32_t l = tree.node(node_b).begin; l < tree.node(node_b).end; ++l)
-        p_b += t.sampler->pmf(c, l);
+        p_b += light_pmf(t.sampler->sampler_view(), c, l);
       const float reach_b = tree_reach_pmf(tree, node_b, c.p, c.n);
       const float eps = t.sampler->cuts().defensive_weight(c.cell);
       max_reach = std::max(max_reach, reach_b);
@@ -181,7 +181,7 @@ TEST(RllLearning, GuidedDescentLearnsTheOccludedLamp) {
     if (!(reach_b > 0.05f)) continue;
     float p_b = 0, total = 0;
     for (uint32_t l = 0; l < tree.light_count(); ++l) {
-      const float p = t.sampler->pmf(c, l);
+      const float p = light_pmf(t.sampler->sampler_view(), c, l);
       total += p;
       if (l >= tree.node(node_b).begin && l < tree.node(node_b).end) p_b += p;
     }
@@ -340,26 +340,26 @@ TEST(RllLearning, RewardsOfANewCellReachTheClustersOfTheirLights) {
   Pcg32 rng(5);
   // The coarse cell learns that only the first half of the lights matters, and refines there.
   for (int pass = 0; pass < 8; ++pass) {
-    rll.prepare(coarse, 0.0f);
+    prepare_point(rll.sampler_view(), coarse, 0.0f);
     ASSERT_NE(coarse.cell, kNoCell);
     for (int i = 0; i < 2000; ++i) {
-      SampledLight s = rll.sample(coarse, rng.next_double());
-      if (s.pmf > 0) rll.record(coarse, s, nee(s.light < half ? 1.0f : 0.0f));
+      SampledLight s = sample_light(rll.sampler_view(), coarse, rng.next_double());
+      if (s.pmf > 0) record_nee(rll.sampler_view(), coarse, s, nee(s.light < half ? 1.0f : 0.0f));
     }
     rll.end_pass();
   }
   // A finer cell inside it sees only the second half.
-  rll.prepare(fine, 0.9999f);
+  prepare_point(rll.sampler_view(), fine, 0.9999f);
   ASSERT_NE(fine.cell, kNoCell);
   ASSERT_NE(fine.cell, coarse.cell);
   ASSERT_FALSE(rll.cuts().active(fine.cell));
   for (int i = 0; i < 4000; ++i) {
-    SampledLight s = rll.sample(fine, rng.next_double());
-    if (s.pmf > 0) rll.record(fine, s, nee(s.light >= half ? 1.0f : 0.0f));
+    SampledLight s = sample_light(rll.sampler_view(), fine, rng.next_double());
+    if (s.pmf > 0) record_nee(rll.sampler_view(), fine, s, nee(s.light >= half ? 1.0f : 0.0f));
   }
   rll.end_pass();
-  rll.prepare(coarse, 0.0f);
-  rll.prepare(fine, 0.9999f);
+  prepare_point(rll.sampler_view(), coarse, 0.0f);
+  prepare_point(rll.sampler_view(), fine, 0.9999f);
   std::vector<double> shares = rll.cuts().learnt_shares(fine.cell);
   ASSERT_FALSE(shares.empty());
   double second_half = 0, first_half = 0;
@@ -394,14 +394,14 @@ TEST(RllLearning, FullTableEvictsAndStaysCorrect) {
   auto contexts = make_contexts(scene, accel, 60, 5);
   Pcg32 rng(8);
   for (auto& c : contexts) {
-    rll.prepare(c, rng.next_float());
+    prepare_point(rll.sampler_view(), c, rng.next_float());
     double sum = 0;
-    for (uint32_t l = 0; l < scene.lights.size(); ++l) sum += rll.pmf(c, l);
+    for (uint32_t l = 0; l < scene.lights.size(); ++l) sum += light_pmf(rll.sampler_view(), c, l);
     EXPECT_NEAR(sum, 1.0, 1e-4);
     for (int k = 0; k < 16; ++k) {
-      SampledLight s = rll.sample(c, rng.next_double());
+      SampledLight s = sample_light(rll.sampler_view(), c, rng.next_double());
       ASSERT_GT(s.pmf, 0);
-      EXPECT_EQ(s.pmf, rll.pmf(c, s.light));
+      EXPECT_EQ(s.pmf, light_pmf(rll.sampler_view(), c, s.light));
     }
   }
   RenderRequest a;

@@ -169,8 +169,9 @@ int count_misfits(const std::vector<double>& count, const std::vector<double>& e
 std::vector<double> stratified_counts(const LightSampler& s, const LightContext& ctx, int draws,
                                       size_t lights) {
   std::vector<double> count(lights, 0);
+  const SamplerView v = s.sampler_view();
   for (int k = 0; k < draws; ++k) {
-    const SampledLight sl = s.sample(ctx, (k + 0.5) / draws);
+    const SampledLight sl = sample_light(v, ctx, (k + 0.5) / draws);
     if (sl.pmf > 0) count[sl.light] += 1;
   }
   return count;
@@ -183,7 +184,8 @@ std::vector<double> scaled(std::vector<double> v, double f) {
 
 std::vector<double> pmfs(const LightSampler& s, const LightContext& ctx, size_t lights) {
   std::vector<double> p(lights);
-  for (size_t l = 0; l < lights; ++l) p[l] = s.pmf(ctx, uint32_t(l));
+  const SamplerView v = s.sampler_view();
+  for (size_t l = 0; l < lights; ++l) p[l] = light_pmf(v, ctx, uint32_t(l));
   return p;
 }
 
@@ -216,7 +218,9 @@ TEST_P(SamplerTruth, StratifiedCountsAndChiSquareAtManyContexts) {
   const std::unique_ptr<LightSampler>& sampler = s.sampler;
   if (c.passes > 0) train_sampler(scene, accel, *sampler, c.passes);
   std::vector<LightContext> contexts = truth_contexts(scene, accel);
-  for (size_t i = 0; i < contexts.size(); ++i) sampler->prepare(contexts[i], float(i % 97) / 97.0f);
+  const SamplerView view = sampler->sampler_view();
+  for (size_t i = 0; i < contexts.size(); ++i)
+    prepare_point(view, contexts[i], float(i % 97) / 97.0f);
 
   const size_t n = scene.lights.size();
   // Context-free samplers are cheap: draw enough that each light is expected 64 times.
@@ -259,7 +263,7 @@ TEST_P(SamplerTruth, StratifiedCountsAndChiSquareAtManyContexts) {
     }
     std::vector<double> observed(n, 0);
     for (int k = 0; k < kChiSamples; ++k)
-      observed[sampler->sample(ctx, SampleStream(555, i, uint64_t(k)).next_double()).light] += 1;
+      observed[sample_light(view, ctx, SampleStream(555, i, uint64_t(k)).next_double()).light] += 1;
     const ChiSquareResult r = chi_square(observed, scaled(pmf, kChiSamples));
     EXPECT_FALSE(r.sample_in_zero_bin) << "a light with pmf 0 was sampled";
     EXPECT_GT(r.p_value, alpha) << "chi2 " << r.chi2 << " dof " << r.dof;

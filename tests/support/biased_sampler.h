@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "rll/lights/light_dispatch.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/scene/scene.h"
 
@@ -22,24 +23,25 @@ namespace rll::test {
 // `Pmf::Understated`, sample() draws from p but pmf() answers p / factor for the group's lights
 // (pmfs no longer sum to one): the group's next-event light is `factor` times too bright, the
 // image bias a region-wise render test must see. It learns nothing: train the wrapped sampler first
-// (the group's samples carry no cluster for a learner's record()).
+// (the group's samples carry no cluster for a learner's record_nee). Its view is the host kind
+// (over the wrapped sampler's view, taken when it is made).
 class BiasedSampler final : public LightSampler {
  public:
   enum class Pmf { Consistent, Wrapped, Understated };
   // `group`: light indices (any order, no repeats). The wrapped sampler must outlive this one.
   BiasedSampler(LightSampler& inner, std::vector<uint32_t> group, double factor, Pmf mode);
-  std::string name() const override { return "biased-" + m_inner.name(); }
-  void prepare(LightContext& ctx, float u) const override { m_inner.prepare(ctx, u); }
-  bool prepares() const override { return m_inner.prepares(); }
-  SampledLight sample(const LightContext& ctx, double u) const override;
-  float pmf(const LightContext& ctx, uint32_t light) const override;
+  SamplerView sampler_view() const override { return host_view(m_inner.prepares, false); }
+  // Its host kind's calls.
+  void prepare(LightContext& ctx, float u) const { prepare_point(m_inner, ctx, u); }
+  SampledLight sample(const LightContext& ctx, double u) const;
+  float pmf(const LightContext& ctx, uint32_t light) const;
 
   bool in_group(uint32_t light) const { return light < m_in_group.size() && m_in_group[light]; }
   // The mixture weight b at a point: 1 - 1/Z.
   double group_branch(const LightContext& ctx) const;
 
  private:
-  LightSampler& m_inner;
+  SamplerView m_inner;  // the wrapped sampler's
   std::vector<uint32_t> m_group;
   std::vector<uint8_t> m_in_group;
   double m_factor;

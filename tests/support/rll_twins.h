@@ -55,8 +55,8 @@ struct RllTwins {
     for (const LightContext& c : contexts) {
       LightContext ca = c, cb = c;
       const float u = rng.next_float();
-      a->prepare(ca, u);
-      b->prepare(cb, u);
+      prepare_point(a->sampler_view(), ca, u);
+      prepare_point(b->sampler_view(), cb, u);
       ASSERT_EQ(ca.cell, cb.cell);
       if (ca.cell == kNoCell) continue;
       auto clusters = [&](const RllLightSampler& s) {

@@ -115,21 +115,22 @@ void render_path_passes(const Scene& scene, const Accel& accel, LightSampler& sa
 
 void train_sampler(const Scene& scene, const Accel& accel, LightSampler& sampler, int passes,
                    PointSet points) {
-  if (sampler.learns()) render_path_passes(scene, accel, sampler, passes, points);
+  if (sampler.sampler_view().learns) render_path_passes(scene, accel, sampler, passes, points);
 }
 
 void expect_sampler_contract(const LightSampler& sampler, const std::vector<LightContext>& contexts,
                              uint32_t n) {
+  const SamplerView v = sampler.sampler_view();
   const double alpha = sidak_alpha(0.01, 2 * 4);
   for (size_t c = 0; c < contexts.size(); ++c) {
     const LightContext& ctx = contexts[c];
     for (int k = 0; k < 32; ++k) {
-      const SampledLight s = sampler.sample(ctx, SampleStream(99, c, uint64_t(k)).next_double());
+      const SampledLight s = sample_light(v, ctx, SampleStream(99, c, uint64_t(k)).next_double());
       ASSERT_GT(s.pmf, 0);
-      ASSERT_EQ(s.pmf, sampler.pmf(ctx, s.light)) << "context " << c << " light " << s.light;
+      ASSERT_EQ(s.pmf, light_pmf(v, ctx, s.light)) << "context " << c << " light " << s.light;
     }
     double sum = 0;
-    for (uint32_t l = 0; l < n; ++l) sum += sampler.pmf(ctx, l);
+    for (uint32_t l = 0; l < n; ++l) sum += light_pmf(v, ctx, l);
     ASSERT_NEAR(sum, 1.0, 1e-4) << "context " << c;
   }
   for (int c = 0; c < 4; ++c) {
@@ -137,12 +138,12 @@ void expect_sampler_contract(const LightSampler& sampler, const std::vector<Ligh
     const int N = 20000;
     std::vector<double> stratified(n, 0), random(n, 0), expected(n, 0);
     for (int k = 0; k < N; ++k) {
-      stratified[sampler.sample(ctx, (k + 0.5) / N).light] += 1;
-      random[sampler.sample(ctx, SampleStream(4242, uint64_t(c), uint64_t(k)).next_double())
+      stratified[sample_light(v, ctx, (k + 0.5) / N).light] += 1;
+      random[sample_light(v, ctx, SampleStream(4242, uint64_t(c), uint64_t(k)).next_double())
                  .light] += 1;
     }
     for (uint32_t l = 0; l < n; ++l) {
-      const double p = sampler.pmf(ctx, l);
+      const double p = light_pmf(v, ctx, l);
       expected[l] = p * N;
       if (p == 0)
         ASSERT_EQ(stratified[l], 0) << "light " << l << " drawn with pmf 0";

@@ -8,6 +8,7 @@
 
 #include "rll/accel/accel.h"
 #include "rll/core/rng.h"
+#include "rll/lights/light_dispatch.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/scene/scene.h"
@@ -41,9 +42,10 @@ bool light_can_contribute(const Light& light, const Vec3& p, const Vec3& n);
 void render_path_passes(const Scene& scene, const Accel& accel, LightSampler& sampler, int spp,
                         PointSet points = PointSet::Sobol);
 
-// The light-sampler contract at contexts already prepared by `sampler`: sample's pmf equals pmf()
-// exactly and is positive, pmfs sum to one, stratified u draws each light N * pmf times to within
-// two draws, and independent draws fit N * pmf (chi-square, Sidak-corrected over 4 contexts).
+// The light-sampler contract at contexts already prepared by `sampler`, through the dispatch over
+// its view (light_dispatch.h): sample_light's pmf equals light_pmf exactly and is positive, pmfs
+// sum to one, stratified u draws each light N * pmf times to within two draws, and independent
+// draws fit N * pmf (chi-square, Sidak-corrected over 4 contexts).
 void expect_sampler_contract(const LightSampler& sampler, const std::vector<LightContext>& contexts,
                              uint32_t lights);
 

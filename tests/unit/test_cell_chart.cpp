@@ -9,6 +9,7 @@
 #include "rll/accel/accel.h"
 #include "rll/core/params.h"
 #include "rll/eval/cell_chart.h"
+#include "rll/lights/light_dispatch.h"
 #include "rll/lights/rll_sampler.h"
 #include "rll/render/film.h"
 #include "rll/render/render.h"
@@ -76,7 +77,8 @@ TEST(CellChart, BarsAreTheSamplersClusterProbabilities) {
         EXPECT_EQ(cell.begin[k], cell.end[k - 1]);
       }
       double pmf = 0;
-      for (uint32_t l = cell.begin[k]; l < cell.end[k]; ++l) pmf += r.rll->pmf(ctx, l);
+      for (uint32_t l = cell.begin[k]; l < cell.end[k]; ++l)
+        pmf += light_pmf(r.rll->sampler_view(), ctx, l);
       // (Where the within-cluster descent finds no light facing the anchor, the sum is 0.)
       if (cell.has_cut && pmf > 0) {
         EXPECT_NEAR(cell.learnt[k], pmf, 1e-4) << "cell " << cell.cell << " cluster " << k;

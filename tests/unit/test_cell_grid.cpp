@@ -9,6 +9,7 @@
 
 #include "rll/core/params.h"
 #include "rll/learn/cell_grid.h"
+#include "rll/lights/light_dispatch.h"
 #include "rll/lights/rll_sampler.h"
 #include "support/test_support.h"
 
@@ -26,7 +27,7 @@ uint32_t cell_of(const RllLightSampler& rll, const Scene& scene, Vec3 wo, bool g
   c.wo = wo;
   c.glossy = glossy;
   c.footprint = 1e-3f * length(scene.bounds.diagonal());
-  rll.prepare(c, 0.5f);
+  prepare_point(rll.sampler_view(), c, 0.5f);
   return c.cell;
 }
 

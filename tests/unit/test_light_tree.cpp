@@ -126,7 +126,7 @@ std::map<LightGroup, double> group_shares(const Scene& s, const TreeLightSampler
   c.n = c.ns = n;
   std::map<LightGroup, double> share;
   for (uint32_t l = 0; l < s.lights.size(); ++l)
-    share[group_of(s, s.lights[l])] += sampler.pmf(c, l);
+    share[group_of(s, s.lights[l])] += light_pmf(sampler.sampler_view(), c, l);
   return share;
 }
 
@@ -235,9 +235,9 @@ TEST(LightTree, EachContributingGroupGetsAnEqualShare) {
   c.p = Vec3(7, 0, 6);
   c.n = c.ns = Vec3(0, 1, 0);
   for (int k = 0; k < 1000; ++k) {
-    SampledLight sl = sampler.sample(c, (k + 0.5) / 1000);
+    SampledLight sl = sample_light(sampler.sampler_view(), c, (k + 0.5) / 1000);
     ASSERT_GT(sl.pmf, 0.0f);
-    EXPECT_EQ(sl.pmf, sampler.pmf(c, sl.light));
+    EXPECT_EQ(sl.pmf, light_pmf(sampler.sampler_view(), c, sl.light));
   }
 }
 
@@ -260,12 +260,13 @@ TEST(LightTree, TinyImportanceNextToAHugeOneKeepsAPositivePmf) {
   c.n = c.ns = Vec3(0, 1, 0);
   const uint32_t dim = s.lights[0].p0.y > 50 ? 0 : 1;
   ASSERT_TRUE(test::light_can_contribute(s.lights[dim], c.p, c.n));
-  const float p_dim = sampler.pmf(c, dim), p_bright = sampler.pmf(c, 1 - dim);
+  const float p_dim = light_pmf(sampler.sampler_view(), c, dim),
+              p_bright = light_pmf(sampler.sampler_view(), c, 1 - dim);
   EXPECT_GT(p_dim, 0.0f);
   EXPECT_GE(p_dim, 0x1p-25f);
   EXPECT_EQ(double(p_dim) + double(p_bright), 1.0);
   // The top of [0, 1) draws it, with the same probability pmf() gives.
-  SampledLight sl = sampler.sample(c, dim == 1 ? 1 - 0x1p-30 : 0x1p-30);
+  SampledLight sl = sample_light(sampler.sampler_view(), c, dim == 1 ? 1 - 0x1p-30 : 0x1p-30);
   EXPECT_EQ(sl.light, dim);
   EXPECT_EQ(sl.pmf, p_dim);
 }
@@ -287,7 +288,7 @@ TEST(LightTree, RefitAfterLightsMoveKeepsBoundsConservative) {
     for (const LightContext& c : test::make_contexts(s, accel, 40, 7 + frame))
       for (uint32_t l = 0; l < s.lights.size(); ++l) {
         if (test::light_can_contribute(s.lights[l], c.p, c.n)) {
-          ASSERT_GT(sampler.pmf(c, l), 0.0f) << "light " << l;
+          ASSERT_GT(light_pmf(sampler.sampler_view(), c, l), 0.0f) << "light " << l;
         }
       }
   }

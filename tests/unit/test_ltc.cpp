@@ -10,6 +10,7 @@
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
 #include "rll/learn/cut.h"
+#include "rll/lights/light_dispatch.h"
 #include "rll/lights/ltc_sampler.h"
 #include "rll/scene/builtin.h"
 #include "support/test_support.h"
@@ -40,12 +41,12 @@ void feed_pass(LtcLightSampler& ltc, const LightContext& ctx, int samples, uint3
                uint64_t seed) {
   Pcg32 rng(seed);
   for (int i = 0; i < samples; ++i) {
-    SampledLight s = ltc.sample(ctx, rng.next_double());
+    SampledLight s = sample_light(ltc.sampler_view(), ctx, rng.next_double());
     ASSERT_GT(s.pmf, 0);
     NeeRecord r;
     r.estimate = s.light >= lit_begin && s.light < lit_end ? 1.0f : 0.0f;
     r.mis_weight = 1;
-    ltc.record(ctx, s, r);
+    record_nee(ltc.sampler_view(), ctx, s, r);
   }
   ltc.end_pass();
 }
@@ -120,7 +121,7 @@ TEST(LtcSampler, LearningMovesProbabilityOntoTheLitLights) {
   ASSERT_GT(tree.light_count(), 64u);
   LtcLightSampler ltc(s, tree, small_settings());
   LightContext ctx = floor_context(s);
-  ltc.prepare(ctx, 0.5f);
+  prepare_point(ltc.sampler_view(), ctx, 0.5f);
   ASSERT_NE(ctx.cell, kNoCell);
   // The lit lights: a subtree two levels below a node of the global cut, the one whose lights
   // the tree at this point likes least among those it gives at least 1% to, so that learning must
@@ -131,7 +132,8 @@ TEST(LtcSampler, LearningMovesProbabilityOntoTheLitLights) {
     uint32_t n = top;
     for (int d = 0; d < 2 && !tree.node(n).is_leaf(); ++d) n = tree.node(n).child + 1;
     double mass = 0;
-    for (uint32_t l = tree.node(n).begin; l < tree.node(n).end; ++l) mass += ltc.pmf(ctx, l);
+    for (uint32_t l = tree.node(n).begin; l < tree.node(n).end; ++l)
+      mass += light_pmf(ltc.sampler_view(), ctx, l);
     if (n != top && mass > 0.01 && mass < before) {
       before = mass;
       lit_node = n;
@@ -147,12 +149,12 @@ TEST(LtcSampler, LearningMovesProbabilityOntoTheLitLights) {
   std::vector<uint32_t> nodes(ltc.cut_nodes(ctx.cell), ltc.cut_nodes(ctx.cell) + K);
   EXPECT_TRUE(is_valid_cut(tree, nodes));
   double after = 0;
-  for (uint32_t l = lit_begin; l < lit_end; ++l) after += ltc.pmf(ctx, l);
+  for (uint32_t l = lit_begin; l < lit_end; ++l) after += light_pmf(ltc.sampler_view(), ctx, l);
   EXPECT_GT(after, 0.8) << "before " << before;
   EXPECT_GT(after, 4 * before);
   // pmfs still sum to one and every light keeps some probability (the defensive mix).
   double sum = 0;
-  for (uint32_t l = 0; l < tree.light_count(); ++l) sum += ltc.pmf(ctx, l);
+  for (uint32_t l = 0; l < tree.light_count(); ++l) sum += light_pmf(ltc.sampler_view(), ctx, l);
   EXPECT_NEAR(sum, 1.0, 1e-5);
 }
 
@@ -163,25 +165,28 @@ TEST(LtcSampler, LearntStateIndependentOfRewardOrder) {
   const LightTree tree = build_light_tree(s);
   LtcLightSampler a(s, tree, small_settings()), b(s, tree, small_settings());
   LightContext ctx = floor_context(s), cb = ctx;
-  a.prepare(ctx, 0.5f);
-  b.prepare(cb, 0.5f);
+  prepare_point(a.sampler_view(), ctx, 0.5f);
+  prepare_point(b.sampler_view(), cb, 0.5f);
   const uint32_t lit = uint32_t(s.lights.size() / 2);
   for (int pass = 0; pass < 6; ++pass) {
     std::vector<std::pair<SampledLight, NeeRecord>> recs;
     Pcg32 rng(50 + pass);
     for (int i = 0; i < 3000; ++i) {
-      SampledLight sl = a.sample(ctx, rng.next_double());
+      SampledLight sl = sample_light(a.sampler_view(), ctx, rng.next_double());
       NeeRecord r;
       r.estimate = sl.light == lit ? 2.0f : (sl.light % 7 == 0 ? 0.01f * float(sl.light % 13) : 0.0f);
       r.mis_weight = 0.9f;
       recs.push_back({sl, r});
     }
-    for (const auto& [sl, r] : recs) a.record(ctx, sl, r);
-    for (auto it = recs.rbegin(); it != recs.rend(); ++it) b.record(cb, it->first, it->second);
+    for (const auto& [sl, r] : recs) record_nee(a.sampler_view(), ctx, sl, r);
+    for (auto it = recs.rbegin(); it != recs.rend(); ++it)
+      record_nee(b.sampler_view(), cb, it->first, it->second);
     a.end_pass();
     b.end_pass();
   }
-  for (uint32_t l = 0; l < s.lights.size(); ++l) ASSERT_EQ(a.pmf(ctx, l), b.pmf(cb, l)) << "light " << l;
+  for (uint32_t l = 0; l < s.lights.size(); ++l)
+    ASSERT_EQ(light_pmf(a.sampler_view(), ctx, l), light_pmf(b.sampler_view(), cb, l))
+        << "light " << l;
 }
 
 TEST(LtcSampler, BadParametersAreErrors) {

@@ -49,9 +49,11 @@ float largest_pmf_difference(const LightSampler& a, const LightSampler& b,
   for (size_t i = 0; i < contexts.size(); ++i) {
     LightContext ca = contexts[i], cb = contexts[i];
     const float u = float(i % 97) / 97.0f;
-    a.prepare(ca, u);
-    b.prepare(cb, u);
-    for (uint32_t l = 0; l < lights; ++l) worst = std::max(worst, std::abs(a.pmf(ca, l) - b.pmf(cb, l)));
+    prepare_point(a.sampler_view(), ca, u);
+    prepare_point(b.sampler_view(), cb, u);
+    for (uint32_t l = 0; l < lights; ++l)
+      worst = std::max(
+          worst, std::abs(light_pmf(a.sampler_view(), ca, l) - light_pmf(b.sampler_view(), cb, l)));
   }
   return worst;
 }
@@ -173,10 +175,11 @@ TEST(SamplerState, LoadedSamplerHasTheSavedPmfsAndSamples) {
     EXPECT_GT(largest_pmf_difference(*trained, *fresh, contexts, lights), 1e-3f) << name;
     for (size_t i = 0; i < contexts.size(); ++i) {
       LightContext ca = contexts[i], cb = contexts[i];
-      trained->prepare(ca, 0.5f);
-      loaded->prepare(cb, 0.5f);
+      prepare_point(trained->sampler_view(), ca, 0.5f);
+      prepare_point(loaded->sampler_view(), cb, 0.5f);
       for (double u : {0.01, 0.3, 0.77, 0.999}) {
-        const SampledLight sa = trained->sample(ca, u), sb = loaded->sample(cb, u);
+        const SampledLight sa = sample_light(trained->sampler_view(), ca, u),
+                           sb = sample_light(loaded->sampler_view(), cb, u);
         EXPECT_EQ(sa.light, sb.light);
         EXPECT_EQ(sa.pmf, sb.pmf);
       }

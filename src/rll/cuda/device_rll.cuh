@@ -1,33 +1,37 @@
-// RLL's learning state resident in device memory (nvcc only, issue 31 item 4): every array of an
-// RllLightSampler (cell table, free list, last use, point sums, cuts with their values, tables,
-// anchors and reward sums) uploaded once, the coarse cells of pooling and the end of pass's
-// scratch kept there; the end of pass runs there (rll_end_pass over the CUDA backend) and only
-// its counters come back per pass. When the lights change (an animated scene's frames), the
-// refit light tree and the light powers are copied into the device's arrays and the priors and
-// tables are made anew there (rll_lights_changed). The sampler is told (set_remote) and pulls
-// the arrays back when the host reads them: a saved state, --stats, Python, a host end of pass.
+// RLL's learning state resident in device memory (nvcc only, issue 31 item 4): the device's copy
+// of a learner (lights/resident.h: rll and fermat while they learn), owned by the GPU renderer
+// (cuda/wavefront.cu), which the render session owns. Every array of the learner's state (cell
+// table, free list, last use, point sums, cuts with their values, tables, anchors and reward
+// sums) uploaded once, the coarse cells of pooling and the end of pass's scratch kept there; the
+// learner's end of pass runs there (rll_end_pass over the CUDA backend) and only its counters come
+// back per pass. When the lights change (an animated scene's frames), the refit light tree and
+// the light powers are copied into the device's arrays and the priors and tables are made anew
+// there (rll_lights_changed). The learner is lent to it and pulls the arrays back when the host
+// reads them (a saved state, --stats, Python, a CPU render); the copy hands them back when it
+// goes first.
 #pragma once
 
 #include <cuda_runtime.h>
 
-#include <memory>
 #include <unordered_map>
 
 #include "rll/core/error.h"
 #include "rll/cuda/backend.cuh"
 #include "rll/cuda/device_scene.cuh"
-#include "rll/lights/rll_sampler.h"
+#include "rll/lights/resident.h"
+#include "rll/lights/rll_end_pass.h"
 
 namespace rll::cuda {
 
-class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
+class DeviceRll final : public DeviceCopy {
  public:
-  // Uploads the sampler's state (its host arrays must be current: sync() first).
-  explicit DeviceRll(RllLightSampler& s) {
-    const RllView& h = s.rll_view();
+  // Uploads the learner's state (taken back first from any copy that holds it) and holds it.
+  explicit DeviceRll(ResidentLearner& learner) {
+    const ResidentState state = learner.resident_state();
+    const RllView& h = *state.view;
     // The learning view first: its writable arrays are mirrored to be copied back; the sampling
     // view's arrays are the same host arrays and take the same device arrays.
-    m_learn = s.learn_view();
+    m_learn = state.learn;
     const RllLearnView host_learn = m_learn;
     CutStoreEndView& e = m_learn.cuts;
     e.tree.nodes = once(e.tree.nodes);
@@ -90,8 +94,24 @@ class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
     r.power_prefix = once(h.power_prefix);
     m_device_view = DeviceArray<RllView>(1);
     m_device_view.upload(&m_view, 1);
-    const RllPoolState<HostBackend>& pool = s.pool();
+    const RllPoolState<HostBackend>& pool = *state.pool;
     m_pool = {upload(pool.keys), upload(pool.q), upload(pool.m2), upload(pool.n)};
+    lend(learner);
+  }
+  // Hands the state back to the learner that holds it here.
+  ~DeviceRll() {
+    if (m_learner) m_learner->sync();
+  }
+  DeviceRll(const DeviceRll&) = delete;
+  DeviceRll& operator=(const DeviceRll&) = delete;
+
+  // Whether it holds `learner`'s state (not since the learner took it back).
+  bool holds(const ResidentLearner& learner) const { return m_learner == &learner; }
+  // The learner's state is here (made from it, or taken back by the host since and changed
+  // there by nothing but what this copy still holds).
+  void lend(ResidentLearner& learner) {
+    learner.lend_to(*this);
+    m_learner = &learner;
   }
 
   // The sampler's view with its arrays here.
@@ -104,19 +124,9 @@ class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
     return v;
   }
 
-  // Tells the sampler that its state is here from now on, and how to pull it back.
-  void make_remote(RllLightSampler& s) {
-    std::shared_ptr<DeviceRll> self = shared_from_this();
-    s.set_remote(
-        this, [self](RllPoolState<HostBackend>& pool) { self->pull(pool); },
-        [self](const LightTreeView& tree, View<const double> power_prefix) {
-          self->lights_changed(tree, power_prefix);
-        });
-  }
-
   // The lights moved or switched (the tree refit on the host, same shape): the tree's arrays and
   // the powers copied into the device's, every prior and table made anew there.
-  void lights_changed(const LightTreeView& tree, View<const double> power_prefix) {
+  void lights_changed(const LightTreeView& tree, View<const double> power_prefix) override {
     refill(m_learn.cuts.tree.nodes, tree.nodes);
     refill(m_learn.cuts.tree.importance, tree.importance);
     refill(m_learn.cuts.tree.leaf_of, tree.leaf_of);
@@ -124,15 +134,13 @@ class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
     rll_lights_changed(CudaBackend{}, m_learn, m_pool, m_scratch);
   }
 
-  // The end of pass here; the sampler keeps its statistics and moves to the next pass, whose
-  // pass number, jitter and free cells the sampling view then takes.
-  void end_pass(RllLightSampler& s) {
-    s.end_pass_with([this](const RllLearnView& host, RllPoolState<HostBackend>&,
-                           uint32_t used_before, bool reset) {
-      m_learn.keyer = host.keyer;  // this pass's
-      return rll_end_pass(CudaBackend{}, m_learn, m_pool, m_scratch, used_before, reset);
-    });
-    const RllView& h = s.rll_view();
+  // The learner's end of pass here (it keeps its statistics and moves to the next pass, whose
+  // pass number, jitter and free cells the sampling view then takes: view_changed).
+  RllPassCounts end_pass(const RllLearnView& host, uint32_t used_before, bool reset) override {
+    m_learn.keyer = host.keyer;  // this pass's
+    return rll_end_pass(CudaBackend{}, m_learn, m_pool, m_scratch, used_before, reset);
+  }
+  void view_changed(const RllView& h) override {
     m_view.pass = h.pass;
     m_view.keyer = h.keyer;
     m_view.table.free.size = h.table.free.size;
@@ -140,14 +148,17 @@ class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
     m_device_view.upload(&m_view, 1);
   }
 
-  // Copies every array back into the sampler's host arrays, the coarse cells into `pool`.
-  void pull(RllPoolState<HostBackend>& pool) const {
+  // Copies every array back into the learner's host arrays, the coarse cells into `pool`.
+  void pull(RllPoolState<HostBackend>& pool) override {
+    m_learner = nullptr;
     m_memory.copy_back();
     pool.keys = download(m_pool.keys);
     pool.q = download(m_pool.q);
     pool.m2 = download(m_pool.m2);
     pool.n = download(m_pool.n);
   }
+
+  void forget() override { m_learner = nullptr; }
 
   size_t bytes() const {
     return m_memory.bytes() + m_device_view.bytes() + m_scratch.bytes() + m_pool.keys.bytes() +
@@ -197,6 +208,7 @@ class DeviceRll : public std::enable_shared_from_this<DeviceRll> {
   DeviceArray<RllView> m_device_view;
   RllPoolState<CudaBackend> m_pool;
   RllScratch<CudaBackend> m_scratch;
+  ResidentLearner* m_learner = nullptr;  // whose state this is, until it takes it back
 };
 
 }  // namespace rll::cuda

@@ -116,17 +116,13 @@ RllPassCounts rll_end_pass_gpu(const RllLearnView& v, RllPoolState<HostBackend>&
 }
 
 void rll_end_pass_resident_gpu(RllLightSampler& s) {
-  s.sync();
-  const auto state = std::make_shared<cuda::DeviceRll>(s);
-  state->make_remote(s);
-  state->end_pass(s);
+  cuda::DeviceRll state(s);
+  s.end_pass();
   s.sync();
 }
 
 void rll_lights_changed_resident_gpu(RllLightSampler& s, const Scene& scene) {
-  s.sync();
-  const auto state = std::make_shared<cuda::DeviceRll>(s);
-  state->make_remote(s);
+  cuda::DeviceRll state(s);
   s.lights_changed(scene);
   s.sync();
 }

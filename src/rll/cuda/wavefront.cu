@@ -198,9 +198,10 @@ struct GpuRenderer::Impl {
   BvhView bvh_view;
   SobolView sobol;
   size_t render_bytes = 0;  // the most the last render took besides the above
-  // rll's learning state, kept here from render to render while the sampler's state is this
-  // (RllLightSampler::remote); a sampler whose host arrays changed since is uploaded anew.
-  std::shared_ptr<DeviceRll> rll;
+  // A learner's state (lights/resident.h: rll's, fermat's), kept here from render to render
+  // while it holds it (DeviceRll::holds); a learner that took it back since is uploaded anew.
+  // One at a time: another learner's render hands the state back first.
+  std::unique_ptr<DeviceRll> rll;
   // Kept from render to render (interactive's frames take no new memory): the path slots and
   // the stages' events, another sampler's tables (uploaded again each render into the memory
   // the last one freed: the cache of launch.cuh), the film and its pinned host copy.
@@ -308,25 +309,26 @@ RenderProgress GpuRenderer::render(
     const RenderSettings& settings, const std::atomic<bool>* cancel,
     const std::function<void(const RenderProgress&, const Film&)>& after_pass,
     const WavefrontSettings& wavefront) {
-  require_device_version(sampler, sampler.name());
+  // (A learner's view is not asked for: that would take its state back from here.)
+  ResidentLearner* const rll = sampler.resident_learner();
+  if (!rll) require_device_version(sampler, sampler.name());
   const auto t_start = std::chrono::steady_clock::now();
   const DeviceWork work_start = device_work();
   Impl& m = *m_impl;
-  // A learning rll or fermat: its state resident here (uploaded only where the host's arrays are
-  // newer); every other sampler's tables uploaded for this render.
-  auto* rll = dynamic_cast<RllLightSampler*>(&sampler);
-  if (rll && !rll->learns()) rll = nullptr;
+  // A learning rll or fermat: its state resident here (uploaded only where it is not here
+  // already: the host took it back since, or another learner's was); every other sampler's tables
+  // uploaded for this render.
+  auto hold_learner = [&] {
+    if (m.rll && m.rll->holds(*rll)) return;
+    m.rll.reset();  // (the last learner's state back to it, and its memory, first)
+    m.rll = std::make_unique<DeviceRll>(*rll);
+  };
   DeviceSampler& device_sampler = m.device_sampler;
-  if (rll) {
-    if (!m.rll || rll->remote() != m.rll.get()) {
-      rll->sync();
-      m.rll.reset();  // (its memory first)
-      m.rll = std::make_shared<DeviceRll>(*rll);
-    }
-    m.rll->make_remote(*rll);
-  } else {
+  if (rll)
+    hold_learner();
+  else
     device_sampler.upload(sampler.sampler_view());
-  }
+  const bool learns = rll || sampler.sampler_view().learns;
   auto sampler_view = [&] { return rll ? m.rll->sampler_view() : device_sampler.view(); };
 
   // The film's sums and counts on the device: where the film stayed here after the last render,
@@ -364,14 +366,17 @@ RenderProgress GpuRenderer::render(
                                                   m.film_count.bytes());
   };
   note_bytes();
-  // rll's end of pass on the device: only its counters come back. Another sampler learns
-  // nothing within a pass (its tables are what was uploaded: nothing to copy either way) and its
-  // end of pass is the host's.
+  // rll's end of pass runs on its copy here (the learner's own end_pass: only the counters come
+  // back). Another sampler learns nothing within a pass (its tables are what was uploaded:
+  // nothing to copy either way) and its end of pass is the host's.
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] {
       if (rll) {
-        m.rll->end_pass(*rll);
-      } else if (sampler.learns()) {
+        // An after_pass that read the state took it back: this copy is still that state with
+        // this pass's records on top (the host changed nothing since), so it is lent as it is.
+        if (!m.rll->holds(*rll)) m.rll->lend(*rll);
+        sampler.end_pass();
+      } else if (learns) {
         device_sampler.copy_back();
         sampler.end_pass();
         device_sampler.upload(sampler.sampler_view());

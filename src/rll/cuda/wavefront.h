@@ -54,10 +54,11 @@ class GpuRenderer {
 
   // As render_wavefront (wavefront/wavefront.h) on the GPU; throws rll::Error for a sampler
   // without a device version (require_device_version). rll's and fermat's learning state stays
-  // on the device, its end of pass runs there; another sampler's tables are uploaded at the start
-  // (it learns nothing within a pass). One host synchronisation per pass (the read of its
-  // counts); the film comes back to the host, through pinned memory, in that wait, only where the
-  // host reads it: after the last pass, and before each after_pass where
+  // on the device (a learner, LightSampler::resident_learner(), lent to the device's copy that
+  // this renderer owns: cuda/device_rll.cuh), its end of pass runs there; another sampler's tables
+  // are uploaded at the start (it learns nothing within a pass). One host synchronisation per pass
+  // (the read of its counts); the film comes back to the host, through pinned memory, in that wait,
+  // only where the host reads it: after the last pass, and before each after_pass where
   // `wavefront.after_pass_reads_film` (unless `wavefront.film_stays_on_device`: see there). The
   // path slots, the film and the events are kept from render to render. `wavefront.tracer` is
   // ignored (the GPU traces with rll's BVH); `wavefront.times` receives the stages' times by CUDA

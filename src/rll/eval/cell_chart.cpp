@@ -8,6 +8,7 @@
 
 #include "rll/accel/accel.h"
 #include "rll/core/parallel.h"
+#include "rll/lights/light_dispatch.h"
 #include "rll/lights/rll_sampler.h"
 #include "rll/lights/rll_view.h"
 #include "rll/render/path_vertex.h"
@@ -102,6 +103,7 @@ CellChart cell_chart(const Scene& scene, const Accel& accel, const IntegratorSet
   }
   std::vector<uint32_t> cell_ids(first_point.size());
   for (const auto& [cell, i] : index) cell_ids[size_t(i)] = cell;
+  const SamplerView ov = chart.has_oracle ? oracle->sampler_view() : SamplerView{};
   chart.cells.resize(first_point.size());
   parallel_for_each(first_point.size(), [&](size_t i) {
     CellChartCell& out = chart.cells[i];
@@ -112,7 +114,7 @@ CellChart cell_chart(const Scene& scene, const Accel& accel, const IntegratorSet
     out.has_cut = detail::rll_has_cut(v, cell);
     const detail::RllCut cut = detail::rll_cut(v, cell);
     LightContext oracle_ctx = ctx;
-    if (chart.has_oracle) oracle->prepare(oracle_ctx, 0.5f);
+    if (chart.has_oracle) prepare_point(ov, oracle_ctx, 0.5f);
     for (uint32_t k = 0; k < cut.size; ++k) {
       const uint32_t begin = detail::rll_begin(cut, k), end = cut.ends[k];
       out.begin.push_back(begin);
@@ -125,7 +127,7 @@ CellChart cell_chart(const Scene& scene, const Accel& accel, const IntegratorSet
         out.learnt.push_back(v.cold_uniform ? 1.0f / float(cut.size) : tree);
       if (chart.has_oracle) {
         double sum = 0;
-        for (uint32_t l = begin; l < end; ++l) sum += oracle->pmf(oracle_ctx, l);
+        for (uint32_t l = begin; l < end; ++l) sum += light_pmf(ov, oracle_ctx, l);
         out.oracle.push_back(float(sum));
       }
     }

@@ -1,5 +1,5 @@
 // The record (SamplerRecord, light_context.h) of the samplers that draw a cluster of a cut first
-// and then a light inside it (rll, fermat, the oracle's frozen rll, ltc): what their record()
+// and then a light inside it (rll, fermat, the oracle's frozen rll, ltc): what their record_nee
 // needs of the draw, and resampled NEE's learnt target factor.
 #pragma once
 

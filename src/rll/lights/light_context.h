@@ -19,10 +19,10 @@ struct LightContext {
   Vec3 wo;                  // direction towards where the path came from (zero: unknown)
   bool glossy = false;      // the surface's BSDF is not Lambertian: its response depends on wo
   float footprint = 0;      // ray footprint radius at this vertex, world units
-  uint32_t cell = kNoCell;  // per-point sampler state (an RLL cell), set by prepare()
+  uint32_t cell = kNoCell;  // per-point sampler state (an RLL cell), set by prepare_point
 };
 
-// What a sampler remembers of one of its draws, for its own record() and resampled NEE's learnt
+// What a sampler remembers of one of its draws, for its own record_nee and resampled NEE's learnt
 // target (light_dispatch.h): four words whose meaning is the drawing sampler's (rll's and ltc's
 // ClusterDraw, lights/cluster_draw.h). The renderers only carry it from the draw to the record.
 struct SamplerRecord {

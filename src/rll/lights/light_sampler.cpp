@@ -11,31 +11,6 @@
 
 namespace rll {
 
-LightSampler::LightSampler() {
-  m_host.self = this;
-  m_host.prepare = [](const void* s, LightContext& ctx, float u) {
-    static_cast<const LightSampler*>(s)->prepare(ctx, u);
-  };
-  m_host.sample = [](const void* s, const LightContext& ctx, double u) {
-    return static_cast<const LightSampler*>(s)->sample(ctx, u);
-  };
-  m_host.pmf = [](const void* s, const LightContext& ctx, uint32_t light) {
-    return static_cast<const LightSampler*>(s)->pmf(ctx, light);
-  };
-  // record() changes the sampler (thread-safely); the view holds it as const like every view.
-  m_host.record = [](const void* s, const LightContext& ctx, const SampledLight& l,
-                     const NeeRecord& r) {
-    const_cast<LightSampler*>(static_cast<const LightSampler*>(s))->record(ctx, l, r);
-  };
-}
-
-SamplerView LightSampler::sampler_view() const {
-  SamplerView v;
-  v.kind = SamplerKind::Host;
-  v.host = &m_host;
-  return with_flags(v);
-}
-
 const std::vector<std::string>& light_sampler_names() {
   static const std::vector<std::string> names = {"uniform", "power", "tree", "fermat", "ltc", "rht", "rll", "oracle"};
   return names;

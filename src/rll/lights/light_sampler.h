@@ -1,11 +1,16 @@
-// The light-sampler contract shared by every sampler (uniform, power, tree, rll, oracle):
-// sample(ctx, u) -> {light, pmf} and pmf(ctx, light) for any light, which must agree exactly.
+// The light-sampler contract shared by every sampler (uniform, power, tree, rll, fermat, ltc, rht,
+// oracle), in two parts. Sampling is data: sampler_view() gives the SamplerView that every
+// renderer and tool hands to the one dispatch (lights/light_dispatch.h: prepare_point,
+// sample_light, light_pmf, record_nee), where sample and pmf agree exactly. This class keeps the
+// host's lifecycle around it: the view, the end of a pass, lights that changed, the learnt state
+// saved and loaded, and what --stats reports.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rll/lights/light_context.h"
@@ -19,69 +24,87 @@ class LightTree;
 class Accel;
 class BinaryWriter;
 class BinaryReader;
+class ResidentLearner;
 
 class LightSampler {
  public:
-  LightSampler();
-  LightSampler(const LightSampler&) = delete;  // its host view points at it
+  LightSampler(const LightSampler&) = delete;  // views (and a host kind's calls) point at it
   LightSampler& operator=(const LightSampler&) = delete;
   virtual ~LightSampler() = default;
-  virtual std::string name() const = 0;
+  // The name the user gives (rll and fermat are one class).
+  const std::string& name() const { return m_name; }
 
-  // Called once per shading point before sample/pmf; a learning sampler finds its cell here.
-  // u is a fresh uniform number for any stochastic choice it makes.
-  virtual void prepare(LightContext& ctx, float u) const {
-    (void)ctx;
-    (void)u;
-  }
-  // True if prepare() does anything: the integrator skips the call, and its random number,
-  // for samplers that keep no per-point state.
-  virtual bool prepares() const { return false; }
-  // u is uniform in [0,1) with 53 bits: descents over millions of lights need them.
-  virtual SampledLight sample(const LightContext& ctx, double u) const = 0;
-  // Probability that sample(ctx, .) returns `light`.
-  virtual float pmf(const LightContext& ctx, uint32_t light) const = 0;
-
-  // Learning samplers only. One call per next-event sample, zeros included (see NeeRecord);
-  // safe to call from many threads at once.
-  virtual bool learns() const { return false; }
-  virtual void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) {
-    (void)ctx;
-    (void)s;
-    (void)r;
-  }
-  // Between passes: adapt to what was recorded (no sample/record calls run concurrently).
+  // This sampler as data for the dispatch every renderer runs (light_dispatch.h), valid while the
+  // sampler lives and between changes to it (end_pass, lights_changed, load_state). A sampler
+  // with no device version is the host kind (host_view below), which a device renderer refuses.
+  virtual SamplerView sampler_view() const = 0;
+  // Between passes: adapt to what was recorded (no sampling or record_nee runs concurrently).
   virtual void end_pass() {}
   // Lights moved or changed power (animation): refit whatever depends on them.
   virtual void lights_changed(const Scene& scene) { (void)scene; }
 
   // Learnt state that travels between renders (--rll-state, sampler_state.h): a sampler that has
-  // one writes it, between passes, and reads it back into a sampler made with the same
-  // parameters for the same scene, throwing rll::Error if what it reads is damaged.
-  virtual bool has_state() const { return false; }
+  // one (has_state) writes it, between passes, and reads it back into a sampler made with the
+  // same parameters for the same scene, throwing rll::Error if what it reads is damaged.
+  bool has_state() const { return m_has_state; }
   virtual void save_state(BinaryWriter& w) const { (void)w; }
   virtual void load_state(BinaryReader& r) { (void)r; }
-
-  // This sampler as data for the dispatch every renderer runs (light_dispatch.h), valid while the
-  // sampler lives and between changes to it (end_pass, lights_changed, load_state). By default
-  // the host kind over this class's calls (a sampler with no device version: a device renderer
-  // refuses it).
-  virtual SamplerView sampler_view() const;
 
   // Name, parameters and statistics for --stats and reports.
   virtual nlohmann::json describe() const { return {{"name", name()}}; }
 
+  // The learning state a device may keep between passes and renders (lights/resident.h: rll and
+  // fermat while they learn; the GPU renderer makes its copy from it); null for a sampler that
+  // learns nothing or whose tables a device renderer uploads for each render.
+  ResidentLearner* resident_learner() const { return m_resident; }
+
  protected:
-  // prepares and learns of this sampler's view (its prepares() and learns()).
-  SamplerView with_flags(SamplerView v) const {
-    v.prepares = prepares();
-    v.learns = learns();
+  explicit LightSampler(std::string name, bool has_state = false)
+      : m_name(std::move(name)), m_has_state(has_state) {}
+  void set_resident_learner(ResidentLearner* r) { m_resident = r; }
+
+  // The host kind of a sampler with no device version: set_host_calls(*this) once (in the
+  // constructor) takes T's const prepare(ctx, float), sample(ctx, double), pmf(ctx, light) and
+  // its record(ctx, sampled, r) if T has them (T's own, private ones too where T befriends
+  // LightSampler); host_view() is then its view.
+  template <typename T>
+  void set_host_calls(const T& self);
+  SamplerView host_view(bool prepares, bool learns) const {
+    SamplerView v;
+    v.kind = SamplerKind::Host;
+    v.host = &m_host;
+    v.prepares = prepares;
+    v.learns = learns;
     return v;
   }
 
  private:
-  HostSampler m_host;  // this class's calls, for the default sampler_view()
+  std::string m_name;
+  bool m_has_state = false;
+  ResidentLearner* m_resident = nullptr;
+  HostSampler m_host;
 };
+
+template <typename T>
+void LightSampler::set_host_calls(const T& self) {
+  m_host.self = &self;
+  m_host.prepare = [](const void* s, LightContext& ctx, float u) {
+    if constexpr (requires(const T& t) { t.prepare(ctx, u); })
+      static_cast<const T*>(s)->prepare(ctx, u);
+  };
+  m_host.sample = [](const void* s, const LightContext& ctx, double u) {
+    return static_cast<const T*>(s)->sample(ctx, u);
+  };
+  m_host.pmf = [](const void* s, const LightContext& ctx, uint32_t light) {
+    return static_cast<const T*>(s)->pmf(ctx, light);
+  };
+  // record changes the sampler (thread-safely); the view holds it as const like every view.
+  m_host.record = [](const void* s, const LightContext& ctx, const SampledLight& l,
+                     const NeeRecord& r) {
+    if constexpr (requires(T & t) { t.record(ctx, l, r); })
+      const_cast<T*>(static_cast<const T*>(s))->record(ctx, l, r);
+  };
+}
 
 // The sampler names `make_light_sampler` knows, in the order they are listed to users.
 const std::vector<std::string>& light_sampler_names();

@@ -187,7 +187,8 @@ inline double unit_hash(uint64_t key, uint64_t node, uint64_t pass) {
 }  // namespace
 
 LtcLightSampler::LtcLightSampler(const Scene& scene, const LightTree& tree, const LtcSettings& s)
-    : m_tree(tree), m_s(s), m_m(s.max_cut) {
+    : LightSampler("ltc"), m_tree(tree), m_s(s), m_m(s.max_cut) {
+  set_host_calls(*this);
   if (m_tree.depth() >= kMaxTreeDepth)
     fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
   m_clusters = SpatialClusters::build(scene, s.clusters);

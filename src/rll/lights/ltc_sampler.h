@@ -121,13 +121,8 @@ std::vector<uint32_t> power_cut(const LightTree& tree, int size);
 class LtcLightSampler final : public LightSampler {
  public:
   LtcLightSampler(const Scene& scene, const LightTree& tree, const LtcSettings& settings);
-  std::string name() const override { return "ltc"; }
-  void prepare(LightContext& ctx, float u) const override;
-  bool prepares() const override { return true; }
-  SampledLight sample(const LightContext& ctx, double u) const override;
-  float pmf(const LightContext& ctx, uint32_t light) const override;
-  bool learns() const override { return true; }
-  void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) override;
+  // The host kind over its prepare, sample, pmf and record below (it has no device version).
+  SamplerView sampler_view() const override { return host_view(true, true); }
   void end_pass() override;
   void lights_changed(const Scene& scene) override;
   nlohmann::json describe() const override;
@@ -145,6 +140,14 @@ class LtcLightSampler final : public LightSampler {
   size_t bytes() const;
 
  private:
+  friend class LightSampler;  // its host kind's calls (set_host_calls)
+  // The host kind's calls: find the point's entry (ctx.cell), draw a light, its probability,
+  // accumulate a sample's reward (thread-safe; applied at end_pass).
+  void prepare(LightContext& ctx, float u) const;
+  SampledLight sample(const LightContext& ctx, double u) const;
+  float pmf(const LightContext& ctx, uint32_t light) const;
+  void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r);
+
   // Refuses (rll::Error naming the keys) tables beyond the memory budget, before they exist.
   static void check_memory(const SpatialClusters& clusters, uint32_t keys, const LtcSettings& s);
   uint32_t find_node(uint32_t entry, uint32_t light) const;

@@ -18,6 +18,7 @@
 #include "rll/core/sampling.h"
 #include "rll/learn/cut_store.h"
 #include "rll/learn/split_collapse.h"
+#include "rll/lights/light_dispatch.h"
 #include "rll/lights/tree_sampler.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/scene/interaction.h"
@@ -92,7 +93,7 @@ float finite_estimate(double e) {
 OracleLightSampler::OracleLightSampler(const Scene& scene, const LightTree& tree,
                                        const Accel& accel, const RllSettings& rll,
                                        const OracleSettings& s)
-    : m_s(s), m_tree(tree), m_accel(accel), m_rll_settings(rll) {
+    : LightSampler("oracle"), m_s(s), m_tree(tree), m_accel(accel), m_rll_settings(rll) {
   precompute(scene);
 }
 
@@ -112,6 +113,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
   fixed.cut.pool_levels = 0;      // it knows each cell's clusters: nothing to pool
   fixed.cut.pool_up = 0;
   m_rll = std::make_unique<RllLightSampler>(scene, m_tree, fixed);
+  const SamplerView view = m_rll->sampler_view();  // its cells found as a render finds them
   const LightTree& tree = m_tree;
 
   // 1. Discovery: camera paths (diffuse bounces) find the cells and points where NEE happens.
@@ -146,7 +148,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
             c.p = sh.p;
             footprint = widen_footprint(footprint, hit.t, prev_pdf, ray.d, sh.ng);
             c.footprint = footprint;
-            m_rll->prepare(c, st.next());
+            prepare_point(view, c, st.next());
             if (c.cell != kNoCell) local.push_back({c.cell, mix64(st.next_double() * 0x1p53), c});
             Vec3 d = Frame(c.ns).to_world(sample_cosine_hemisphere(st.next2()));
             if (dot(d, c.n) <= 0) break;

@@ -41,11 +41,6 @@ class OracleLightSampler final : public LightSampler {
  public:
   OracleLightSampler(const Scene& scene, const LightTree& tree, const Accel& accel,
                      const RllSettings& rll, const OracleSettings& settings);
-  std::string name() const override { return "oracle"; }
-  void prepare(LightContext& ctx, float u) const override { m_rll->prepare(ctx, u); }
-  bool prepares() const override { return true; }
-  SampledLight sample(const LightContext& ctx, double u) const override { return m_rll->sample(ctx, u); }
-  float pmf(const LightContext& ctx, uint32_t light) const override { return m_rll->pmf(ctx, light); }
   // The frozen rll's: the oracle samples as rll does, with its knowledge, on any renderer.
   SamplerView sampler_view() const override { return m_rll->sampler_view(); }
   // Lights moved or switched: the knowledge is computed again (outside render time too).

@@ -26,7 +26,7 @@ RhtSettings rht_settings_from(const Params& p) {
 
 RhtLightSampler::RhtLightSampler(const Scene& scene, const LightTree& tree,
                                  const RhtSettings& settings)
-    : m_s(settings) {
+    : LightSampler("rht"), m_s(settings) {
   if (tree.depth() >= kMaxTreeDepth)
     fail("{}: light tree too deep ({})", scene.source, tree.depth());
   m_view.tree = tree.view();
@@ -41,22 +41,12 @@ RhtLightSampler::RhtLightSampler(const Scene& scene, const LightTree& tree,
   m_view.has_tree_lights = tree.light_count() > m_view.dir_count;
 }
 
-SampledLight RhtLightSampler::sample(const LightContext&, double) const {
-  fail(
-      "sampler 'rht' draws several light samples per vertex, with a shadow ray each: this "
-      "caller draws one (the renderers draw it through draw_nee, render/nee_draw.h)");
-}
-
 SamplerView RhtLightSampler::sampler_view() const {
   SamplerView v;
   v.kind = SamplerKind::Rht;
   v.rht = m_view;
   v.tree = m_view.tree;
   return v;
-}
-
-float RhtLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
-  return rht_pmf(m_view, ctx.p, ctx.n, light);
 }
 
 nlohmann::json RhtLightSampler::describe() const {

@@ -2,9 +2,9 @@
 // code of Kvasnica & Havran's study runs it; docs/rht.md): per vertex a split descent of the
 // light tree yields several candidates, two reservoir stages keep up to rht.samples of them, each
 // with its own shadow ray. It draws several samples, so every renderer reaches it through its
-// view's Rht kind and draw_nee (render/nee_draw.h), not through sample(); pmf() is the
-// probability that a draw yields the light, the density the BSDF strategy's MIS weight needs. It
-// learns nothing.
+// view's Rht kind and draw_nee (render/nee_draw.h), not through sample_light; its light_pmf is
+// the probability that a draw yields the light, the density the BSDF strategy's MIS weight needs.
+// It learns nothing.
 #pragma once
 
 #include <vector>
@@ -30,13 +30,9 @@ const std::vector<ParamSpec<RhtSettings>>& rht_params();
 class RhtLightSampler final : public LightSampler {
  public:
   RhtLightSampler(const Scene& scene, const LightTree& tree, const RhtSettings& settings);
-  std::string name() const override { return "rht"; }
-  // rht draws several samples per vertex (draw_nee): a caller that asks for one light gets an
-  // error naming it, never a wrong image.
-  SampledLight sample(const LightContext& ctx, double u) const override;
-  // The probability that a draw yields `light` (rht_pmf): sums to the expected number of
-  // candidates, not to one.
-  float pmf(const LightContext& ctx, uint32_t light) const override;
+  // Its Rht kind: sample_light yields nothing (a caller that asks for one light gets no light,
+  // never a wrong image); light_pmf is the probability that a draw yields the light (rht_pmf),
+  // which sums to the expected number of candidates, not to one.
   SamplerView sampler_view() const override;
   nlohmann::json describe() const override;
 

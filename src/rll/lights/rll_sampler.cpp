@@ -42,7 +42,8 @@ void check_memory(const RllSettings& s) {
 }  // namespace
 
 RllLightSampler::RllLightSampler(const Scene& scene, const LightTree& tree, const RllSettings& s)
-    : m_tree(tree), m_s(s), m_keyer(s.grid, scene.bounds) {
+    : LightSampler(s.name, true), m_tree(tree), m_s(s), m_keyer(s.grid, scene.bounds) {
+  set_resident_learner(this);
   check_memory(s);
   m_table = std::make_unique<CellTable>(s.capacity);
   // Guided: the rewards are ratios to the tree's importance, of the order of a reflectance.
@@ -55,6 +56,10 @@ RllLightSampler::RllLightSampler(const Scene& scene, const LightTree& tree, cons
   refresh_light_powers(scene);
   m_keyer.set_pass(0, 0);
   refresh_view();
+}
+
+RllLightSampler::~RllLightSampler() {
+  if (m_remote) m_remote->forget();
 }
 
 void RllLightSampler::refresh_light_powers(const Scene& scene) {
@@ -82,6 +87,7 @@ void RllLightSampler::refresh_view() {
   v.defensive = m_s.defensive;
   v.cold_uniform = m_s.cold_uniform;
   v.guided = m_s.cut.guided;
+  if (m_remote) m_remote->view_changed(v);
 }
 
 SamplerView RllLightSampler::sampler_view() const {
@@ -90,30 +96,15 @@ SamplerView RllLightSampler::sampler_view() const {
   v.kind = SamplerKind::Rll;
   v.tree = m_view.tree;
   v.rll = &m_view;
-  return with_flags(v);
+  v.prepares = true;
+  v.learns = !m_frozen;
+  return v;
 }
 
 size_t RllLightSampler::bytes() const {
   return m_table->bytes() + m_cuts->bytes() +
          m_s.capacity * (sizeof(uint32_t) + kPointWords * sizeof(int64_t)) +
          m_power_prefix.size() * sizeof(double) + m_scratch.bytes();
-}
-
-void RllLightSampler::prepare(LightContext& ctx, float u) const {
-  rll_prepare(m_view, ctx, u);
-}
-
-SampledLight RllLightSampler::sample(const LightContext& ctx, double u) const {
-  return rll_sample(m_view, ctx, u);
-}
-
-float RllLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
-  return rll_pmf(m_view, ctx, light);
-}
-
-void RllLightSampler::record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) {
-  if (m_frozen) return;
-  rll_record(m_view, ctx, s, r);
 }
 
 RllLearnView RllLightSampler::learn_view() {
@@ -130,18 +121,27 @@ RllLearnView RllLightSampler::learn_view() {
   return v;
 }
 
+ResidentState RllLightSampler::resident_state() {
+  sync();
+  return {learn_view(), &m_view, &m_pool};
+}
+
+void RllLightSampler::lend_to(DeviceCopy& copy) {
+  if (m_remote != &copy) sync();
+  m_remote = &copy;
+}
+
 void RllLightSampler::sync() const {
-  if (!m_pull) return;
-  const auto pull = std::move(m_pull);
-  m_pull = nullptr;
+  if (!m_remote) return;
+  DeviceCopy* const remote = m_remote;
   m_remote = nullptr;
-  m_remote_lights = nullptr;
-  pull(m_pool);
+  remote->pull(m_pool);
 }
 
 void RllLightSampler::end_pass() {
-  sync();
-  end_pass_with({});
+  if (!m_remote) return end_pass_with({});
+  end_pass_with([&](const RllLearnView& v, RllPoolState<HostBackend>&, uint32_t used_before,
+                    bool reset) { return m_remote->end_pass(v, used_before, reset); });
 }
 
 void RllLightSampler::end_pass_with(const EndPassRun& run) {
@@ -174,12 +174,10 @@ void RllLightSampler::end_pass_with(const EndPassRun& run) {
 
 void RllLightSampler::lights_changed(const Scene& scene) {
   refresh_light_powers(scene);
-  if (m_pull && m_remote_lights) {
-    m_remote_lights(m_tree.view(), view_of(std::as_const(m_power_prefix)));  // on the device
-  } else {
-    sync();
+  if (m_remote)
+    m_remote->lights_changed(m_tree.view(), view_of(std::as_const(m_power_prefix)));
+  else
     rll_lights_changed(HostBackend{}, learn_view(), m_pool, m_scratch);
-  }
   refresh_view();
 }
 

@@ -16,6 +16,7 @@
 #include "rll/learn/cell_grid.h"
 #include "rll/learn/cut_store.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/lights/resident.h"
 #include "rll/lights/rll_end_pass.h"
 #include "rll/lights/rll_settings.h"
 #include "rll/lights/rll_view.h"
@@ -23,67 +24,50 @@
 
 namespace rll {
 
-class RllLightSampler final : public LightSampler {
+// Its Rll view (rll_view.h) is what every renderer samples with; the view learns until freeze().
+class RllLightSampler final : public LightSampler, public ResidentLearner {
  public:
   RllLightSampler(const Scene& scene, const LightTree& tree, const RllSettings& settings);
-  std::string name() const override { return m_s.name; }
-  void prepare(LightContext& ctx, float u) const override;
-  bool prepares() const override { return true; }
-  SampledLight sample(const LightContext& ctx, double u) const override;
-  float pmf(const LightContext& ctx, uint32_t light) const override;
-  bool learns() const override { return !m_frozen; }
-  void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) override;
+  ~RllLightSampler() override;
+  // On the device's copy where one holds the state (lent_to), else on the host's arrays.
   void end_pass() override;
   void lights_changed(const Scene& scene) override;
   nlohmann::json describe() const override;
   // The cells in use, their keys, last use and cuts, and the pass count; not the statistics.
-  bool has_state() const override { return true; }
   void save_state(BinaryWriter& w) const override;
   void load_state(BinaryReader& r) override;
   SamplerView sampler_view() const override;
 
   // The end of pass with its whole-array work (rll_end_pass over this sampler's learning arrays,
-  // its pool and the cells in use at the last rebuild; with Fermat's reset) done by `run`, on
-  // another device (the GPU: cuda/device_rll.cuh, cuda/endpass_check.h), the bookkeeping (the
-  // statistics, the pass, the keyer's jitter, the table's count) as end_pass does it. Does not
-  // pull a remote state (below): run works on the device's copy.
+  // its pool and the cells in use at the last rebuild; with Fermat's reset) done by `run` (the
+  // GPU's checks: cuda/endpass_check.h), the bookkeeping (the statistics, the pass, the keyer's
+  // jitter, the table's count) as end_pass does it. Does not pull a device's copy (below).
   using EndPassRun = std::function<RllPassCounts(const RllLearnView& v,
                                                  RllPoolState<HostBackend>& pool,
                                                  uint32_t used_before, bool reset)>;
   void end_pass_with(const EndPassRun& run);
-  // The learning state may live on a device between passes and renders (`rll render --device
-  // cuda`, `rll interactive`): set_remote says so, with `pull`, which copies the device's arrays
-  // back into this sampler's and its coarse cells into `pool`; `remote` is the device state's
-  // token (null: the host's arrays are current). Everything on the host that reads or changes
-  // the learnt state (end_pass, save and load, describe, sampler_view, cuts, table, pool) pulls
-  // first (sync) and the state is the host's again. prepare, sample, pmf and record do not
-  // (they are the CPU renderers' hot path, which reach the sampler through sampler_view or
-  // end_pass first; a session with a GPU renders every pass there). lights_changed hands the
-  // new light tree and powers to `lights` where one is given, which runs it on the device's
-  // copy (rll_lights_changed), else it pulls too.
-  using RemoteLightsChanged =
-      std::function<void(const LightTreeView& tree, View<const double> power_prefix)>;
-  void set_remote(const void* token, std::function<void(RllPoolState<HostBackend>& pool)> pull,
-                  RemoteLightsChanged lights = {}) {
-    m_remote = token;
-    m_pull = std::move(pull);
-    m_remote_lights = std::move(lights);
-  }
-  const void* remote() const { return m_remote; }
-  void sync() const;
-  // What the end of pass reads and writes (rll_end_pass.h), this sampler's host arrays, without
-  // pulling (for a device's copy).
-  RllLearnView learn_view();
-  // The sampling view (its pass, keyer and free cells) without pulling: for the device's copy.
-  const RllView& rll_view() const { return m_view; }
+
+  // The learning state may live on a device between passes and renders (lights/resident.h):
+  // lent to a DeviceCopy, it stays there until the host reads or changes it. Everything on the
+  // host that does (save and load, describe, sampler_view, cuts, table, pool) pulls it back first
+  // (sync); end_pass and lights_changed run on the copy. Sampling reads the view, which
+  // sampler_view() hands out after a sync.
+  ResidentState resident_state() override;
+  void lend_to(DeviceCopy& copy) override;
+  void sync() const override;
+  const DeviceCopy* lent_to() const { return m_remote; }
   // For tests: the coarse cells of pooling.
   const RllPoolState<HostBackend>& pool() const {
     sync();
     return m_pool;
   }
 
-  // Stops learning: record() and end_pass() do nothing from now on (the oracle).
-  void freeze() { m_frozen = true; }
+  // Stops learning: the view records nothing and end_pass() does nothing from now on (the
+  // oracle).
+  void freeze() {
+    m_frozen = true;
+    set_resident_learner(nullptr);
+  }
   // For tests and the oracle: the learnt state.
   const CutStore& cuts() const {
     sync();
@@ -101,7 +85,11 @@ class RllLightSampler final : public LightSampler {
   size_t bytes() const;
 
  private:
-  // Points m_view at this sampler's arrays, pass and keyer (after anything that changes them).
+  // What the end of pass reads and writes (rll_end_pass.h), this sampler's host arrays, without
+  // pulling.
+  RllLearnView learn_view();
+  // Points m_view at this sampler's arrays, pass and keyer (after anything that changes them),
+  // and tells a device's copy that holds the state.
   void refresh_view();
   void refresh_light_powers(const Scene& scene);
 
@@ -109,9 +97,7 @@ class RllLightSampler final : public LightSampler {
   // reward weight of each cluster of the shared cut (initial_size() per coarse cell, key order).
   // (mutable: sync, from const readers, pulls a device's copy into it and the arrays.)
   mutable RllPoolState<HostBackend> m_pool;
-  mutable const void* m_remote = nullptr;
-  mutable std::function<void(RllPoolState<HostBackend>&)> m_pull;
-  mutable RemoteLightsChanged m_remote_lights;
+  mutable DeviceCopy* m_remote = nullptr;  // the device's copy that holds the state, if any
   RllScratch<HostBackend> m_scratch;  // the end of pass's, kept between passes
 
   const LightTree& m_tree;  // the render session's (it outlives its samplers)
@@ -137,7 +123,7 @@ class RllLightSampler final : public LightSampler {
   std::vector<uint32_t> m_splits_per_pass, m_collapses_per_pass, m_touched_per_pass;
   // Clusters whose rewards failed the change test (forget=changes), of cells and of coarse cells.
   std::vector<uint32_t> m_changes_per_pass, m_pool_changes_per_pass;
-  RllView m_view;  // what prepare, sample, pmf and record read (rll_view.h)
+  RllView m_view;  // what rll_prepare, rll_sample, rll_pmf and rll_record read (rll_view.h)
 };
 
 }  // namespace rll

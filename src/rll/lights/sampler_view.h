@@ -1,9 +1,9 @@
 // Every light sampler as data (DESIGN 6): a trivially copyable SamplerView holds a tag and the
 // flat views a sampler reads, and each sampler's RLL_HD sample and pmf functions read them;
 // lights/light_dispatch.h switches on the tag. Every renderer (the megakernel, the CPU wavefront,
-// the GPU's) reaches every sampler through that switch; the samplers' classes call the same
-// functions, so the renderers run one source. A sampler with no device version is the one
-// host-only kind (HostSampler), which a device renderer refuses.
+// the GPU's) and every tool reaches every sampler through that switch alone (the samplers'
+// classes keep only the host's lifecycle: light_sampler.h), so all run one source. A sampler with
+// no device version is the one host-only kind (HostSampler), which a device renderer refuses.
 #pragma once
 
 #include <cstdint>
@@ -21,7 +21,7 @@ enum class SamplerKind : uint8_t { None, Uniform, Power, Tree, Rll, Rht, Host };
 struct RllView;  // lights/rll_view.h
 
 // A sampler with no device version (ltc, the tests' samplers): its calls as plain functions of the
-// sampler object, on the CPU only. LightSampler's default sampler_view() makes one of its class.
+// sampler object, on the CPU only (LightSampler::set_host_calls makes them from its class).
 struct HostSampler {
   const void* self = nullptr;
   void (*prepare)(const void* self, LightContext& ctx, float u) = nullptr;

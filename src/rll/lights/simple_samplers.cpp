@@ -19,15 +19,7 @@ std::vector<float> light_powers(const Scene& scene) {
 }
 
 UniformLightSampler::UniformLightSampler(const Scene& scene)
-    : m_count(uint32_t(scene.lights.size())) {}
-
-SampledLight UniformLightSampler::sample(const LightContext&, double u) const {
-  return uniform_sample(m_count, u);
-}
-
-float UniformLightSampler::pmf(const LightContext&, uint32_t light) const {
-  return uniform_pmf(m_count, light);
-}
+    : LightSampler("uniform"), m_count(uint32_t(scene.lights.size())) {}
 
 SamplerView UniformLightSampler::sampler_view() const {
   SamplerView v;
@@ -36,21 +28,13 @@ SamplerView UniformLightSampler::sampler_view() const {
   return v;
 }
 
-PowerLightSampler::PowerLightSampler(const Scene& scene) {
+PowerLightSampler::PowerLightSampler(const Scene& scene) : LightSampler("power") {
   lights_changed(scene);
 }
 
 void PowerLightSampler::lights_changed(const Scene& scene) {
   auto w = light_powers(scene);
   m_distribution = DiscreteDistribution(w);
-}
-
-SampledLight PowerLightSampler::sample(const LightContext&, double u) const {
-  return power_sample(m_distribution.view(), u);
-}
-
-float PowerLightSampler::pmf(const LightContext&, uint32_t light) const {
-  return power_pmf(m_distribution.view(), light);
 }
 
 SamplerView PowerLightSampler::sampler_view() const {

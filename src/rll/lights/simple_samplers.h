@@ -10,9 +10,6 @@ namespace rll {
 class UniformLightSampler final : public LightSampler {
  public:
   explicit UniformLightSampler(const Scene& scene);
-  std::string name() const override { return "uniform"; }
-  SampledLight sample(const LightContext& ctx, double u) const override;
-  float pmf(const LightContext& ctx, uint32_t light) const override;
   SamplerView sampler_view() const override;
 
  private:
@@ -23,9 +20,6 @@ class UniformLightSampler final : public LightSampler {
 class PowerLightSampler final : public LightSampler {
  public:
   explicit PowerLightSampler(const Scene& scene);
-  std::string name() const override { return "power"; }
-  SampledLight sample(const LightContext& ctx, double u) const override;
-  float pmf(const LightContext& ctx, uint32_t light) const override;
   void lights_changed(const Scene& scene) override;
   SamplerView sampler_view() const override;
 

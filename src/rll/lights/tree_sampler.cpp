@@ -6,17 +6,10 @@
 
 namespace rll {
 
-TreeLightSampler::TreeLightSampler(const Scene& scene, const LightTree& tree) : m_tree(tree) {
+TreeLightSampler::TreeLightSampler(const Scene& scene, const LightTree& tree)
+    : LightSampler("tree"), m_tree(tree) {
   if (m_tree.depth() >= kMaxTreeDepth)
     fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
-}
-
-SampledLight TreeLightSampler::sample(const LightContext& ctx, double u) const {
-  return tree_sample(m_tree.view(), ctx, u);
-}
-
-float TreeLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
-  return tree_pmf(m_tree.view(), ctx, light);
 }
 
 SamplerView TreeLightSampler::sampler_view() const {

@@ -12,9 +12,6 @@ namespace rll {
 class TreeLightSampler final : public LightSampler {
  public:
   TreeLightSampler(const Scene& scene, const LightTree& tree);
-  std::string name() const override { return "tree"; }
-  SampledLight sample(const LightContext& ctx, double u) const override;
-  float pmf(const LightContext& ctx, uint32_t light) const override;
   nlohmann::json describe() const override;
   SamplerView sampler_view() const override;
 

@@ -124,6 +124,9 @@ class RenderSession {
   IntegratorSettings m_integrator;
   PointSet m_points = PointSet::Sobol;
   std::unique_ptr<Accel> m_accel;
+  // --device cuda: the GPU renderer, and with it the device's copy of a learning sampler's state
+  // (cuda/device_rll.cuh), kept between passes and renders; it hands the state back to its
+  // sampler when it goes first (samplers made here must not outlive the session).
   std::unique_ptr<cuda::GpuRenderer> m_gpu;
   mutable std::vector<std::string> m_made;  // the samplers made, by name (for messages)
   // The CPU wavefront's path slots, kept from render to render, and what its renders did; a
