@@ -222,7 +222,9 @@ TEST(SamplerView, HostKindRunsTheClassesCalls) {
         ASSERT_GT(st.pmf, 0);
         ASSERT_GT(s.pmf, 0);
         ASSERT_EQ(s.pmf, light_pmf(v, c, s.light));
-        if (pass == 0) ASSERT_EQ(s.light, st.light);  // (then what the first learnt differs)
+        if (pass == 0) {  // (then what the first learnt differs)
+          ASSERT_EQ(s.light, st.light);
+        }
         NeeRecord r;
         r.estimate = r.unoccluded = r.max_rgb = s.light % 2 ? 1.0f : 0.0f;
         record_nee(v, c, s, r);
