@@ -149,7 +149,9 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     LightContext ctx = make_vertex_context(c, s, sh, hit, wo, bsdf);
     if (cut && cut->key == 0 && psf_cuts_here(c, s, bsdf, hit.t, depth)) {
       psf_cut(s, *cut);
-      cut->key = psf_cut_key(c, ctx, bsdf, wo, depth, stream);
+      cut->key = psf_cut_key(c, ctx, bsdf, wo,
+                             psf_cut_footprint(ctx.footprint, hit.t, s.prev_dir_pdf, wo, sh.ng),
+                             depth, stream);
     }
     const bool light = samples_light(c, bsdf);
     if (m_view.prepares && !bsdf.is_delta())

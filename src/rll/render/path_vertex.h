@@ -418,14 +418,32 @@ RLL_HD inline void psf_cut(PathState& s, PsfCut& cut) {
   s.L = Rgb(0);
 }
 
-// The key of the cell of the path's cut at this vertex, jittered by numbers of its own.
+// The footprint that sizes a cut's cell: Fermat's ray cone, whose spread at each bounce is that of
+// a pdf of at least kPsfMinConePdf (about 10 degrees), where the footprint of rll's cells
+// (`footprint`, widened by widen_footprint) takes the bounce's pdf as it is. At a cut the bounce
+// before was rough (its pdf below psf.max_prob), so the two differ by that last segment's spread
+// alone: a diffuse bounce widens rll's footprint by about t sqrt(pi / cos), ten times Fermat's
+// cone, and cells that wide averaged the lit inside of a box with the dark room around it. The
+// bounces before the cut's are taken as rll's: the same as Fermat's for a cut at depth 0 or 1
+// (the default), and at deeper cuts wherever the bounces before were sharp (pdf 32 or more);
+// rough bounces above psf.depth keep their wider spread there.
+RLL_HD inline float psf_cut_footprint(float footprint, float t, float prev_dir_pdf, const Vec3& wo,
+                                      const Vec3& ng) {
+  const float cos_in = std::max(1e-2f, absdot(wo, ng));  // as widen_footprint's
+  const float spread = t / std::sqrt(prev_dir_pdf * cos_in);
+  const float capped = t / std::sqrt(std::max(prev_dir_pdf, float(kPsfMinConePdf)) * cos_in);
+  return std::max(footprint - spread, 0.0f) + capped;
+}
+
+// The key of the cell of the path's cut at this vertex, jittered by numbers of its own;
+// `footprint` is psf_cut_footprint's.
 RLL_HD inline uint64_t psf_cut_key(const PathConstants& c, const LightContext& ctx,
-                                   const Bsdf& bsdf, const Vec3& wo, int depth,
+                                   const Bsdf& bsdf, const Vec3& wo, float footprint, int depth,
                                    SampleStream& stream) {
   stream.seek(kPsfJitterDimension);
   float u[5];
   for (float& x : u) x = stream.next();
-  return psf_key(c.psf, ctx.p, bsdf.shading_normal(), wo, ctx.footprint, depth, u);
+  return psf_key(c.psf, ctx.p, bsdf.shading_normal(), wo, footprint, depth, u);
 }
 
 // Russian roulette with the number drawn at the vertex's kRoulette dimension.

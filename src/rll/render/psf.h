@@ -65,6 +65,10 @@ inline constexpr uint32_t kPsfJitterDimension = 1u << 25;
 // A path's cut: the key of its cell (0: not cut), its throughput at the cut vertex and what it
 // had gathered before it (the emission up to and at the cut vertex, the light sampled before it),
 // which goes to the film unfiltered.
+// Fermat's cap on a bounce's spread in the cone that sizes the filter's cells (`min_p`: a pdf of
+// 32, about 10 degrees; render/path_vertex.h, psf_cut_footprint).
+inline constexpr float kPsfMinConePdf = 32.0f;
+
 struct PsfCut {
   uint64_t key = 0;
   Rgb weight{0}, before{0};

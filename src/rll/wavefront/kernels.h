@@ -282,7 +282,10 @@ struct WavefrontKernels {
     const int depth = p.depth[i];
     const Bsdf& bsdf = p.bsdf[i];
     if (c.psf.on && p.cut[i].key == kPsfKeyPending)  // (the key of a cut at this vertex)
-      p.cut[i].key = psf_cut_key(c, p.ctx[i], bsdf, -p.ray[i].d, depth, p.stream[i]);
+      p.cut[i].key = psf_cut_key(c, p.ctx[i], bsdf, -p.ray[i].d,
+                                 psf_cut_footprint(p.ctx[i].footprint, p.hit[i].t,
+                                                   p.prev_dir_pdf[i], -p.ray[i].d, p.surface[i].ng),
+                                 depth, p.stream[i]);
     if (!continues_after_light(c, bsdf, depth)) return;
     PathState s = p.load(i);
     Ray next;
