@@ -12,7 +12,7 @@
 #      (1 - its samples per second over the unfiltered render's, same sampler and time).
 # Usage: scripts/psf_study.sh RLL OUT_DIR [--tiny]
 #   --tiny: 64x48, 4 spp, 2 seeds, 1 s, reference 64 spp (checks that the script works; its
-#   figures mean nothing). Env: RES, SPP, SEEDS, TIME, REF_SPP override; PYTHONPATH must reach
+#   figures mean nothing). Env: RES, SPP, SEEDS, TIME, REF_SPP, CACHE, STEPS override; PYTHONPATH must reach
 #   the rll module (build/python) for step 2, run by $PYTHON (default /usr/bin/python3, which
 #   has numpy).
 set -euo pipefail
@@ -24,12 +24,16 @@ else
   res=${RES:-640x480} spp=${SPP:-64} seeds=${SEEDS:-16} time=${TIME:-10} ref_spp=${REF_SPP:-4096}
 fi
 mkdir -p "$out"
-cache="$out/cache"
+cache=${CACHE:-$out/cache}  # CACHE: a reference cache to reuse (the bench's out/cache at 320x240)
 export RLL_CACHE_DIR="$cache"
 common=(--res "$res" --integrator path --quiet --cache-dir "$cache" --reference-spp "$ref_spp")
 
-# 1. The teaser.
+# STEPS (default "teaser bias time") picks the steps that run.
+steps=" ${STEPS:-teaser bias time} "
 scene=cornell-boxes-room
+
+# 1. The teaser.
+if [[ $steps == *" teaser "* ]]; then
 "$rll" compare "builtin:$scene" --samplers power,rll --spp "$spp" --out "$out/teaser-plain" \
   "${common[@]}" > "$out/teaser-plain.log" 2>&1
 "$rll" compare "builtin:$scene" --samplers power,rll --spp "$spp" --filter psf \
@@ -51,8 +55,10 @@ r = lambda n, t: val(rows[(n, t)], "relmse")
 print(f"\npsf power / psf rll relMSE: {r('power', 'psf') / r('rll', 'psf'):.2f}x (goal: >= 5x); "
       f"plain rll / psf rll: {r('rll', 'plain') / r('rll', 'psf'):.2f}x (goal: > 1)")
 PY
+fi
 
 # 2. The bias against the width, over seeds (the reference of step 1, cached).
+if [[ $steps == *" bias "* ]]; then
 bias="$out/bias"
 mkdir -p "$bias"
 "$rll" reference "builtin:$scene" --spp "$ref_spp" --res "$res" --integrator path --quiet \
@@ -86,8 +92,10 @@ for width in ("none", "3", "1.5", "0.75"):
     one = np.mean(w * (imgs - ref) ** 2)
     print(f"| {width} | {bias2:.4g} | {np.mean(w * var):.4g} | {one:.4g} |")
 PY
+fi
 
-# 3. Equal time, and the filter's cost.
+# 3. Equal time, and the filter's cost (on a quiet machine: it times the renders).
+[[ $steps == *" time "* ]] || exit 0
 for scene in cornell-boxes-room arch-interior many-lights-open; do
   "$rll" compare "builtin:$scene" --samplers power,tree,rll --time "$time" --filter psf \
     --out "$out/time-$scene" "${common[@]}" > "$out/time-$scene.log" 2>&1
