@@ -45,7 +45,8 @@ TEST(PsfSettings, DefaultsAreFermats) {
 TEST(PsfSettings, BadValuesAreRefusedNamingTheKey) {
   for (const std::string kv :
        {"psf.width=0", "psf.width=-1", "psf.width=nan", "psf.width=abc", "psf.max_prob=0",
-        "psf.min_dist=-0.1", "psf.clamp=-5", "psf.depth=-2", "psf.depth=1.5"}) {
+        "psf.min_dist=-0.1", "psf.clamp=-5", "psf.depth=-2", "psf.depth=1.5", "psf.temporal=1",
+        "psf.temporal=-0.1", "psf.temporal=nan", "psf.temporal=2"}) {
     SCOPED_TRACE(kv);
     const std::string key = kv.substr(0, kv.find('='));
     expect_mentions(error_of([&] { psf_from({kv}); }), {key});
@@ -67,9 +68,9 @@ TEST(PsfSettings, BadValuesAreRefusedNamingTheKey) {
 // Every parameter of the table is listed with its default (`rll filters --params psf`).
 TEST(PsfSettings, TableListsEveryKey) {
   const std::vector<std::string> lines = describe_params(psf_params(), "psf", PsfSettings{});
-  ASSERT_EQ(lines.size(), 5u);
-  for (const std::string key :
-       {"psf.depth=-1", "psf.width=3", "psf.max_prob=32", "psf.min_dist=0", "psf.clamp=100"})
+  ASSERT_EQ(lines.size(), 6u);
+  for (const std::string key : {"psf.depth=-1", "psf.width=3", "psf.max_prob=32", "psf.min_dist=0",
+                                "psf.clamp=100", "psf.temporal=0"})
     EXPECT_TRUE(std::any_of(lines.begin(), lines.end(), [&](const std::string& l) {
       return l.rfind(key, 0) == 0;
     })) << key;
