@@ -16,6 +16,7 @@
 #include "rll/render/render.h"
 #include "rll/scene/builtin.h"
 #include "rll/wavefront/wavefront.h"
+#include "support/small_scene.h"
 #include "support/test_support.h"
 
 using namespace rll;
@@ -41,14 +42,8 @@ struct FramesResult {
   PsfCounts counts;
 };
 
-struct Fixture {
-  Scene scene;
-  LightTree tree;
-  std::unique_ptr<Accel> accel;
-  Fixture(const std::string& name, int w, int h) : scene(small_builtin_scene(name, w, h)) {
-    tree = build_light_tree(scene);
-    accel = std::make_unique<Accel>(scene.mesh);
-  }
+struct Fixture : SmallScene {
+  using SmallScene::SmallScene;
 
   // The frames of a still scene as `rll render --frames` renders them: each its own film and
   // seed (the frame enters it), the filter's cells kept in one history.

@@ -211,7 +211,7 @@ struct GpuRenderer::Impl {
   DeviceArray<uint32_t> film_count;
   PinnedBuffer film_pinned;
   // The path-space filter's temporal reuse (render/psf.h): its two tables of cells, kept here from
-  // frame to frame, made at the first render that reuses.
+  // frame to frame, made at the first render with psf.temporal.
   DeviceArray<uint64_t> psf_keys[2];
   DeviceArray<ExactSum> psf_sums[2];
   DeviceArray<uint32_t> psf_used;

@@ -139,7 +139,7 @@ class RenderSession {
   mutable WavefrontWork m_wavefront_work;
   bool m_film_on_device = false;
   // The filter's temporal reuse on the CPU: its cells, kept from frame to frame (made at the first
-  // render that reuses); a render on another thread at the same time (Python) reuses nothing.
+  // render with psf.temporal); a render on another thread at the same time (Python) blends nothing.
   mutable std::mutex m_psf_mutex;
   mutable std::unique_ptr<PsfHistory> m_psf_history;
 };
