@@ -209,4 +209,29 @@ TEST(PsfKey, CellSizeFollowsTheWidth) {
   EXPECT_LT(shared(0.1f), 200);
 }
 
+// Temporal reuse: a cell of this sample's table adds w times the six sums its key had in the last
+// sample's, found past the cells its home slot's probe runs through; a cell whose key the last
+// sample had not, and a free slot, add nothing.
+TEST(PsfTemporal, BlendAddsTheLastSamplesSumsTimesTheWeight) {
+  PsfConstants f;
+  f.on = true;
+  f.temporal = 0.75f;
+  Table last(2), now(2);  // 5 cells each
+  const PsfTableView l = last.view(), t = now.view();
+  // Keys 1, 11 and 21 share the home slot (key >> 1) % 5 = 0: 21 lands in slot 2 after the others.
+  for (uint64_t key : {1u, 11u, 21u}) psf_cell(l, key);
+  ASSERT_EQ(last.keys[2], 21u);
+  EXPECT_EQ(psf_find(l, 21), 2u);
+  EXPECT_EQ(psf_find(l, 31), kPsfNoCell);
+  for (int i = 0; i < 6; ++i) last.sums[6 * 2 + i].add(double(i + 1));
+  const uint32_t found = psf_cell(t, 21), missing = psf_cell(t, 33);
+  for (int i = 0; i < 6; ++i) now.sums[6 * found + i].add(0.5);
+  for (size_t c = 0; c < now.keys.size(); ++c)
+    EXPECT_EQ(psf_blend_cell(f, t, l, c), c == found) << "cell " << c;
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_EQ(now.sums[6 * found + i].value(), 0.5 + 0.75 * (i + 1)) << "sum " << i;
+    EXPECT_EQ(now.sums[6 * missing + i].value(), 0.0);
+  }
+}
+
 }  // namespace
