@@ -129,6 +129,8 @@ void run(InteractiveOptions o) {
   set_activity(fmt::format("rendering {}x{} frames", scene.width, scene.height));
   begin_work();
   bool cancelled = false;
+  PsfCounts filter;  // path-space filtering's, over the frames
+  uint64_t samples = 0;
   for (int f = 0; f < o.frames && !interrupted(); ++f) {
     session.set_frame(f, sampler.get());
     if (animated) {
@@ -137,6 +139,7 @@ void run(InteractiveOptions o) {
     } else {
       rs.spp = f + 1;  // the film holds samples 0 to f - 1: this frame takes sample f
     }
+    rs.follows_frame = f > 0;  // (the filter's temporal reuse blends the last frame's cells)
     WavefrontTimes times;
     // One pass of 1 spp: the sampler's end_pass after it carries the frame's learning on.
     const RenderProgress p =
@@ -145,6 +148,8 @@ void run(InteractiveOptions o) {
       cancelled = true;
       break;
     }
+    filter += p.filter;
+    samples += p.samples;
     const FrameTimes ft = to_ms(times);
     frames.push_back(ft);
     nlohmann::json stages;
@@ -200,6 +205,7 @@ void run(InteractiveOptions o) {
   if (!o.stats.empty()) {
     nlohmann::json j = session_stats(session);
     j["sampler"] = sampler->describe();
+    j["filter"] = filter_json(is.psf, &filter, samples, session.psf_history_bytes());
     j["device"] = o.session.device;
     if (session.gpu()) {
       j["gpu"] = session.gpu()->device_name();

@@ -177,6 +177,7 @@ void run(const RenderOptions& o) {
   for (int f = 0; f < frames && !interrupted(); ++f) {
     session.set_frame(f, sampler.get());
     rs.frame = f;
+    rs.follows_frame = f > 0;  // (the filter's temporal reuse blends the last frame's cells)
     std::string label =
         frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
     set_activity(fmt::format("rendering {}x{} ({}{})", scene.width, scene.height, label,
@@ -260,7 +261,8 @@ void run(const RenderOptions& o) {
     j["rll_state"] = {{"file", o.state}, {"mode", o.state_mode}, {"loaded", state_loaded}};
     j["interrupted"] = total.cancelled;
     j["nonfinite_samples"] = total.nonfinite;
-    j["filter"] = filter_json(integrator.psf, &total.filter, total.samples);
+    j["filter"] =
+        filter_json(integrator.psf, &total.filter, total.samples, session.psf_history_bytes());
     j["memory"] = {{"peak_rss_bytes", peak_rss_bytes()}};
     write_file_atomic(o.stats, j.dump(2) + "\n");
   }

@@ -547,7 +547,8 @@ PyRender py_render(const Arg<PyScene>& scene_arg, const Arg<std::string>& sample
   r.stats["interrupted"] = r.interrupted;
   r.stats["out_of_time"] = p.out_of_time;
   r.stats["nonfinite_samples"] = p.nonfinite;
-  r.stats["filter"] = to_python(filter_json(session->integrator().psf, &p.filter, p.samples));
+  r.stats["filter"] = to_python(
+      filter_json(session->integrator().psf, &p.filter, p.samples, session->psf_history_bytes()));
   return r;
 }
 

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rll/core/image.h"
+#include "rll/render/psf.h"
 #include "support/test_support.h"
 
 using namespace rll;
@@ -62,6 +63,35 @@ TEST(PsfCli, InteractiveFiltersItsFrames) {
   const nlohmann::json j = nlohmann::json::parse(read_text(stats));
   EXPECT_EQ(j.at("filter").at("name"), "psf");
   EXPECT_EQ(j.at("filter").at("width"), 3.0);
+}
+
+// psf.temporal: interactive's frames blend the last frame's cells, counted in --stats with the
+// host table's memory; `render --frames` blends too; a bad weight is refused naming the key.
+TEST(PsfCli, TemporalReuseBlendsFramesAndSaysSo) {
+  TempDir dir;
+  const fs::path stats = dir / "frames.json";
+  const CommandResult r =
+      run_rll({"interactive", "builtin:cornell-box", "--res", "24x16", "--frames", "3", "--quiet",
+               "--filter", "psf", "--sampler", "power", "--set", "psf.temporal=0.5", "--stats",
+               stats.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json f = nlohmann::json::parse(read_text(stats)).at("filter");
+  EXPECT_EQ(f.at("temporal"), 0.5);
+  EXPECT_EQ(f.at("batches"), 3);
+  EXPECT_GT(f.at("cells_reused").get<double>(), 0);
+  EXPECT_LE(f.at("cells_reused").get<double>(), f.at("cells_used").get<double>());
+  EXPECT_EQ(f.at("temporal_bytes"), 24 * 16 * kPsfTemporalBytesPerPixel);
+  const fs::path out = dir / "f.exr", render_stats = dir / "render.json";
+  const CommandResult frames =
+      run_rll(render_args(out, {"--filter", "psf", "--frames", "2", "--set", "psf.temporal=0.9",
+                                "--stats", render_stats.string()}));
+  ASSERT_EQ(frames.exit_code, 0) << frames.output;
+  EXPECT_GT(
+      nlohmann::json::parse(read_text(render_stats)).at("filter").at("cells_reused").get<double>(),
+      0);
+  expect_clean_failure({"render", "builtin:cornell-box", "--filter", "psf", "--set",
+                        "psf.temporal=1", "-o", (dir / "x.png").string()},
+                       {"psf.temporal", "[0, 1)"});
 }
 
 TEST(PsfCli, BadValuesAndMisplacedKeysAreRefusedNamingThem) {

@@ -132,5 +132,51 @@ TEST(GpuWavefront, RefusesASamplerWithoutADeviceVersion) {
   }
 }
 
+// The path-space filter's temporal reuse (psf.temporal, render/psf.h) on the GPU, whose tables
+// stay on the device from frame to frame: frames that follow frames blend (cells found, another
+// image), the same frames for a seed twice, and a render that follows no frame is the one
+// without the key to the bit.
+TEST(GpuWavefront, PsfTemporalFramesBlendOnTheDevice) {
+  Scene scene = test::small_builtin_scene("cornell-boxes-room", 40, 30);
+  const LightTree tree = build_light_tree(scene);
+  const Accel accel(scene.mesh);
+  cuda::GpuRenderer gpu(scene);
+  struct Frames {
+    std::vector<Image> images;
+    PsfCounts counts;
+  };
+  auto frames = [&](const std::string& temporal, bool follows) {
+    const Params params = Params::parse({"psf.temporal=" + temporal});
+    const IntegratorSettings is = make_integrator_settings("path", 4, params, "psf");
+    auto sampler = make_light_sampler("power", scene, tree, params, &accel);
+    Frames out;
+    for (int f = 0; f < 3; ++f) {
+      Film film(scene.width, scene.height);
+      RenderSettings rs;
+      rs.spp = 2;
+      rs.seed = 5;
+      rs.frame = f;
+      rs.follows_frame = follows && f > 0;
+      out.counts += gpu.render(scene, *sampler, is, film, rs).filter;
+      out.images.push_back(film.resolve());
+    }
+    return out;
+  };
+  auto same = [](const Image& a, const Image& b) {
+    return std::memcmp(a.pixels().data(), b.pixels().data(), a.pixel_count() * sizeof(Rgb)) == 0;
+  };
+  const Frames off = frames("0", true), still = frames("0.8", false);
+  const Frames blended = frames("0.8", true), again = frames("0.8", true);
+  EXPECT_EQ(off.counts.reused, 0u);
+  EXPECT_GT(blended.counts.reused, 0u);
+  EXPECT_EQ(blended.counts.reused, again.counts.reused);
+  for (size_t f = 0; f < 3; ++f) {
+    SCOPED_TRACE(f);
+    EXPECT_TRUE(same(still.images[f], off.images[f])) << "a render that follows no frame";
+    EXPECT_TRUE(same(blended.images[f], again.images[f])) << "the same seed twice";
+    EXPECT_EQ(same(blended.images[f], off.images[f]), f == 0) << "blended from frame 1 on";
+  }
+}
+
 }  // namespace
 }  // namespace rll

@@ -18,6 +18,7 @@
 #include "rll/render/render.h"
 #include "rll/scene/builtin.h"
 #include "rll/wavefront/wavefront.h"
+#include "support/small_scene.h"
 #include "support/test_support.h"
 
 using namespace rll;
@@ -70,14 +71,8 @@ PsfResult render_psf(const Scene& scene, const LightTree& tree, const Accel& acc
   return out;
 }
 
-struct Fixture {
-  Scene scene;
-  LightTree tree;
-  std::unique_ptr<Accel> accel;
-  Fixture(const std::string& name, int w, int h) : scene(small_builtin_scene(name, w, h)) {
-    tree = build_light_tree(scene);
-    accel = std::make_unique<Accel>(scene.mesh);
-  }
+struct Fixture : SmallScene {
+  using SmallScene::SmallScene;
   PsfResult render(const PsfRender& r) const { return render_psf(scene, tree, *accel, r); }
 };
 

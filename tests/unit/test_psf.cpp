@@ -45,7 +45,8 @@ TEST(PsfSettings, DefaultsAreFermats) {
 TEST(PsfSettings, BadValuesAreRefusedNamingTheKey) {
   for (const std::string kv :
        {"psf.width=0", "psf.width=-1", "psf.width=nan", "psf.width=abc", "psf.max_prob=0",
-        "psf.min_dist=-0.1", "psf.clamp=-5", "psf.depth=-2", "psf.depth=1.5"}) {
+        "psf.min_dist=-0.1", "psf.clamp=-5", "psf.depth=-2", "psf.depth=1.5", "psf.temporal=1",
+        "psf.temporal=-0.1", "psf.temporal=nan", "psf.temporal=2"}) {
     SCOPED_TRACE(kv);
     const std::string key = kv.substr(0, kv.find('='));
     expect_mentions(error_of([&] { psf_from({kv}); }), {key});
@@ -67,9 +68,9 @@ TEST(PsfSettings, BadValuesAreRefusedNamingTheKey) {
 // Every parameter of the table is listed with its default (`rll filters --params psf`).
 TEST(PsfSettings, TableListsEveryKey) {
   const std::vector<std::string> lines = describe_params(psf_params(), "psf", PsfSettings{});
-  ASSERT_EQ(lines.size(), 5u);
-  for (const std::string key :
-       {"psf.depth=-1", "psf.width=3", "psf.max_prob=32", "psf.min_dist=0", "psf.clamp=100"})
+  ASSERT_EQ(lines.size(), 6u);
+  for (const std::string key : {"psf.depth=-1", "psf.width=3", "psf.max_prob=32", "psf.min_dist=0",
+                                "psf.clamp=100", "psf.temporal=0"})
     EXPECT_TRUE(std::any_of(lines.begin(), lines.end(), [&](const std::string& l) {
       return l.rfind(key, 0) == 0;
     })) << key;
@@ -206,6 +207,31 @@ TEST(PsfKey, CellSizeFollowsTheWidth) {
   };
   EXPECT_GT(shared(3.0f), 1500);
   EXPECT_LT(shared(0.1f), 200);
+}
+
+// Temporal reuse: a cell of this sample's table adds w times the six sums its key had in the last
+// sample's, found past the cells its home slot's probe runs through; a cell whose key the last
+// sample had not, and a free slot, add nothing.
+TEST(PsfTemporal, BlendAddsTheLastSamplesSumsTimesTheWeight) {
+  PsfConstants f;
+  f.on = true;
+  f.temporal = 0.75f;
+  Table last(2), now(2);  // 5 cells each
+  const PsfTableView l = last.view(), t = now.view();
+  // Keys 1, 11 and 21 share the home slot (key >> 1) % 5 = 0: 21 lands in slot 2 after the others.
+  for (uint64_t key : {1u, 11u, 21u}) psf_cell(l, key);
+  ASSERT_EQ(last.keys[2], 21u);
+  EXPECT_EQ(psf_find(l, 21), 2u);
+  EXPECT_EQ(psf_find(l, 31), kPsfNoCell);
+  for (int i = 0; i < 6; ++i) last.sums[6 * 2 + i].add(double(i + 1));
+  const uint32_t found = psf_cell(t, 21), missing = psf_cell(t, 33);
+  for (int i = 0; i < 6; ++i) now.sums[6 * found + i].add(0.5);
+  for (size_t c = 0; c < now.keys.size(); ++c)
+    EXPECT_EQ(psf_blend_cell(f, t, l, c), c == found) << "cell " << c;
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_EQ(now.sums[6 * found + i].value(), 0.5 + 0.75 * (i + 1)) << "sum " << i;
+    EXPECT_EQ(now.sums[6 * missing + i].value(), 0.0);
+  }
 }
 
 }  // namespace

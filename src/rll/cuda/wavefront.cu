@@ -210,6 +210,30 @@ struct GpuRenderer::Impl {
   DeviceArray<double> film_sum;
   DeviceArray<uint32_t> film_count;
   PinnedBuffer film_pinned;
+  // The path-space filter's temporal reuse (render/psf.h): its two tables of cells, kept here from
+  // frame to frame, made at the first render with psf.temporal.
+  DeviceArray<uint64_t> psf_keys[2];
+  DeviceArray<ExactSum> psf_sums[2];
+  DeviceArray<uint32_t> psf_used;
+  PsfFrameCells psf_frames;
+  PsfFrameCells* psf_cells(const IntegratorSettings& is, size_t pixels) {
+    if (!is.psf.on || !(is.psf.temporal > 0)) return nullptr;
+    if (psf_frames.pixels != pixels) {
+      check_psf_memory(pixels, true);
+      psf_frames = PsfFrameCells{};
+      const size_t cells = psf_capacity(pixels);
+      psf_used = DeviceArray<uint32_t>(2);
+      for (int i = 0; i < 2; ++i) {
+        psf_keys[i] = DeviceArray<uint64_t>();
+        psf_sums[i] = DeviceArray<ExactSum>();
+        psf_keys[i] = DeviceArray<uint64_t>(cells);
+        psf_sums[i] = DeviceArray<ExactSum>(6 * cells);
+        psf_frames.tables[i] = {psf_keys[i].view(), psf_sums[i].view(), psf_used.view().data + i};
+      }
+      psf_frames.pixels = pixels;
+    }
+    return &psf_frames;
+  }
   // The film that stayed here after the last render (WavefrontSettings::film_stays_on_device),
   // its host copy out of date, and its fewest samples per pixel.
   const Film* resident = nullptr;
@@ -358,12 +382,14 @@ RenderProgress GpuRenderer::render(
   backend.begin(wavefront.times);
   const size_t budget = device_slot_budget();
   const size_t slots = render_path_slots(wavefront, film, settings, budget, kMaxPathSlots, draws);
-  WavefrontDriver<CudaWavefrontBackend, BvhTracer> driver(backend, k, slots);
+  WavefrontDriver<CudaWavefrontBackend, BvhTracer> driver(
+      backend, k, slots, m.psf_cells(integrator, pixels), settings.follows_frame);
   m.render_bytes = 0;
   auto note_bytes = [&] {
-    m.render_bytes = std::max(m.render_bytes, backend.bytes() + device_sampler.bytes() +
-                                                  (rll ? m.rll->bytes() : 0) + m.film_sum.bytes() +
-                                                  m.film_count.bytes());
+    m.render_bytes = std::max(
+        m.render_bytes, backend.bytes() + device_sampler.bytes() + (rll ? m.rll->bytes() : 0) +
+                            m.film_sum.bytes() + m.film_count.bytes() + m.psf_keys[0].bytes() +
+                            m.psf_keys[1].bytes() + m.psf_sums[0].bytes() + m.psf_sums[1].bytes());
   };
   note_bytes();
   // rll's end of pass runs on its copy here (the learner's own end_pass: only the counters come

@@ -62,6 +62,7 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
     Film earlier(scene.width, scene.height);
     RenderSettings rf = rs;
     rf.frame = f;
+    rf.follows_frame = f > 0;  // (the filter's temporal reuse blends the last frame's cells)
     session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1), show_progress,
                    cancel, after_pass, nullptr, &integrator);
     if (cancel && cancel->load()) {
@@ -71,6 +72,7 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
   }
   session.set_frame(frames - 1, sampler.get());
   rs.frame = frames - 1;
+  rs.follows_frame = frames > 1;
   ConvergenceRecorder recorder(reference, reference_variance);
   Film film(scene.width, scene.height);
   if (!aovs.empty()) film.track_camera_vertex();

@@ -24,6 +24,8 @@ const std::vector<ParamSpec<PsfSettings>>& psf_params() {
                   "the largest pdf of the bounce before a cut"),
       float_param("min_dist", ParamRange::at_least(0), field<S, &S::min_dist>()),
       float_param("clamp", ParamRange::at_least(0), field<S, &S::clamp>(), "0 clamps nothing"),
+      float_param("temporal", ParamRange{0, 1, false, true}, field<S, &S::temporal>(),
+                  "the weight of the sample before in frames that follow frames; 0 is off"),
   };
   return table;
 }
@@ -66,6 +68,7 @@ PsfConstants make_psf_constants(const PsfSettings& s, const Bounds3& scene_bound
   c.max_prob = s.max_prob;
   c.min_dist = s.min_dist;
   c.clamp = s.clamp;
+  c.temporal = s.temporal;
   // Fermat's hash: a cell of `width` footprints in radius, at most the scene's extent across,
   // the level of detail rounded at random, 4 bins per axis of the normal's square map; the
   // jitter is each path's own (psf_key), never the pass's.
@@ -79,7 +82,8 @@ PsfConstants make_psf_constants(const PsfSettings& s, const Bounds3& scene_bound
   return c;
 }
 
-nlohmann::json filter_json(const PsfSettings& s, const PsfCounts* counts, uint64_t samples) {
+nlohmann::json filter_json(const PsfSettings& s, const PsfCounts* counts, uint64_t samples,
+                           size_t temporal_bytes) {
   if (!s.on) return {{"name", "none"}};
   nlohmann::json j = {{"name", "psf"}};
   params_json(psf_params(), s, j);
@@ -90,39 +94,65 @@ nlohmann::json filter_json(const PsfSettings& s, const PsfCounts* counts, uint64
         counts->batches > 0 ? double(counts->cells) / double(counts->batches) : 0.0;
     j["paths_filtered"] = counts->paths;
     j["filtered_share"] = samples > 0 ? double(counts->paths) / double(samples) : 0.0;
+    if (s.temporal > 0) {
+      j["cells_reused"] = counts->reused;
+      j["temporal_bytes"] = temporal_bytes;
+    }
   }
   return j;
 }
 
-void check_psf_memory(size_t pixels) {
-  check_memory_budget(double(pixels) * kPsfBytesPerPixel,
-                      fmt::format("the path-space filter's cells and path records for {} pixels "
-                                  "({} bytes a pixel)",
-                                  pixels, kPsfBytesPerPixel));
+void check_psf_memory(size_t pixels, bool temporal) {
+  const double bytes = kPsfBytesPerPixel + (temporal ? kPsfTemporalBytesPerPixel : 0.0);
+  check_memory_budget(
+      double(pixels) * bytes,
+      fmt::format("the path-space filter's cells and path records{} for {} pixels "
+                  "({} bytes a pixel)",
+                  temporal ? ", with the cells of the sample before (psf.temporal)" : "", pixels,
+                  bytes));
 }
 
-PsfTable::PsfTable(size_t pixels) {
+PsfTable::PsfTable(size_t pixels, bool cells) {
   check_psf_memory(pixels);
-  const size_t cells = psf_capacity(pixels);
-  m_keys.resize(cells);
-  m_sums.resize(6 * cells);
+  if (cells) {
+    m_keys.resize(psf_capacity(pixels));
+    m_sums.resize(6 * m_keys.size());
+  }
   m_records.resize(pixels);
 }
 
+PsfHistory::PsfHistory(size_t pixels) {
+  check_psf_memory(pixels, true);
+  const size_t cells = psf_capacity(pixels);
+  for (int i = 0; i < 2; ++i) {
+    m_keys[i].resize(cells);
+    m_sums[i].resize(6 * cells);
+    m_cells.tables[i] = {view_of(m_keys[i]), view_of(m_sums[i]), &m_used[i]};
+  }
+  m_cells.pixels = pixels;
+}
+
+namespace {
+// Large tables are cleared in parallel: a 1080p frame's are 450 MB, cleared every sample.
+void zero_in_parallel(void* data, size_t bytes) {
+  constexpr size_t kChunk = size_t(1) << 20;
+  unsigned char* p = static_cast<unsigned char*>(data);
+  parallel_for((bytes + kChunk - 1) / kChunk, 1, [&](size_t begin, size_t end) {
+    const size_t from = begin * kChunk, to = std::min(bytes, end * kChunk);
+    std::memset(p + from, 0, to - from);
+  });
+}
+}  // namespace
+
+void clear_psf_cells(const PsfTableView& t) {
+  zero_in_parallel(t.keys.data, t.keys.size * sizeof(uint64_t));
+  zero_in_parallel(t.sums.data, t.sums.size * sizeof(ExactSum));
+  *t.used = 0;
+}
+
 void PsfTable::clear() {
-  // Large tables are cleared in parallel: a 1080p frame's are 450 MB, cleared every sample.
-  auto zero = [](void* data, size_t bytes) {
-    constexpr size_t kChunk = size_t(1) << 20;
-    unsigned char* p = static_cast<unsigned char*>(data);
-    parallel_for((bytes + kChunk - 1) / kChunk, 1, [&](size_t begin, size_t end) {
-      const size_t from = begin * kChunk, to = std::min(bytes, end * kChunk);
-      std::memset(p + from, 0, to - from);
-    });
-  };
-  zero(m_keys.data(), m_keys.size() * sizeof(uint64_t));
-  zero(m_sums.data(), m_sums.size() * sizeof(ExactSum));
-  zero(m_records.data(), m_records.size() * sizeof(PsfRecord));
-  m_used = 0;
+  clear_psf_cells(view());
+  zero_in_parallel(m_records.data(), m_records.size() * sizeof(PsfRecord));
 }
 
 }  // namespace rll

@@ -35,6 +35,10 @@ struct PsfSettings {
   // its test is commented out, so its renders use none: 0)
   float min_dist = 0;
   float clamp = 100;  // firefly clamp of every contribution to the film, per channel; 0: none
+  // Temporal reuse (Fermat's psf_temporal_reuse, as an exponential blend): the weight, in [0, 1),
+  // of the cells of the sample before in a render that follows a frame (RenderSettings::
+  // follows_frame); 0: off.
+  float temporal = 0;
 };
 
 // The psf.* keys as one table (core/param_table.h): read, checked, listed by `rll filters`.
@@ -53,6 +57,7 @@ struct PsfConstants {
   bool on = false;
   int depth = 1;
   float max_prob = 32, min_dist = 0, clamp = 0;
+  float temporal = 0;  // PsfSettings::temporal
   CellKeyer keyer;
 };
 PsfConstants make_psf_constants(const PsfSettings& s, const Bounds3& scene_bounds);
@@ -190,40 +195,115 @@ RLL_HD inline void psf_resolve_pixel(const PsfConstants& f, const PsfTableView& 
   film.add_sum(pixel, psf_clamp(v, f.clamp));
 }
 
+// Temporal reuse (psf.temporal, docs/psf.md; Fermat's psf_temporal_reuse, which sums a cell over
+// up to 64 frames and then starts it afresh): in a render that follows a frame, each sample's cell
+// adds `temporal` times the sums its key had in the sample before (the last sample of the frame
+// before, for a frame's first), which had blended its own sample before: the sums, and so the
+// cell's mean, are an exponentially weighted blend over the samples, a path weighing temporal^k
+// after k samples. A cell that no path of a sample reaches is not kept (the table stays as
+// large as one sample's). The last sample's table is only read while the next is blended.
+
+// Where a table has no cell of a key.
+inline constexpr uint32_t kPsfNoCell = 0xffffffffu;
+
+// The cell of `key` (!= 0) in a table that no thread writes to, or kPsfNoCell.
+RLL_HD inline uint32_t psf_find(const PsfTableView& t, uint64_t key) {
+  const uint32_t n = uint32_t(t.keys.size);
+  uint32_t slot = uint32_t((key >> 1) % n);
+  for (uint32_t probes = 0; probes < n; ++probes) {
+    const uint64_t seen = t.keys[slot];
+    if (seen == key) return slot;
+    if (seen == 0) break;
+    if (++slot == n) slot = 0;
+  }
+  return kPsfNoCell;
+}
+
+// After every path of the sample, before the resolve: cell `cell` of its table `t`, where a path
+// took it, adds `temporal` times the sums of its key in the last sample's table `last`; true
+// where it found them. One thread per cell, each sum one add: the blend is exact and independent
+// of the threads as the paths' adds are.
+RLL_HD inline bool psf_blend_cell(const PsfConstants& f, const PsfTableView& t,
+                                  const PsfTableView& last, size_t cell) {
+  const uint64_t key = t.keys[cell];
+  if (key == 0) return false;
+  const uint32_t from = psf_find(last, key);
+  if (from == kPsfNoCell) return false;
+  ExactSum* s = &t.sums[6 * cell];
+  const ExactSum* l = &last.sums[6 * size_t(from)];
+  for (int i = 0; i < 6; ++i) s[i].add(double(f.temporal) * l[i].value());
+  return true;
+}
+
+// Temporal reuse's two tables of cells, in the memory of the device that renders (views, copied
+// into kernels by value): the last sample's, which the next sample blends, and the next sample's,
+// which its paths fill; they change places every sample. Kept from render to render by whoever
+// renders frames (the session on the host, the GPU renderer on its device).
+struct PsfFrameCells {
+  PsfTableView tables[2];
+  int last = 0;        // tables[last]: the last sample's cells, where `holds`
+  bool holds = false;  // a sample was rendered into tables[last]
+  size_t pixels = 0;   // the film's pixels they are sized for (psf_capacity each)
+
+  // The table the next sample fills (clear it first), and the one it blends.
+  const PsfTableView& next() const { return tables[1 - last]; }
+  const PsfTableView& previous() const { return tables[last]; }
+  // Whether the next sample blends the last one's cells: in a render that follows a frame.
+  bool blends(bool follows_frame) const { return follows_frame && holds; }
+  // The next sample's cells are in: they are the last sample's now.
+  void filled() {
+    last = 1 - last;
+    holds = true;
+  }
+};
+
 // The bytes the filter takes per pixel of the film: a record, psf_capacity cells of a key and six
 // sums for its batch of one path per pixel, and (the wavefront's) a path slot's cut.
 inline constexpr double kPsfBytesPerPixel =
     sizeof(PsfRecord) + 2.0 * (sizeof(uint64_t) + 6 * sizeof(ExactSum)) + sizeof(PsfCut);
 inline constexpr const char* kPsfPixelText = "the path-space filter's cells and path records";
 
-// Throws rll::Error where the filter's table and records for `pixels` pixels do not fit the
-// memory budget (core/memory_budget.h), before they are allocated.
-void check_psf_memory(size_t pixels);
+// The bytes a pixel temporal reuse adds: the second table of cells.
+inline constexpr double kPsfTemporalBytesPerPixel = 2.0 * (sizeof(uint64_t) + 6 * sizeof(ExactSum));
+inline constexpr const char* kPsfTemporalPixelText =
+    "the path-space filter's cells of the sample before (psf.temporal)";
+
+// Throws rll::Error where the filter's table and records for `pixels` pixels (and with `temporal`
+// the second table of temporal reuse) do not fit the memory budget (core/memory_budget.h), before
+// they are allocated.
+void check_psf_memory(size_t pixels, bool temporal = false);
 
 // A batch's counts, summed over the batches of a render: --stats' `filter`.
 struct PsfCounts {
   uint64_t batches = 0;  // batches resolved (one per sample of each pixel)
   uint64_t cells = 0;    // cells used, summed over the batches
   uint64_t paths = 0;    // paths filtered (cut), over all batches
+  uint64_t reused = 0;   // cells that blended the last sample's (psf.temporal), over all batches
   PsfCounts& operator+=(const PsfCounts& o) {
     batches += o.batches;
     cells += o.cells;
     paths += o.paths;
+    reused += o.reused;
     return *this;
   }
 };
 
 // What --stats and summaries say of the filter: {"name": "none"}, or "psf" with its settings and,
 // where `counts` is given, the cells used per batch, the paths filtered and their share of the
-// `samples` camera paths.
+// `samples` camera paths, and with temporal reuse the cells that blended the sample before's and
+// `temporal_bytes`, the memory its second table took.
 nlohmann::json filter_json(const PsfSettings& s, const PsfCounts* counts = nullptr,
-                           uint64_t samples = 0);
+                           uint64_t samples = 0, size_t temporal_bytes = 0);
+
+// Every cell of a table in the host's memory free (in parallel).
+void clear_psf_cells(const PsfTableView& t);
 
 // The host's table and records, for the megakernel: one batch of one path per pixel at a time.
 class PsfTable {
  public:
-  // Checks the memory (check_psf_memory) before allocating.
-  explicit PsfTable(size_t pixels);
+  // Checks the memory (check_psf_memory) before allocating; without `cells` (temporal reuse,
+  // whose cells a PsfHistory holds) only the records.
+  explicit PsfTable(size_t pixels, bool cells = true);
   // Starts a batch: every cell free, every record empty.
   void clear();
   PsfTableView view() { return {view_of(m_keys), {m_sums.data(), m_sums.size()}, &m_used}; }
@@ -235,6 +315,25 @@ class PsfTable {
   std::vector<ExactSum> m_sums;
   std::vector<PsfRecord> m_records;
   uint32_t m_used = 0;
+};
+
+// Temporal reuse's cells in the host's memory (the megakernel's and the CPU wavefront's), kept by
+// the session from frame to frame.
+class PsfHistory {
+ public:
+  // Checks the memory of the filter with both tables (check_psf_memory) before allocating.
+  explicit PsfHistory(size_t pixels);
+  PsfHistory(const PsfHistory&) = delete;
+  PsfHistory& operator=(const PsfHistory&) = delete;
+  PsfFrameCells& cells() { return m_cells; }
+  // The memory of the second table, what temporal reuse adds (--stats).
+  size_t bytes() const { return size_t(double(m_cells.pixels) * kPsfTemporalBytesPerPixel); }
+
+ private:
+  std::vector<uint64_t> m_keys[2];
+  std::vector<ExactSum> m_sums[2];
+  uint32_t m_used[2] = {0, 0};
+  PsfFrameCells m_cells;
 };
 
 }  // namespace rll

@@ -158,7 +158,8 @@ void for_each_tile(int w, int h, int ts, const PassStop& stop, RayCounters& pass
 
 RenderProgress render(const Scene& scene, Integrator& integrator, LightSampler& sampler, Film& film,
                       const RenderSettings& settings, const std::atomic<bool>* cancel,
-                      const std::function<void(const RenderProgress&, const Film&)>& after_pass) {
+                      const std::function<void(const RenderProgress&, const Film&)>& after_pass,
+                      PsfHistory* history) {
   const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
   const bool tracks_vertex = film.camera_vertex() != nullptr;
   auto trace = [&](int x, int y, int s, uint64_t frame_seed, RayCounters& rays, PsfCut* cut) {
@@ -186,18 +187,23 @@ RenderProgress render(const Scene& scene, Integrator& integrator, LightSampler& 
                     return true;
                   });
   };
-  // Path-space filtering: a batch per sample index (render/psf.h), its cells in `table`.
+  // Path-space filtering: a batch per sample index (render/psf.h), its cells in `table`, or with
+  // temporal reuse in the history's tables, which change places every sample.
   std::unique_ptr<PsfTable> table;
   const PsfConstants& psf = integrator.constants().psf;
-  if (psf.on) table = std::make_unique<PsfTable>(size_t(w) * h);
+  PsfFrameCells* frames = nullptr;
+  if (psf.on && psf.temporal > 0 && history && history->cells().pixels == size_t(w) * h)
+    frames = &history->cells();
+  if (psf.on) table = std::make_unique<PsfTable>(size_t(w) * h, !frames);
   auto filtered_pass = [&](int first, int count, uint64_t frame_seed, const PassStop& stop,
                            RayCounters& pass_rays, uint64_t& pass_nonfinite, PsfCounts& filter) {
     const FilmView fv = film.view();
     for (int s = first; s < first + count && !stop.stopped(); ++s) {
       table->clear();
-      const PsfTableView t = table->view();
+      const PsfTableView t = frames ? frames->next() : table->view();
+      if (frames) clear_psf_cells(t);
       const View<PsfRecord> records = table->records();
-      std::atomic<uint64_t> paths{0};
+      std::atomic<uint64_t> paths{0}, reused{0};
       for_each_tile(
           w, h, ts, stop, pass_rays, pass_nonfinite,
           [&](int x, int y, RayCounters& rays, uint64_t& nonfinite, const auto& stop_now) {
@@ -209,12 +215,22 @@ RenderProgress render(const Scene& scene, Integrator& integrator, LightSampler& 
             if (end == PsfEnd::Filtered) paths.fetch_add(1, std::memory_order_relaxed);
             return true;
           });
+      if (frames && frames->blends(settings.follows_frame)) {
+        const PsfTableView last = frames->previous();
+        parallel_for(t.keys.size, 4096, [&](size_t begin, size_t end) {
+          uint64_t n = 0;
+          for (size_t c = begin; c < end; ++c) n += psf_blend_cell(psf, t, last, c);
+          reused.fetch_add(n, std::memory_order_relaxed);
+        });
+      }
       parallel_for(size_t(w) * h, 4096, [&](size_t begin, size_t end) {
         for (size_t p = begin; p < end; ++p) psf_resolve_pixel(psf, t, fv, records, p);
       });
       filter.batches += 1;
-      filter.cells += table->used();
+      filter.cells += *t.used;
       filter.paths += paths.load();
+      filter.reused += reused.load();
+      if (frames) frames->filled();
     }
   };
   integrator.sampler_changed();

@@ -31,7 +31,12 @@ struct RenderSettings {
   int pass_spp = 1;
   int max_pass_spp = 8;
   int tile_size = 16;
-  int frame = 0;                      // animation frame (enters the random seed)
+  int frame = 0;  // animation frame (enters the random seed)
+  // This render is the frame after the last one rendered with the same PsfHistory (an animation's
+  // next frame, interactive's next sample of a still scene): path-space filtering's temporal
+  // reuse (psf.temporal) blends the cells that render left. False (a first frame, a still
+  // render): the render's samples blend nothing, and leave their cells for the next frame.
+  bool follows_frame = false;
   PointSet points = PointSet::Sobol;  // the sample points (--points)
 };
 
@@ -109,9 +114,12 @@ Ray camera_ray(const Scene& scene, int x, int y, SampleStream& stream);
 // after every pass with the film, between passes, and may not touch the sampler; the time it
 // takes is excluded from the render's seconds and time budget. `integrator` reads `sampler`
 // through its view, which it takes again at the start and after each end of pass.
+// With the filter's temporal reuse (psf.temporal > 0), `history` holds its cells from frame to
+// frame (without one, no sample blends another's, as in a render that follows no frame).
 RenderProgress render(
     const Scene& scene, Integrator& integrator, LightSampler& sampler, Film& film,
     const RenderSettings& settings, const std::atomic<bool>* cancel = nullptr,
-    const std::function<void(const RenderProgress&, const Film&)>& after_pass = {});
+    const std::function<void(const RenderProgress&, const Film&)>& after_pass = {},
+    PsfHistory* history = nullptr);
 
 }  // namespace rll

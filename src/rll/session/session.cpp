@@ -64,8 +64,13 @@ RenderSession::RenderSession(const SessionSettings& settings)
   m_tree = build_light_tree(m_scene);
   m_integrator =
       make_integrator_settings(settings.integrator, settings.max_depth, m_params, settings.filter);
-  // The filter's cells and records are kept beside the film: checked with it.
-  if (m_integrator.psf.on)
+  // The filter's cells and records (and temporal reuse's second table) are kept beside the film:
+  // checked with it.
+  if (m_integrator.psf.on && m_integrator.psf.temporal > 0)
+    check_film_memory(
+        kRenderBytesPerPixel + kPsfBytesPerPixel + kPsfTemporalBytesPerPixel,
+        fmt::format("{}, {} and {}", kRenderPixelText, kPsfPixelText, kPsfTemporalPixelText));
+  else if (m_integrator.psf.on)
     check_film_memory(kRenderBytesPerPixel + kPsfBytesPerPixel,
                       fmt::format("{}, and {}", kRenderPixelText, kPsfPixelText));
   m_accel = std::make_unique<Accel>(m_scene.mesh);
@@ -219,11 +224,23 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   wavefront.after_pass_reads_film = bool(after_pass);  // (the progress bar reads no film)
   wavefront.film_stays_on_device = m_film_on_device;
   wavefront.tracer = m_settings.tracer == "bvh" ? WavefrontTracer::Bvh : WavefrontTracer::Embree;
+  // The filter's temporal reuse on the CPU: the cells the last frame left (the GPU keeps its own).
+  std::unique_lock psf_lock(m_psf_mutex, std::defer_lock);
+  PsfHistory* history = nullptr;
+  const size_t pixels = size_t(film.width()) * film.height();
+  if (is.psf.on && is.psf.temporal > 0 && !m_gpu && psf_lock.try_lock()) {
+    if (!m_psf_history || m_psf_history->cells().pixels != pixels) {
+      m_psf_history.reset();
+      m_psf_history = std::make_unique<PsfHistory>(pixels);
+    }
+    history = m_psf_history.get();
+  }
+  wavefront.psf_history = history;
   auto run = [&](const RenderSettings& r, const AfterPass& after) {
     if (m_gpu) return m_gpu->render(m_scene, sampler, is, film, r, cancel, after, wavefront);
     return m_settings.wavefront
                ? render_wavefront(m_scene, *m_accel, sampler, is, film, r, cancel, after, wavefront)
-               : rll::render(m_scene, integrator, sampler, film, r, cancel, after);
+               : rll::render(m_scene, integrator, sampler, film, r, cancel, after, history);
   };
   RenderProgress p = run(rs, [&](const RenderProgress& pr, const Film& f) {
     bar.update(pr);
@@ -254,6 +271,11 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   }
   bar.finish();
   return p;
+}
+
+size_t RenderSession::psf_history_bytes() const {
+  std::lock_guard lock(m_psf_mutex);
+  return m_psf_history ? m_psf_history->bytes() : 0;
 }
 
 void RenderSession::read_film(Film& film) const {

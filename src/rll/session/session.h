@@ -109,6 +109,9 @@ class RenderSession {
   // WavefrontSettings::film_stays_on_device) until read_film() brings the host's up to date.
   void keep_film_on_device(bool keep) { m_film_on_device = keep; }
   void read_film(Film& film) const;
+  // The memory the path-space filter's temporal reuse keeps on the host for the next frame
+  // (psf.temporal; render/psf.h), 0 before a render made it (--stats).
+  size_t psf_history_bytes() const;
 
  private:
   std::unique_ptr<LightSampler> make_sampler_on_host(const std::string& spec) const;
@@ -135,6 +138,10 @@ class RenderSession {
   mutable WavefrontMemory m_wavefront_memory;
   mutable WavefrontWork m_wavefront_work;
   bool m_film_on_device = false;
+  // The filter's temporal reuse on the CPU: its cells, kept from frame to frame (made at the first
+  // render with psf.temporal); a render on another thread at the same time (Python) blends nothing.
+  mutable std::mutex m_psf_mutex;
+  mutable std::unique_ptr<PsfHistory> m_psf_history;
 };
 
 }  // namespace rll

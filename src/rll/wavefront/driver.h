@@ -46,9 +46,12 @@ class WavefrontDriver {
   using Kernels = WavefrontKernels<Tracer>;
 
   // `k` holds the scene, camera, tables, tracer, sampler and film; the driver adds the path slots,
-  // queues and tally, n_slots of each, taken from the backend once.
-  WavefrontDriver(Backend& backend, const Kernels& k, size_t n_slots)
-      : m_backend(backend), m_k(k), m_slots(n_slots) {
+  // queues and tally, n_slots of each, taken from the backend once. With `frames` (the filter's
+  // temporal reuse, render/psf.h: its two tables in the backend's memory, kept by the caller from
+  // render to render), the filter's cells are theirs; `follows_frame` as RenderSettings'.
+  WavefrontDriver(Backend& backend, const Kernels& k, size_t n_slots,
+                  PsfFrameCells* frames = nullptr, bool follows_frame = false)
+      : m_backend(backend), m_k(k), m_slots(n_slots), m_frames(frames), m_follows(follows_frame) {
     auto take = [&]<typename T>(size_t n) { return m_backend.template take<T>(n); };
     m_k.draws = uint32_t(nee_draws_per_vertex(m_k.sampler));
     m_k.p = PathSlots::make(take, n_slots, m_k.draws, filters());
@@ -60,9 +63,12 @@ class WavefrontDriver {
     if (filters()) {
       // Path-space filtering: a sample of every pixel at a time (render/psf.h).
       const size_t pixels = m_k.film.count.size, cells = psf_capacity(pixels);
-      m_k.psf_table.keys = m_backend.template take<uint64_t>(cells);
-      m_k.psf_table.sums = m_backend.template take<ExactSum>(6 * cells);
-      m_k.psf_table.used = m_backend.template take<uint32_t>(1).data;
+      if (m_frames && m_frames->pixels != pixels) m_frames = nullptr;  // (not this film's)
+      if (!m_frames) {
+        m_k.psf_table.keys = m_backend.template take<uint64_t>(cells);
+        m_k.psf_table.sums = m_backend.template take<ExactSum>(6 * cells);
+        m_k.psf_table.used = m_backend.template take<uint32_t>(1).data;
+      }
       m_k.psf_records = m_backend.template take<PsfRecord>(pixels);
     }
   }
@@ -71,7 +77,14 @@ class WavefrontDriver {
   // pixel at a time, begin_filter_batch() before and resolve_filter() after each.
   bool filters() const { return m_k.c.psf.on; }
   // Every cell free, every record empty (a stopped batch leaves pixels it did not reach empty).
+  // With temporal reuse the two tables change places: the sample fills the one the sample before
+  // blended, and blends the other where the render follows a frame.
   void begin_filter_batch() {
+    if (m_frames) {
+      m_k.psf_table = m_frames->next();
+      m_blend = m_frames->blends(m_follows);
+      m_k.psf_last = m_blend ? m_frames->previous() : PsfTableView{};
+    }
     m_backend.timed(WavefrontStage::Accumulate, [&] {
       const PsfTableView& t = m_k.psf_table;
       m_backend.zero(t.keys.data, t.keys.size * sizeof(uint64_t));
@@ -80,14 +93,19 @@ class WavefrontDriver {
       m_backend.zero(m_k.psf_records.data, m_k.psf_records.size * sizeof(PsfRecord));
     });
   }
-  // After the batches of a sample: every cut path gets its cell's mean; the cells are counted.
+  // After the batches of a sample: its cells blend the last sample's (temporal reuse), every cut
+  // path gets its cell's mean; the cells are counted.
   void resolve_filter() {
     m_backend.timed(WavefrontStage::Accumulate, [&] {
       const Kernels k = m_k;
+      if (m_blend)
+        m_backend.launch(k.psf_table.keys.size,
+                         [k] RLL_HD(size_t cell) { k.psf_blend_stage(uint64_t(cell)); });
       m_backend.launch(k.psf_records.size,
                        [k] RLL_HD(size_t pixel) { k.psf_resolve_stage(uint64_t(pixel)); });
       m_backend.launch(1, [k] RLL_HD(size_t) { k.psf_count_stage(); });
     });
+    if (m_frames) m_frames->filled();
   }
 
   size_t slots() const { return m_slots; }
@@ -156,7 +174,10 @@ class WavefrontDriver {
   Backend& m_backend;
   Kernels m_k;
   size_t m_slots;
-  uint32_t* m_sizes = nullptr;  // the two blocks of queue sizes
+  uint32_t* m_sizes = nullptr;        // the two blocks of queue sizes
+  PsfFrameCells* m_frames = nullptr;  // temporal reuse's tables, where it is on
+  bool m_follows = false;             // the render follows a frame
+  bool m_blend = false;               // the sample in flight blends the last one's cells
 };
 
 }  // namespace rll

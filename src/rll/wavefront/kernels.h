@@ -175,6 +175,7 @@ struct WavefrontKernels {
   // Path-space filtering (render/psf.h; c.psf.on): the batch's cells, and a record per pixel.
   PsfTableView psf_table;
   View<PsfRecord> psf_records;
+  PsfTableView psf_last;  // temporal reuse: the last sample's cells, where this one blends them
 
   RLL_HD WavefrontQueue queue(WavefrontQueueId q) const {
     return {queue_slots[q], q == kNextRays ? &next_queue_sizes[kRays] : &queue_sizes[q]};
@@ -347,6 +348,13 @@ struct WavefrontKernels {
         psf_end_path(c.psf, psf_table, film, psf_records, size_t(pixel), p.cut[slot], p.L[slot]);
     if (end == PsfEnd::NonFinite) atomic_add(&tally->nonfinite, uint64_t(1));
     if (end == PsfEnd::Filtered) atomic_add(&tally->filter.paths, uint64_t(1));
+  }
+
+  // After every path of the sample, with temporal reuse: its cell `cell` blends the last
+  // sample's (psf_blend_cell), counted.
+  RLL_HD void psf_blend_stage(uint64_t cell) const {
+    if (psf_blend_cell(c.psf, psf_table, psf_last, size_t(cell)))
+      atomic_add(&tally->filter.reused, uint64_t(1));
   }
 
   // After every path of the sample: pixel's cut path gets its cell's mean (psf_resolve_pixel).

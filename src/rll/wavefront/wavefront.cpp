@@ -128,7 +128,10 @@ RenderProgress render_with(
   const size_t slots =
       render_path_slots(wavefront, film, settings, budget, kHostMaxPathSlots, draws);
   if (integrator.psf.on) check_psf_memory(size_t(film.width()) * film.height());
-  WavefrontDriver<HostBackend, Tracer> driver(backend, k, slots);
+  PsfFrameCells* frames = integrator.psf.on && integrator.psf.temporal > 0 && wavefront.psf_history
+                              ? &wavefront.psf_history->cells()
+                              : nullptr;
+  WavefrontDriver<HostBackend, Tracer> driver(backend, k, slots, frames, settings.follows_frame);
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] { light_sampler.end_pass(); });
     driver.set_sampler(light_sampler.sampler_view());

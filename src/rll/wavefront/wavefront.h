@@ -74,6 +74,9 @@ struct WavefrontSettings {
   // date, and the next render into the same film continues from the device's (interactive's
   // frames); GpuRenderer::download_film brings the host's up to date.
   bool film_stays_on_device = false;
+  // The CPU's: the path-space filter's temporal reuse keeps its cells there from render to
+  // render (render/psf.h; without it, no sample blends another's). The GPU keeps its own.
+  PsfHistory* psf_history = nullptr;
 };
 
 // As render() (render/render.h), with the wavefront renderer: the same pass loop, the same
