@@ -284,27 +284,23 @@ for scene, integ, s, b, r in goal_rows:
     goal(f"{scene}, {integ}, {s['budget'].get('time', '?'):g} s: best rll ({label}) relMSE and trimmed "
          f"<= {RHT_GOAL[scene]:.2g}x rht's", " / ".join(f"{x:.2f}x" for x in ratios),
          max(ratios) <= RHT_GOAL[scene])
-# Issue 45's goal on the new scenes: rll at most 0.5x the better rht.
-for scene in ("spot-hall", "screen-hall"):
-    s = load(f"{scene}-path")
+def rll_half_of_rht(scene, s, peer):
+    """The goal that rll's relMSE and trimmed relMSE are at most half rht's in one comparison."""
     b = by_name(s) if s else {}
-    if "rll" in b and "rht" in b:
-        rr = [med(b["rll"], "relmse") / med(b["rht"], "relmse")]
-        if trimmed(b["rll"]) and trimmed(b["rht"]):
-            rr.append(trimmed(b["rll"]) / trimmed(b["rht"]))
-        goal(f"{scene}, path, {s['budget']['time']:g} s: rll relMSE and trimmed <= 0.5x the better rht's",
-             " / ".join(f"{x:.2f}x" for x in rr), max(rr) <= 0.5)
+    if "rll" not in b or "rht" not in b:
+        return
+    rr = [med(b["rll"], "relmse") / med(b["rht"], "relmse")]
+    if trimmed(b["rll"]) and trimmed(b["rht"]):
+        rr.append(trimmed(b["rll"]) / trimmed(b["rht"]))
+    goal(f"{scene}, path, {s['budget']['time']:g} s: rll relMSE and trimmed <= 0.5x {peer}",
+         " / ".join(f"{x:.2f}x" for x in rr), max(rr) <= 0.5)
+
+
+# Issue 45's goal on the new scenes (rll at most 0.5x the better rht), and the long renders'.
+for scene in ("spot-hall", "screen-hall"):
+    rll_half_of_rht(scene, load(f"{scene}-path"), "the better rht's")
 for scene in ("cornell-boxes-room", "arch-interior"):
-    s = load(f"long-{scene}-path", any_time=True)
-    if not s:
-        continue
-    b = by_name(s)
-    if "rll" in b and "rht" in b:
-        rr = [med(b["rll"], "relmse") / med(b["rht"], "relmse")]
-        if trimmed(b["rll"]) and trimmed(b["rht"]):
-            rr.append(trimmed(b["rll"]) / trimmed(b["rht"]))
-        goal(f"{scene}, path, {s['budget']['time']:g} s: rll relMSE and trimmed <= 0.5x rht's",
-             " / ".join(f"{x:.2f}x" for x in rr), max(rr) <= 0.5)
+    rll_half_of_rht(scene, load(f"long-{scene}-path", any_time=True), "rht's")
 for scene, integ, s in comparisons("-spp", ("cornell-boxes-room", "arch-interior")):
     r = {x["name"]: med(x, "relmse") for x in s["samplers"]}
     best_other = min(v for n, v in r.items() if n != "oracle")
