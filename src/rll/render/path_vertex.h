@@ -429,10 +429,10 @@ RLL_HD inline void psf_cut(PathState& s, PsfCut& cut) {
 // rough bounces above psf.depth keep their wider spread there.
 RLL_HD inline float psf_cut_footprint(float footprint, float t, float prev_dir_pdf, const Vec3& wo,
                                       const Vec3& ng) {
-  const float cos_in = std::max(1e-2f, absdot(wo, ng));  // as widen_footprint's
-  const float spread = t / std::sqrt(prev_dir_pdf * cos_in);
-  const float capped = t / std::sqrt(std::max(prev_dir_pdf, float(kPsfMinConePdf)) * cos_in);
-  return std::max(footprint - spread, 0.0f) + capped;
+  // The segment's spread as widen_footprint added it, taken back, and added again capped.
+  const float spread = widen_footprint(0.0f, t, prev_dir_pdf, wo, ng);
+  return widen_footprint(std::max(footprint - spread, 0.0f), t,
+                         std::max(prev_dir_pdf, float(kPsfMinConePdf)), wo, ng);
 }
 
 // The key of the cell of the path's cut at this vertex, jittered by numbers of its own;
