@@ -41,6 +41,7 @@ struct CompareOptions {
   int spp = 0;
   int repeats = 1;
   int frames = 1;
+  bool every_frame = false;  // --every-frame: each frame measured against its own reference
   int pass_spp = 1;
   int max_pass_spp = 8;
   uint64_t seed = 1;
@@ -108,6 +109,10 @@ std::vector<std::string> check_flags(const CompareOptions& o) {
     fail("give exactly one budget: --time SECONDS or --spp N (positive)");
   if (o.repeats < 1) fail("--repeats must be at least 1");
   if (o.frames < 1) fail("--frames must be at least 1");
+  if (o.every_frame && !o.reference.empty())
+    fail(
+        "--every-frame measures each frame against its own reference, from the cache; "
+        "--reference gives one image: leave one of them out");
   if (o.pass_spp < 1) fail("--pass-spp must be at least 1");
   if (o.max_pass_spp < 1) fail("--max-pass-spp must be at least 1");
   if (o.reference.empty() && o.reference_request.spp < 1)
@@ -199,7 +204,8 @@ std::string interrupted_text(const CompareOptions& o, const std::string& name) {
 // checkpoints; the image is returned in `image`, and the sampler in `kept` and the --aov
 // diagnostics in `aovs` when they are given.
 RunResult run_once(const CompareOptions& o, RenderSession& session, const std::string& name,
-                   int repeat, const ChosenReference& reference, Image& image,
+                   int repeat, const ChosenReference& reference,
+                   const std::vector<FrameReference>& frame_references, Image& image,
                    std::unique_ptr<LightSampler>* kept = nullptr,
                    std::vector<std::pair<std::string, std::vector<float>>>* aovs = nullptr) {
   RenderSettings rs;
@@ -210,11 +216,11 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
   rs.max_pass_spp = o.max_pass_spp;
   const std::string label =
       o.repeats > 1 ? fmt::format("{} ({}/{})", name, repeat + 1, o.repeats) : name;
-  MeasuredRun m =
-      measure_run(session, name, repeat, rs, o.frames, reference.image,
-                  reference.variance.pixel_count() ? &reference.variance : nullptr, label, !o.quiet,
-                  interrupt_flag(), {},
-                  aovs && !o.aov.empty() ? parse_aovs(o.aov, "--aov") : std::vector<Aov>());
+  MeasuredRun m = measure_run(
+      session, name, repeat, rs, o.frames, reference.image,
+      reference.variance.pixel_count() ? &reference.variance : nullptr, label, !o.quiet,
+      interrupt_flag(), {},
+      aovs && !o.aov.empty() ? parse_aovs(o.aov, "--aov") : std::vector<Aov>(), frame_references);
   if (m.cancelled || interrupted()) throw Interrupted(interrupted_text(o, name));
   image = std::move(m.image);
   if (kept) *kept = std::move(m.sampler);
@@ -226,23 +232,47 @@ RunResult run_once(const CompareOptions& o, RenderSession& session, const std::s
   return run;
 }
 
-LogLogPlot convergence_plot(const Scene& scene, const std::vector<SamplerSummary>& summaries,
-                            const std::string& metric) {
+// A plot of each sampler's runs, one curve per repeat: `points(run, metric)` gives a run's
+// (x, metric) points.
+template <typename Points>
+LogLogPlot runs_plot(const std::vector<SamplerSummary>& summaries, const std::string& title,
+                     const std::string& x_label, const std::string& metric, const Points& points) {
   LogLogPlot plot;
-  plot.title = fmt::format("{} against render time ({})", metric_label(metric), scene.source);
-  plot.x_label = "render time (s)";
+  plot.title = title;
+  plot.x_label = x_label;
   plot.y_label = metric_label(metric);
   for (size_t i = 0; i < summaries.size(); ++i) {
     PlotSeries series{summaries[i].name, series_colour(i), {}};
-    for (const RunResult* r : summaries[i].runs) {
-      std::vector<std::pair<double, double>> curve;
-      for (const auto& c : r->checkpoints)
-        curve.emplace_back(c.seconds, checkpoint_metric(c, metric));
-      series.curves.push_back(std::move(curve));
-    }
+    for (const RunResult* r : summaries[i].runs) series.curves.push_back(points(*r, metric));
     plot.series.push_back(std::move(series));
   }
   return plot;
+}
+
+LogLogPlot convergence_plot(const Scene& scene, const std::vector<SamplerSummary>& summaries,
+                            const std::string& metric) {
+  return runs_plot(summaries,
+                   fmt::format("{} against render time ({})", metric_label(metric), scene.source),
+                   "render time (s)", metric, [](const RunResult& r, const std::string& m) {
+                     std::vector<std::pair<double, double>> curve;
+                     for (const auto& c : r.checkpoints)
+                       curve.emplace_back(c.seconds, checkpoint_metric(c, m));
+                     return curve;
+                   });
+}
+
+// --every-frame's plot: each sampler's error against the frame.
+LogLogPlot frame_plot(const Scene& scene, const std::vector<SamplerSummary>& summaries,
+                      const std::string& metric) {
+  return runs_plot(summaries,
+                   fmt::format("{} of each frame against its own reference ({})",
+                               metric_label(metric), scene.source),
+                   "frame", metric, [](const RunResult& r, const std::string& m) {
+                     std::vector<std::pair<double, double>> curve;
+                     for (const FrameError& f : r.frames)
+                       curve.emplace_back(double(f.frame + 1), checkpoint_metric(f.error, m));
+                     return curve;
+                   });
 }
 
 std::string integrator_text(const IntegratorSettings& is) {
@@ -314,22 +344,34 @@ void run(const CompareOptions& o) {
   // Per pixel, a run's film and image, the reference and its variance, and for each sampler its
   // first image, its error map and its tile of the side-by-side figure (with --aov, its
   // diagnostics too): the whole of it is checked before the first film is allocated.
+  // (--every-frame keeps every frame's reference and variance.)
   session.check_film_memory(
-      kRenderBytesPerPixel + 2 * 3 * 4 +
+      kRenderBytesPerPixel + 2 * 3 * 4 * (o.every_frame ? o.frames : 1) +
           double(samplers.size()) *
               (3 * 4 + 4 + 4 + (o.aov.empty() ? 0 : kCameraVertexBytesPerPixel)),
       "a run's film and image, the reference and its variance, and each sampler's image, error "
       "map and figure");
   set_activity("making the samplers");
   check_samplers(o, session, samplers);
-  session.set_frame(o.frames - 1, nullptr);  // the measured frame, for the reference
 
   // Only now, when every check has passed, may an earlier compare's files go.
   prepare_folder(o, samplers);
   set_activity(
       fmt::format("comparing {} samplers at {}x{}", samplers.size(), scene.width, scene.height));
   begin_work();
-  const ChosenReference ref = choose_reference(o, session);
+  // The measured frame's reference (the last frame's), and with --every-frame every frame's, each
+  // with the scene moved to its frame (a moved light changes the scene's cache key).
+  std::vector<ChosenReference> frame_refs;
+  for (int f = o.every_frame ? 0 : o.frames - 1; f < o.frames; ++f) {
+    session.set_frame(f, nullptr);
+    if (o.every_frame) fmt::print(stderr, "frame {} of {}: ", f + 1, o.frames);
+    frame_refs.push_back(choose_reference(o, session));
+  }
+  const ChosenReference& ref = frame_refs.back();
+  std::vector<FrameReference> frame_references;
+  if (o.every_frame)
+    for (const ChosenReference& r : frame_refs)
+      frame_references.push_back({&r.image, r.variance.pixel_count() ? &r.variance : nullptr});
   write_image(out / "reference.exr", ref.image);
   // The reference's per-pixel variance, so that the errors can be recomputed from the files.
   if (ref.variance.pixel_count()) write_image(out / "reference.variance.exr", ref.variance);
@@ -352,8 +394,8 @@ void run(const CompareOptions& o) {
       Image image;
       std::unique_ptr<LightSampler> sampler;
       std::vector<std::pair<std::string, std::vector<float>>> aovs;
-      runs.push_back(run_once(o, session, name, r, ref, image, r == 0 ? &sampler : nullptr,
-                              r == 0 ? &aovs : nullptr));
+      runs.push_back(run_once(o, session, name, r, ref, frame_references, image,
+                              r == 0 ? &sampler : nullptr, r == 0 ? &aovs : nullptr));
       if (!aovs.empty()) first_aovs.emplace(name, std::move(aovs));
       const auto* as_oracle = dynamic_cast<const OracleLightSampler*>(sampler.get());
       if (as_oracle) oracle = as_oracle;
@@ -460,6 +502,7 @@ void run(const CompareOptions& o) {
   report.table = table_cells(summaries);
   report.exposure = o.exposure;
   report.plot_svg = plot_svg(plot);
+  if (o.every_frame) report.frame_plot_svg = plot_svg(frame_plot(scene, summaries, o.plot_metric));
   for (const auto& name : samplers) {
     const auto it = charted.find(name);
     if (it == charted.end()) continue;
@@ -473,6 +516,11 @@ void run(const CompareOptions& o) {
   j["lights"] = scene.lights.size();
   j["budget"] = o.time > 0 ? nlohmann::json{{"time", o.time}} : nlohmann::json{{"spp", o.spp}};
   j["frames"] = o.frames;
+  if (o.every_frame) {
+    // Every frame's reference, frame 0 first (the last is "reference").
+    j["frame_references"] = nlohmann::json::array();
+    for (const ChosenReference& r : frame_refs) j["frame_references"].push_back(r.json);
+  }
   j["repeats"] = o.repeats;
   j["seed"] = o.seed;
   j["pass_spp"] = {{"first", o.pass_spp}, {"max", o.max_pass_spp}};
@@ -505,6 +553,8 @@ void run(const CompareOptions& o) {
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 
   fmt::print("{}", format_table(summaries));
+  if (o.every_frame)
+    fmt::print("\nrelMSE of each frame (median over repeats):\n{}", format_frame_table(summaries));
   for (const auto& w : budget_warnings(summaries)) fmt::print(stderr, "rll: warning: {}\n", w);
   fmt::print("report: {}\n", (out / "report.html").string());
 }
@@ -536,8 +586,13 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option(
          "--frames", o->frames,
          "Frames per run (animated scenes): each frame gets the budget, learning carries over, "
-         "the last frame is measured")
+         "the last frame is measured (every frame with --every-frame)")
       ->capture_default_str();
+  cmd->add_flag("--every-frame", o->every_frame,
+                "Measure every frame of a run against that frame's own reference (each taken from "
+                "the cache or rendered into it, as the last frame's): summary.json's per-run and "
+                "per-sampler `frames`, a table of relMSE per frame and a plot of error against "
+                "frame in report.html");
   cmd->add_option("--repeats", o->repeats, "Runs per sampler; reported as median and range")
       ->capture_default_str();
   cmd->add_option("--pass-spp", o->pass_spp,

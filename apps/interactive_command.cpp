@@ -17,6 +17,9 @@
 #include "rll/core/parallel.h"
 #include "rll/core/params.h"
 #include "rll/core/sysinfo.h"
+#include "rll/eval/compare.h"
+#include "rll/eval/metrics.h"
+#include "rll/eval/reference.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/session/session.h"
 
@@ -37,6 +40,10 @@ struct InteractiveOptions {
   std::string stats;
   float exposure = 0;
   bool quiet = false;
+  // --errors: each frame measured against its own reference (an animated scene's per frame).
+  bool errors = false;
+  ReferenceRequest reference_request;
+  std::string cache_dir;
 };
 
 // Median, least and greatest of a set of times (not empty).
@@ -106,6 +113,34 @@ void run(InteractiveOptions o) {
   auto sampler = make_sampler_for(session, o.sampler, "--sampler");
   session.check_params_used();
   const bool animated = bool(scene.animate);
+  // --errors: the references, before the first frame (a static scene's one; an animated
+  // scene's one per frame, each with the scene moved to it). The seeds of the frames' renders
+  // are the run's `seed`: a reference never shares them.
+  std::vector<ObtainedReference> references;
+  if (o.errors) {
+    session.check_film_memory(kRenderBytesPerPixel + 2 * 3 * 4 * (animated ? o.frames : 1),
+                              "the film, and each reference and its variance");
+    ReferenceCache cache(o.cache_dir.empty() ? default_cache_dir() : fs::path(o.cache_dir));
+    ReferenceRequest request = o.reference_request;
+    request.seed_allowed = [&](uint64_t s) { return !reference_shares_a_seed(s, o.seed, 1); };
+    if (reference_shares_a_seed(request.seed, o.seed, 1))
+      fail(
+          "--reference-seed {} (its halves use seeds {} and {}) shares --seed {}: the reference "
+          "would share the frames' noise",
+          request.seed, request.seed, request.seed + 1, o.seed);
+    for (int f = 0; f < (animated ? o.frames : 1); ++f) {
+      session.set_frame(f, nullptr);
+      set_activity(fmt::format("the reference of frame {}", f + 1));
+      ObtainedReference got = obtain_reference(session, cache, request, !o.quiet, interrupt_flag());
+      if (!got.complete) throw Interrupted("interrupted while rendering a reference");
+      if (!o.quiet)
+        fmt::print(stderr, "reference{}: {} {} ({} spp, sampler {})\n",
+                   animated ? fmt::format(" of frame {}", f + 1) : std::string(),
+                   got.from_cache ? "reused" : "rendered and cached", got.info.image.string(),
+                   got.info.spp, got.info.sampler);
+      references.push_back(std::move(got));
+    }
+  }
   // A static scene's frames accumulate in one film, which stays on the GPU between them (read
   // back once, for -o); an animated scene's film is new each frame.
   session.keep_film_on_device(!animated);
@@ -129,7 +164,8 @@ void run(InteractiveOptions o) {
   set_activity(fmt::format("rendering {}x{} frames", scene.width, scene.height));
   begin_work();
   bool cancelled = false;
-  PsfCounts filter;  // path-space filtering's, over the frames
+  PsfCounts filter;                     // path-space filtering's, over the frames
+  std::vector<double> relmse, trimmed;  // --errors: per frame
   uint64_t samples = 0;
   for (int f = 0; f < o.frames && !interrupted(); ++f) {
     session.set_frame(f, sampler.get());
@@ -152,6 +188,18 @@ void run(InteractiveOptions o) {
     samples += p.samples;
     const FrameTimes ft = to_ms(times);
     frames.push_back(ft);
+    // --errors: the frame's image (an animated scene's frame, a static scene's frames so far)
+    // against its reference; read and measured after the frame's timed render.
+    Checkpoint error;
+    if (o.errors) {
+      const ObtainedReference& ref = references[animated ? size_t(f) : 0];
+      session.read_film(film);
+      ConvergenceRecorder recorder(ref.image, ref.variance.pixel_count() ? &ref.variance : nullptr);
+      recorder.finish(p, film.resolve());
+      error = recorder.checkpoints().back();
+      relmse.push_back(error.relmse);
+      trimmed.push_back(error.trimmed_relmse);
+    }
     nlohmann::json stages;
     for (size_t s = 0; s < kWavefrontStages; ++s) stages[kWavefrontStageNames[s]] = ft.stage_ms[s];
     frame_stats.push_back(
@@ -161,8 +209,16 @@ void run(InteractiveOptions o) {
          {"samples", p.samples},
          {"rays",
           {{"camera", p.rays.camera}, {"bounce", p.rays.bounce}, {"shadow", p.rays.shadow}}}});
+    if (o.errors) {
+      frame_stats.back()["relmse"] = error.relmse;
+      frame_stats.back()["trimmed_relmse"] = error.trimmed_relmse;
+      frame_stats.back()["mrse"] = error.mrse;
+    }
     if (!o.quiet) {
-      fmt::print("frame {} {:.2f} ms:{}\n", f, ft.total_ms, stage_columns(ft.stage_ms));
+      fmt::print("frame {} {:.2f} ms:{}{}\n", f, ft.total_ms, stage_columns(ft.stage_ms),
+                 o.errors ? fmt::format(" relmse {:.4e} trimmed {:.4e}", error.relmse,
+                                        error.trimmed_relmse)
+                          : std::string());
       std::fflush(stdout);  // a line as each frame ends, also into a pipe
     }
   }
@@ -218,6 +274,13 @@ void run(InteractiveOptions o) {
     j["stages"] = kWavefrontStageNames;
     j["frames"] = frame_stats;
     j["summary"] = summary;
+    if (o.errors) {
+      j["summary"]["relmse"] = relmse;  // per frame, frame 0 first (the warm-up's too)
+      j["summary"]["trimmed_relmse"] = trimmed;
+      j["references"] = nlohmann::json::array();
+      for (const ObtainedReference& r : references)
+        j["references"].push_back(reference_json(r.from_cache, r.info, r.image, r.variance));
+    }
     j["threads"] = o.threads > 0 ? o.threads : hardware_threads();
     j["seed"] = o.seed;
     j["interrupted"] = cancelled || interrupted();
@@ -279,6 +342,30 @@ void add_interactive_command(CLI::App& app) {
       ->capture_default_str()
       ->check(number_in(-kMaxExposure, kMaxExposure));
   cmd->add_flag("--quiet", o->quiet, "No per-frame lines and summary on stdout");
+  auto* errors = cmd->add_flag(
+      "--errors", o->errors,
+      "Measure each frame against its own reference (an animated scene's per frame, a "
+      "static scene's frames so far against its one), taken from the reference cache "
+      "or rendered into it before the first frame: relMSE and trimmed relMSE on each "
+      "frame's line and in --stats (the reading and measuring are not timed)");
+  cmd->add_option("--reference-spp", o->reference_request.spp,
+                  "With --errors: samples per pixel of the references")
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxSpp))
+      ->needs(errors);
+  cmd->add_option("--reference-sampler", o->reference_request.sampler,
+                  "With --errors: the light sampler that renders the references")
+      ->capture_default_str()
+      ->needs(errors);
+  cmd->add_option("--reference-seed", o->reference_request.seed,
+                  "With --errors: seed of the references")
+      ->capture_default_str()
+      ->check(unsigned_integer())
+      ->needs(errors);
+  cmd->add_option("--cache-dir", o->cache_dir,
+                  "With --errors: reference cache folder (default: $RLL_CACHE_DIR, else "
+                  "out/cache)")
+      ->needs(errors);
   cmd->callback([o] { run(*o); });
 }
 

@@ -47,7 +47,10 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
                         const Image* reference_variance, const std::string& label,
                         bool show_progress, const std::atomic<bool>* cancel,
                         const std::function<void(const RenderProgress&, const Film&)>& after_pass,
-                        const std::vector<Aov>& aovs) {
+                        const std::vector<Aov>& aovs,
+                        const std::vector<FrameReference>& frame_references) {
+  if (!frame_references.empty() && frame_references.size() != size_t(frames))
+    fail("measure_run: {} frame references for {} frames", frame_references.size(), frames);
   reset_peak_rss();
   MeasuredRun out;
   const auto t0 = std::chrono::steady_clock::now();
@@ -63,11 +66,18 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
     RenderSettings rf = rs;
     rf.frame = f;
     rf.follows_frame = f > 0;  // (the filter's temporal reuse blends the last frame's cells)
-    session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1), show_progress,
-                   cancel, after_pass, nullptr, &integrator);
-    if (cancel && cancel->load()) {
+    const RenderProgress pf =
+        session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1),
+                       show_progress, cancel, after_pass, nullptr, &integrator);
+    if (pf.cancelled || (cancel && cancel->load())) {
       out.cancelled = true;
       return out;
+    }
+    if (!frame_references.empty()) {
+      const FrameReference& fr = frame_references[size_t(f)];
+      ConvergenceRecorder frame_error(*fr.image, fr.variance);
+      frame_error.finish(pf, earlier.resolve());
+      out.result.frames.push_back({f, frame_error.checkpoints().back()});
     }
   }
   session.set_frame(frames - 1, sampler.get());
@@ -107,6 +117,7 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
   run.trimmed_relmse = last.trimmed_relmse;
   run.mrse = last.mrse;
   run.visible_ratio = p.rays.visible_ratio();
+  if (!frame_references.empty()) run.frames.push_back({frames - 1, last});
   run.describe = sampler->describe();
   if (run.describe.is_object() && run.describe.contains("bytes") &&
       run.describe["bytes"].is_number())
@@ -195,6 +206,19 @@ std::vector<SamplerSummary> summarize(const std::vector<std::string>& samplers,
     s.relmse_ratio = spread_of(ratio);
     s.trimmed_ratio = spread_of(trimmed_ratio);
     s.visible_ratio = spread_of(visible);
+    // Per frame, over the repeats that measured it.
+    size_t n_frames = 0;
+    for (const RunResult* r : s.runs) n_frames = std::max(n_frames, r->frames.size());
+    for (size_t f = 0; f < n_frames; ++f) {
+      std::vector<double> fr, ft;
+      for (const RunResult* r : s.runs)
+        if (f < r->frames.size()) {
+          fr.push_back(r->frames[f].error.relmse);
+          ft.push_back(r->frames[f].error.trimmed_relmse);
+        }
+      s.frame_relmse.push_back(spread_of(fr));
+      s.frame_trimmed.push_back(spread_of(ft));
+    }
     out.push_back(std::move(s));
   }
   return out;
@@ -215,6 +239,26 @@ std::string with_range(const Spread& s, std::string (*f)(double)) {
   if (s.values.empty()) return "-";
   if (s.values.size() == 1) return f(s.median);
   return fmt::format("{} [{}, {}]", f(s.median), f(s.min), f(s.max));
+}
+
+// Rows of cells as aligned text: the first column left-aligned, the others right-aligned, a rule
+// under the header row.
+std::string format_rows(const std::vector<std::vector<std::string>>& rows) {
+  std::vector<size_t> width(rows[0].size(), 0);
+  for (const auto& row : rows)
+    for (size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
+  std::string out;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    std::string line;
+    for (size_t c = 0; c < rows[r].size(); ++c) {
+      // The name left-aligned, numbers right-aligned.
+      line += c == 0 ? fmt::format("{:<{}}", rows[r][c], width[c])
+                     : fmt::format("  {:>{}}", rows[r][c], width[c]);
+    }
+    out += line + "\n";
+    if (r == 0) out += std::string(line.size(), '-') + "\n";
+  }
+  return out;
 }
 
 }  // namespace
@@ -258,8 +302,24 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s) {
                     {"mse", r->mse},
                     {"visible_sample_ratio", r->visible_ratio},
                     {"checkpoints", std::move(cps)}});
+    if (!r->frames.empty()) {
+      nlohmann::json frames = nlohmann::json::array();
+      for (const FrameError& f : r->frames)
+        frames.push_back({f.frame, f.error.seconds, f.error.spp, f.error.relmse,
+                          f.error.trimmed_relmse, f.error.mrse, f.error.mse});
+      runs.back()["frames"] = std::move(frames);
+    }
   }
   j["runs"] = std::move(runs);
+  if (!s.frame_relmse.empty()) {
+    nlohmann::json frames = nlohmann::json::array();
+    for (size_t f = 0; f < s.frame_relmse.size(); ++f)
+      frames.push_back({{"frame", f},
+                        {"relmse", spread_json(s.frame_relmse[f])},
+                        {"trimmed_relmse", spread_json(s.frame_trimmed[f])}});
+    j["frames"] = std::move(frames);
+    j["frame_fields"] = {"frame", "seconds", "spp", "relmse", "trimmed_relmse", "mrse", "mse"};
+  }
   j["checkpoint_fields"] = {"seconds", "spp", "relmse", "trimmed_relmse", "mrse", "mse"};
   return j;
 }
@@ -275,6 +335,24 @@ std::vector<std::string> budget_warnings(const std::vector<SamplerSummary>& summ
             s.name, r->repeat + 1, r->seconds, r->budget, 100 * (r->seconds / r->budget - 1),
             100 * kBudgetTolerance));
   return out;
+}
+
+std::string format_frame_table(const std::vector<SamplerSummary>& summaries) {
+  size_t n_frames = 0;
+  for (const auto& s : summaries) n_frames = std::max(n_frames, s.frame_relmse.size());
+  if (n_frames == 0) return {};
+  std::vector<std::vector<std::string>> rows;
+  rows.push_back({"frame"});
+  for (const auto& s : summaries) rows[0].push_back(s.name + " relMSE (trimmed)");
+  for (size_t f = 0; f < n_frames; ++f) {
+    rows.push_back({fmt::format("{}", f + 1)});
+    for (const auto& s : summaries)
+      rows.back().push_back(
+          f < s.frame_relmse.size() && !s.frame_relmse[f].values.empty()
+              ? fmt::format("{:.3e} ({:.3e})", s.frame_relmse[f].median, s.frame_trimmed[f].median)
+              : std::string("-"));
+  }
+  return format_rows(rows);
 }
 
 std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSummary>& summaries) {
@@ -297,22 +375,7 @@ std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSumma
 }
 
 std::string format_table(const std::vector<SamplerSummary>& summaries) {
-  const auto rows = table_cells(summaries);
-  std::vector<size_t> width(rows[0].size(), 0);
-  for (const auto& row : rows)
-    for (size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
-  std::string out;
-  for (size_t r = 0; r < rows.size(); ++r) {
-    std::string line;
-    for (size_t c = 0; c < rows[r].size(); ++c) {
-      // The name left-aligned, numbers right-aligned.
-      line += c == 0 ? fmt::format("{:<{}}", rows[r][c], width[c])
-                     : fmt::format("  {:>{}}", rows[r][c], width[c]);
-    }
-    out += line + "\n";
-    if (r == 0) out += std::string(line.size(), '-') + "\n";
-  }
-  return out;
+  return format_rows(table_cells(summaries));
 }
 
 }  // namespace rll

@@ -50,6 +50,13 @@ class ConvergenceRecorder {
   std::vector<Checkpoint> m_checkpoints;
 };
 
+// The error of one frame of a run against that frame's own reference (compare --every-frame):
+// the frame's final state, as a Checkpoint, and its frame number (0 first).
+struct FrameError {
+  int frame = 0;
+  Checkpoint error;
+};
+
 // One render of one sampler.
 struct RunResult {
   std::string sampler;
@@ -68,9 +75,19 @@ struct RunResult {
   size_t peak_rss_bytes = 0;            // of the whole process, after this run
   nlohmann::json describe;              // the sampler's describe()
   std::vector<Checkpoint> checkpoints;
+  // Every frame's error against its own reference, in frame order (the last is the run's own
+  // final error); empty unless the run measured every frame.
+  std::vector<FrameError> frames;
 };
 
 class RenderSession;
+
+// The references of the frames of an animated run, frame 0 first, each with its variance or
+// null (compare --every-frame): measure_run measures every frame against its own.
+struct FrameReference {
+  const Image* image = nullptr;
+  const Image* variance = nullptr;
+};
 
 // One measured run of `rll compare` (and rll.compare in Python): a fresh sampler `name` (its
 // making timed as setup), the frames before `frames - 1` rendered with the same budget so that a
@@ -79,7 +96,8 @@ class RenderSession;
 // set, no result) when `cancel` is raised during any frame. With `aovs`, the last frame's film
 // keeps its camera vertices and `aovs` of the result holds those diagnostics (render/aov.h), as
 // `rll render --aov` measures them: the image is the same to the bit, the time includes the
-// measuring.
+// measuring. With `frame_references` (one per frame, the last being `reference`), every frame's
+// error against its own reference goes to RunResult::frames (the measuring is not timed).
 struct MeasuredRun {
   RunResult result;
   Image image;
@@ -92,7 +110,7 @@ MeasuredRun measure_run(
     int frames, const Image& reference, const Image* reference_variance, const std::string& label,
     bool show_progress, const std::atomic<bool>* cancel,
     const std::function<void(const RenderProgress&, const Film&)>& after_pass = {},
-    const std::vector<Aov>& aovs = {});
+    const std::vector<Aov>& aovs = {}, const std::vector<FrameReference>& frame_references = {});
 
 // 1 / (relMSE x seconds); nullopt where undefined (zero error or zero time).
 std::optional<double> efficiency(double relmse, double seconds);
@@ -117,7 +135,10 @@ struct SamplerSummary {
   // Per repeat, relMSE (trimmed relMSE) over the first sampler's in the same repeat: ratios taken
   // within one repeat cancel machine noise that hits all samplers of that repeat alike.
   Spread relmse_ratio, trimmed_ratio;
-  Spread visible_ratio;                 // RunResult::visible_ratio
+  Spread visible_ratio;  // RunResult::visible_ratio
+  // Per frame (RunResult::frames, where the runs measured every frame): relMSE and trimmed
+  // relMSE over repeats.
+  std::vector<Spread> frame_relmse, frame_trimmed;
   std::optional<double> sampler_bytes;  // largest over repeats
   size_t peak_rss_bytes = 0;            // largest over repeats
   nlohmann::json describe;
@@ -143,6 +164,9 @@ nlohmann::json sampler_summary_json(const SamplerSummary& s);
 // seconds, setup seconds, relMSE median [min-max], trimmed relMSE, MRSE, both ratios to the first
 // sampler, efficiency without and with setup time, the visible-sample ratio.
 std::string format_table(const std::vector<SamplerSummary>& summaries);
+// The per-frame table of a compare that measured every frame: one row per frame, one column per
+// sampler holding its median relMSE (and trimmed relMSE); empty where no run measured frames.
+std::string format_frame_table(const std::vector<SamplerSummary>& summaries);
 // The same table as rows of cells (header first), for the HTML report.
 std::vector<std::vector<std::string>> table_cells(const std::vector<SamplerSummary>& summaries);
 

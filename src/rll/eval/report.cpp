@@ -780,6 +780,8 @@ std::string report_html(const Report& r) {
 
   if (!r.plot_svg.empty())
     s += "<h2>Convergence</h2>\n<div class=\"plot\">" + r.plot_svg + "</div>\n";
+  if (!r.frame_plot_svg.empty())
+    s += "<h2>Error per frame</h2>\n<div class=\"plot\">" + r.frame_plot_svg + "</div>\n";
   s += "<div class=\"hidden\">\n" + data + "</div>\n</div>\n";
   s += std::string("<script>") + kScript + "</script>\n</body>\n</html>\n";
   return s;

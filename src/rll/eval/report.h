@@ -55,8 +55,9 @@ struct Report {
   std::vector<std::vector<std::string>> table;  // header row first; one row per entry, in order
   std::vector<ReportSampler> samplers;          // matched to entries by name for the colour
   std::string plot_svg;                         // an <svg> element, or empty
-  std::vector<CellChart> cell_charts;           // matched to entries by sampler name
-  float exposure = 0;                           // initial exposure, stops
+  std::string frame_plot_svg;          // error against frame (compare --every-frame), or empty
+  std::vector<CellChart> cell_charts;  // matched to entries by sampler name
+  float exposure = 0;                  // initial exposure, stops
 };
 
 // The report as one HTML document. Throws rll::Error if an image's size differs from the
