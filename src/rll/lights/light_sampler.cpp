@@ -13,7 +13,8 @@
 namespace rll {
 
 const std::vector<std::string>& light_sampler_names() {
-  static const std::vector<std::string> names = {"uniform", "power", "tree", "fermat", "ltc", "rht", "rll", "oracle"};
+  static const std::vector<std::string> names = {"uniform", "power", "tree", "fermat",
+                                                 "ltc",     "rht",   "rll",  "oracle"};
   return names;
 }
 
@@ -35,9 +36,8 @@ std::vector<std::string> rll_parameter_lines() {
 // settings (RllStudy) swapped in: the oracle's cluster table for rll.ideal_cluster, the ideal
 // light within a cluster around either for rll.ideal_light. (rll.ideal_point and ideal_bsdf are
 // the integrator's: render/integrator.cpp.)
-std::unique_ptr<LightSampler> make_rll_study(bool oracle, const Scene& scene,
-                                             const LightTree& tree, const Params& params,
-                                             const Accel* accel) {
+std::unique_ptr<LightSampler> make_rll_study(bool oracle, const Scene& scene, const LightTree& tree,
+                                             const Params& params, const Accel* accel) {
   const RllStudy study = rll_study_from(params);
   if (oracle && study.cluster)
     fail("--set rll.ideal_cluster=1: the oracle's table is already its own (leave it out)");

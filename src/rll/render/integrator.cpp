@@ -112,9 +112,10 @@ void check_nee_settings(const IntegratorSettings& settings, const SamplerView& v
                         const std::string& name) {
   check_candidates(settings, view, name);
   if (settings.ideal_point > 0 || settings.ideal_bsdf > 0)
-    fail("--set {}: a study setting of rll's error budget, on the CPU's megakernel only (leave out "
-         "--wavefront and --device)",
-         settings.ideal_point > 0 ? "rll.ideal_point" : "rll.ideal_bsdf");
+    fail(
+        "--set {}: a study setting of rll's error budget, on the CPU's megakernel only (leave out "
+        "--wavefront and --device)",
+        settings.ideal_point > 0 ? "rll.ideal_point" : "rll.ideal_bsdf");
 }
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, LightSampler& sampler,
@@ -161,8 +162,7 @@ NeeResult Integrator::ideal_point_nee(const NeeDraw& d, const LightContext& ctx,
 }
 
 Rgb Integrator::ideal_bsdf_side(const LightContext& ctx, const Bsdf& bsdf, const SurfaceHit& sh,
-                                const Vec3& wo, const BsdfNumbers& u,
-                                RayCounters& counters) const {
+                                const Vec3& wo, const BsdfNumbers& u, RayCounters& counters) const {
   const PathConstants& c = m_constants;
   const uint32_t n = m_settings.ideal_bsdf;
   Rgb sum(0);
@@ -181,10 +181,9 @@ Rgb Integrator::ideal_bsdf_side(const LightContext& ctx, const Bsdf& bsdf, const
     const Light& light = c.scene.lights[lh.light];
     const Rgb Le = emitted_radiance(c.scene, light, lh, -bs.wi);
     if (is_black(Le)) continue;
-    const float light_pdf =
-        light_pmf(m_view, ctx, uint32_t(lh.light)) * pdf_li(light, ctx.p, lh.p);
-    sum += bs.f * Le * (absdot(bs.wi, bsdf.shading_normal()) / bs.pdf *
-                        power_heuristic(bs.pdf, light_pdf));
+    const float light_pdf = light_pmf(m_view, ctx, uint32_t(lh.light)) * pdf_li(light, ctx.p, lh.p);
+    sum += bs.f * Le *
+           (absdot(bs.wi, bsdf.shading_normal()) / bs.pdf * power_heuristic(bs.pdf, light_pdf));
   }
   return sum / float(n);
 }
