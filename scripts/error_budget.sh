@@ -8,8 +8,9 @@
 #   INTEGRATORS ("direct path"), RES (160x120), SPP (16; path renders SPP too), SEEDS (3: repeats,
 #   seeds 1..SEEDS), CACHE (the reference cache, default OUT_DIR/cache; references by rll, 2048 spp
 #   direct and 1024 path, rendered there if missing), LIGHT_RAYS (16: rll.ideal_light), POINTS
-#   (64: rll.ideal_point), DIRECTIONS (64: rll.ideal_bsdf), CONFIGS (default all: rll cluster
-#   light point bsdf cells).
+#   (64: rll.ideal_point), DIRECTIONS (64: rll.ideal_bsdf), CONFIGS (default: rll cluster light
+#   point bsdf cells all; `all` is the four ideal components at once, what no light sampling
+#   removes: the pixel's own noise, the paths' bounces).
 # Writes OUT_DIR/SCENE-INTEGRATOR/ (each `rll compare` run) and OUT_DIR/budget.md (the table).
 set -euo pipefail
 rll=$(realpath "$1") out=$2
@@ -20,7 +21,7 @@ integrators=${INTEGRATORS:-direct path}
 res=${RES:-160x120} spp=${SPP:-16} seeds=${SEEDS:-3}
 cache=${CACHE:-$out/cache}
 light_rays=${LIGHT_RAYS:-16} points=${POINTS:-64} directions=${DIRECTIONS:-64}
-configs=" ${CONFIGS:-rll cluster light point bsdf cells} "
+configs=" ${CONFIGS:-rll cluster light point bsdf cells all} "
 
 # Each configuration as a sampler of `rll compare` (its label in the table first).
 spec() {
@@ -32,10 +33,11 @@ spec() {
     bsdf) echo "rll:ideal_bsdf=$directions" ;;
     # Cells of half the size: half the radius in footprints, half the cap.
     cells) echo rll:footprint_scale=2:max_cell=0.025 ;;
+    all) echo "rll:ideal_cluster=1:ideal_light=$light_rays:ideal_point=$points:ideal_bsdf=$directions" ;;
   esac
 }
 samplers=""
-for c in rll cluster light point bsdf cells; do
+for c in rll cluster light point bsdf cells all; do
   [[ $configs == *" $c "* ]] && samplers+="${samplers:+,}$(spec "$c")"
 done
 
@@ -59,6 +61,7 @@ samplers = samplers.split(",")
 label = {"rll": "rll", "rll:ideal_cluster=1": "cluster", "rll:footprint_scale=2:max_cell=0.025": "cells"}
 def name(s):
     if s in label: return label[s]
+    if s.count("=") > 1: return "all"
     return {"ideal_light": "light", "ideal_point": "point", "ideal_bsdf": "bsdf"}[s.split(":")[1].split("=")[0]]
 def runs(entry, key):
     # Each repeat's value (summary.json keeps them per run where it can, else the median).

@@ -72,9 +72,23 @@ IntegratorSettings direct() {
   return is;
 }
 
+// The centre rays' variance of direct light on `scene_name` (16 x 12) with `ideal` over rll with
+// `base` must fall below `bound` times rll's with `base` alone; both are recorded.
+void expect_variance_falls(const std::string& scene_name, std::vector<std::string> base,
+                           const std::vector<std::string>& ideal, double bound) {
+  const Scene scene = small_builtin_scene(scene_name, 16, 12);
+  const double plain = centre_ray_variance(scene, "rll", base, direct(), 64);
+  base.insert(base.end(), ideal.begin(), ideal.end());
+  const double with = centre_ray_variance(scene, "rll", base, direct(), 64);
+  ::testing::Test::RecordProperty("variance",
+                                  fmt::format("plain {:.4g}, {} {:.4g}", plain, ideal[0], with));
+  EXPECT_LT(with, bound * plain) << "plain " << plain << ", " << ideal[0] << " " << with;
+}
+
 }  // namespace
 
-// Every study key at 0 (off) renders rll's image to the bit, megakernel and wavefront.
+// Every study key at 0 (off) renders rll's image to the bit (the megakernel: the other
+// renderers refuse the megakernel's keys on).
 TEST(ErrorBudget, StudySettingsOffChangeNothing) {
   const Scene scene = small_builtin_scene("cornell-boxes-room", 24, 18);
   RenderRequest r = request("rll", "path", 3, "", 4, 5);
@@ -93,11 +107,7 @@ TEST(ErrorBudget, StudySettingsOffChangeNothing) {
 // falls (measured: 0.44x at 64 points; the BSDF side's variance stays); 0.6x asserted,
 // deterministic (fixed streams).
 TEST(ErrorBudget, IdealPointRemovesThePointsVariance) {
-  const Scene scene = small_builtin_scene("cornell-box", 16, 12);
-  const double plain = centre_ray_variance(scene, "rll", {}, direct(), 64);
-  const double ideal = centre_ray_variance(scene, "rll", {"rll.ideal_point=64"}, direct(), 64);
-  RecordProperty("variance", fmt::format("plain {:.4g}, ideal point {:.4g}", plain, ideal));
-  EXPECT_LT(ideal, 0.6 * plain) << "plain " << plain << ", ideal point " << ideal;
+  expect_variance_falls("cornell-box", {}, {"rll.ideal_point=64"}, 0.6);
 }
 
 // rll.ideal_bsdf averages the BSDF side of MIS over many directions: inside the furnace (an
@@ -106,11 +116,7 @@ TEST(ErrorBudget, IdealPointRemovesThePointsVariance) {
 // screen-hall, glazed-room, many-lights-open, where lights are smaller); 0.6x asserted,
 // deterministic.
 TEST(ErrorBudget, IdealBsdfRemovesTheBsdfSidesVariance) {
-  const Scene scene = small_builtin_scene("furnace", 16, 12);
-  const double plain = centre_ray_variance(scene, "rll", {}, direct(), 64);
-  const double ideal = centre_ray_variance(scene, "rll", {"rll.ideal_bsdf=64"}, direct(), 64);
-  RecordProperty("variance", fmt::format("plain {:.4g}, ideal bsdf {:.4g}", plain, ideal));
-  EXPECT_LT(ideal, 0.6 * plain) << "plain " << plain << ", ideal bsdf " << ideal;
+  expect_variance_falls("furnace", {}, {"rll.ideal_bsdf=64"}, 0.6);
 }
 
 // rll.ideal_light draws the light within a cluster by its contribution at the cell's anchor. With
@@ -120,26 +126,16 @@ TEST(ErrorBudget, IdealBsdfRemovesTheBsdfSidesVariance) {
 // cells, whose anchors stand for ~8 x 8 pixels, it does not: docs/rll.md "The error budget");
 // 0.8x asserted, deterministic.
 TEST(ErrorBudget, IdealLightRemovesTheWithinClusterVariance) {
-  const Scene scene = small_builtin_scene("many-lights-open", 16, 12);
-  const std::vector<std::string> point_cells = {"rll.footprint_scale=0.25", "rll.max_cell=0.001"};
-  std::vector<std::string> ideal_set = point_cells;
-  ideal_set.push_back("rll.ideal_light=4");
-  const double plain = centre_ray_variance(scene, "rll", point_cells, direct(), 64);
-  const double ideal = centre_ray_variance(scene, "rll", ideal_set, direct(), 64);
-  RecordProperty("variance", fmt::format("plain {:.4g}, ideal light {:.4g}", plain, ideal));
-  EXPECT_LT(ideal, 0.8 * plain) << "plain " << plain << ", ideal light " << ideal;
+  expect_variance_falls("many-lights-open", {"rll.footprint_scale=0.25", "rll.max_cell=0.001"},
+                        {"rll.ideal_light=4"}, 0.8);
 }
 
 // rll.ideal_cluster (the oracle's table over rll's cut) after one pass of rll's learning, on
 // arch-interior (light through small windows): the centre rays' variance falls (measured: 0.25x);
 // 0.8x asserted, deterministic.
 TEST(ErrorBudget, IdealClusterRemovesTheClusterChoicesVariance) {
-  const Scene scene = small_builtin_scene("arch-interior", 16, 12);
-  const double plain = centre_ray_variance(scene, "rll", {}, direct(), 64);
-  const double ideal = centre_ray_variance(
-      scene, "rll", {"rll.ideal_cluster=1", "oracle.points=8", "oracle.rays=4"}, direct(), 64);
-  RecordProperty("variance", fmt::format("plain {:.4g}, ideal cluster {:.4g}", plain, ideal));
-  EXPECT_LT(ideal, 0.8 * plain) << "plain " << plain << ", ideal cluster " << ideal;
+  expect_variance_falls("arch-interior", {},
+                        {"rll.ideal_cluster=1", "oracle.points=8", "oracle.rays=4"}, 0.8);
 }
 
 // Each study keeps the image's mean: against plain rll with other seeds, over the image and in
