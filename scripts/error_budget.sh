@@ -8,9 +8,11 @@
 #   INTEGRATORS ("direct path"), RES (160x120), SPP (16; path renders SPP too), SEEDS (3: repeats,
 #   seeds 1..SEEDS), CACHE (the reference cache, default OUT_DIR/cache; references by rll, 2048 spp
 #   direct and 1024 path, rendered there if missing), LIGHT_RAYS (16: rll.ideal_light), POINTS
-#   (64: rll.ideal_point), DIRECTIONS (64: rll.ideal_bsdf), CONFIGS (default: rll cluster light
-#   point bsdf cells all; `all` is the four ideal components at once, what no light sampling
-#   removes: the pixel's own noise, the paths' bounces).
+#   (64: rll.ideal_point), DIRECTIONS (64: rll.ideal_bsdf), POINT_RAYS (4: rll.ideal_light with
+#   ideal_light_at=point), CONFIGS (default: rll cluster light lightpt point bsdf cells all;
+#   `light` is the distribution at the cell's anchor, `lightpt` at each shading point (slow on
+#   large clusters: spot-hall), `all` the four ideal components at once (the anchor's light), what
+#   no light sampling removes: the pixel's own noise, the paths' bounces).
 # Writes OUT_DIR/SCENE-INTEGRATOR/ (each `rll compare` run) and OUT_DIR/budget.md (the table).
 set -euo pipefail
 rll=$(realpath "$1") out=$2
@@ -21,7 +23,9 @@ integrators=${INTEGRATORS:-direct path}
 res=${RES:-160x120} spp=${SPP:-16} seeds=${SEEDS:-3}
 cache=${CACHE:-$out/cache}
 light_rays=${LIGHT_RAYS:-16} points=${POINTS:-64} directions=${DIRECTIONS:-64}
-configs=" ${CONFIGS:-rll cluster light point bsdf cells all} "
+point_rays=${POINT_RAYS:-4}
+all_configs="rll cluster light lightpt point bsdf cells all"
+configs=" ${CONFIGS:-$all_configs} "
 
 # Each configuration as a sampler of `rll compare` (its label in the table first).
 spec() {
@@ -29,6 +33,7 @@ spec() {
     rll) echo rll ;;
     cluster) echo rll:ideal_cluster=1 ;;
     light) echo "rll:ideal_light=$light_rays" ;;
+    lightpt) echo "rll:ideal_light=$point_rays:ideal_light_at=point" ;;
     point) echo "rll:ideal_point=$points" ;;
     bsdf) echo "rll:ideal_bsdf=$directions" ;;
     # Cells of half the size: half the radius in footprints, half the cap.
@@ -36,9 +41,12 @@ spec() {
     all) echo "rll:ideal_cluster=1:ideal_light=$light_rays:ideal_point=$points:ideal_bsdf=$directions" ;;
   esac
 }
-samplers=""
-for c in rll cluster light point bsdf cells all; do
-  [[ $configs == *" $c "* ]] && samplers+="${samplers:+,}$(spec "$c")"
+samplers="" labels=""
+for c in $all_configs; do
+  if [[ $configs == *" $c "* ]]; then
+    samplers+="${samplers:+,}$(spec "$c")"
+    labels+="${labels:+,}$c"
+  fi
 done
 
 for scene in $scenes; do
@@ -54,15 +62,11 @@ for scene in $scenes; do
   done
 done
 
-python3 - "$out" "$spp" "$seeds" "$res" "$scenes" "$integrators" "$samplers" <<'PY' | tee "$out/budget.md"
+python3 - "$out" "$spp" "$seeds" "$res" "$scenes" "$integrators" "$samplers" "$labels" <<'PY' | tee "$out/budget.md"
 import json, sys
-out, spp, seeds, res, scenes, integrators, samplers = sys.argv[1:8]
+out, spp, seeds, res, scenes, integrators, samplers, labels = sys.argv[1:9]
 samplers = samplers.split(",")
-label = {"rll": "rll", "rll:ideal_cluster=1": "cluster", "rll:footprint_scale=2:max_cell=0.025": "cells"}
-def name(s):
-    if s in label: return label[s]
-    if s.count("=") > 1: return "all"
-    return {"ideal_light": "light", "ideal_point": "point", "ideal_bsdf": "bsdf"}[s.split(":")[1].split("=")[0]]
+name = dict(zip(samplers, labels.split(","))).get
 def runs(entry, key):
     # Each repeat's value (summary.json keeps them per run where it can, else the median).
     r = entry.get(key)

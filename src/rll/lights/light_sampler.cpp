@@ -41,6 +41,8 @@ std::unique_ptr<LightSampler> make_rll_study(bool oracle, const Scene& scene, co
   const RllStudy study = rll_study_from(params);
   if (oracle && study.cluster)
     fail("--set rll.ideal_cluster=1: the oracle's table is already its own (leave it out)");
+  if (study.light_at_point && study.light == 0)
+    fail("--set rll.ideal_light_at=point: give rll.ideal_light, the shadow rays per light");
   if (oracle && !accel)
     fail("the oracle sampler traces rays before rendering and needs the scene's ray tracer");
   if ((study.cluster || study.light > 0) && !accel)
@@ -57,7 +59,8 @@ std::unique_ptr<LightSampler> make_rll_study(bool oracle, const Scene& scene, co
     s = std::make_unique<RllLightSampler>(scene, tree, rll_settings_from(params));
   }
   if (study.light > 0)
-    s = std::make_unique<IdealLightSampler>(std::move(s), scene, *accel, study.light);
+    s = std::make_unique<IdealLightSampler>(std::move(s), scene, *accel, study.light,
+                                            study.light_at_point);
   return s;
 }
 }  // namespace

@@ -29,6 +29,7 @@ const std::vector<ParamSpec<RllStudy>>& rll_study_params() {
   static const std::vector<ParamSpec<S>> table = {
       int_param("ideal_cluster", R::closed(0, 1), field<S, &S::cluster>()),
       int_param("ideal_light", R::closed(0, 4096), field<S, &S::light>()),
+      choice_param("ideal_light_at", {"anchor", "point"}, field<S, &S::light_at_point>()),
       int_param("ideal_point", R::closed(0, 4096), field<S, &S::point>()),
       int_param("ideal_bsdf", R::closed(0, 4096), field<S, &S::bsdf>()),
   };

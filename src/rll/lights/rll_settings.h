@@ -59,15 +59,16 @@ struct RllStudy {
   // light of the cluster in proportion to its contribution there, visibility included), cached
   // per cell and cluster; 0: rll's own within-cluster rule.
   uint32_t light = 0;
+  // Where that distribution is taken: at the cell's anchor (false: what a per-cell table could
+  // know at best) or at each shading point (true: the within-cluster choice's whole share,
+  // computed for every sample and pmf; slow).
+  bool light_at_point = false;
   // Points on the chosen light per next-event sample, each with its shadow ray, averaged: the
   // point's variance all but vanishes; 0: one point (rll's).
   uint32_t point = 0;
   // BSDF directions per vertex whose MIS-weighted emission replaces that of the path's own BSDF
   // ray (the BSDF side of MIS averaged over this many directions); 0: the path's one ray.
   uint32_t bsdf = 0;
-  bool any() const { return cluster || light > 0 || point > 0 || bsdf > 0; }
-  // Whether the integrator acts (point, bsdf), not only the sampler.
-  bool integrator() const { return point > 0 || bsdf > 0; }
 };
 const std::vector<ParamSpec<RllStudy>>& rll_study_params();
 // rll.ideal_* from `params`, each checked against its range (errors name the key).

@@ -1,6 +1,7 @@
 #include "rll/lights/rll_study.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "rll/accel/accel.h"
@@ -40,12 +41,13 @@ size_t IdealLightSampler::KeyHash::operator()(const Key& k) const {
 }
 
 IdealLightSampler::IdealLightSampler(std::unique_ptr<LightSampler> inner, const Scene& scene,
-                                     const Accel& accel, uint32_t rays)
+                                     const Accel& accel, uint32_t rays, bool at_point)
     : LightSampler(inner->name(), inner->has_state()),
       m_inner(std::move(inner)),
       m_scene(scene),
       m_accel(accel),
       m_rays(rays),
+      m_at_point(at_point),
       m_shards(new Shard[kShards]) {
   m_budget_bytes = double(memory_budget_bytes()) / 4;
   m_inner_view = m_inner->sampler_view();
@@ -76,6 +78,7 @@ void IdealLightSampler::load_state(BinaryReader& r) {
 nlohmann::json IdealLightSampler::describe() const {
   nlohmann::json j = m_inner->describe();
   j["study"] = {{"ideal_light", m_rays},
+                {"ideal_light_at", m_at_point ? "point" : "anchor"},
                 {"tables", m_tables.load()},
                 {"table_bytes", m_bytes.load()},
                 {"shadow_rays", m_rays_traced.load()},
@@ -83,16 +86,14 @@ nlohmann::json IdealLightSampler::describe() const {
   return j;
 }
 
-IdealLightSampler::Table IdealLightSampler::compute(const RllView& v, uint32_t cell,
-                                                    uint32_t k) const {
-  const detail::RllCut c = detail::rll_cut(v, cell);
-  const uint32_t begin = detail::rll_begin(c, k), end = c.ends[k];
-  const CellAnchor& a = v.cuts.anchor[cell];
-  const float len = length(a.n);
+IdealLightSampler::Table IdealLightSampler::compute(const Vec3& p, const Vec3& normal,
+                                                    uint32_t begin, uint32_t end,
+                                                    uint64_t seed) const {
+  const float len = length(normal);
   Table t;
   if (!(len > 0)) return t;
-  const Vec3 n = a.n / len;
-  Pcg32 rng(0x1dea1u, mix64(v.table.key_of[cell] ^ c.nodes[k]));
+  const Vec3 n = normal / len;
+  Pcg32 rng(0x1dea1u, seed);
   std::vector<double> e(end - begin, 0.0);
   uint64_t traced = 0;
   for (uint32_t l = begin; l < end; ++l) {
@@ -103,7 +104,7 @@ IdealLightSampler::Table IdealLightSampler::compute(const RllView& v, uint32_t c
     const Vec2 shift{rng.next_float(), rng.next_float()};
     double sum = 0;
     for (uint32_t r = 0; r < rays; ++r) {
-      const LightLiSample ls = sample_li(light, a.p, rotated_hammersley(r, rays, shift), &image);
+      const LightLiSample ls = sample_li(light, p, rotated_hammersley(r, rays, shift), &image);
       if (!(ls.pdf > 0)) continue;
       const float cos = dot(ls.wi, n);
       if (!(cos > 0)) continue;
@@ -111,7 +112,7 @@ IdealLightSampler::Table IdealLightSampler::compute(const RllView& v, uint32_t c
       if (!(value > 0) || !std::isfinite(value)) continue;
       ++traced;
       if (m_accel.occluded(
-              shadow_ray_to_light(a.p, n, light, ls, m_scene.bounds.center(), m_scene.radius)))
+              shadow_ray_to_light(p, n, light, ls, m_scene.bounds.center(), m_scene.radius)))
         continue;
       sum += double(value);
     }
@@ -131,10 +132,19 @@ IdealLightSampler::Table IdealLightSampler::compute(const RllView& v, uint32_t c
   return t;
 }
 
-const IdealLightSampler::Table* IdealLightSampler::table(const RllView& v, uint32_t cell,
-                                                         uint32_t k) const {
-  const detail::RllCut c = detail::rll_cut(v, cell);
-  const Key key{v.table.key_of[cell], c.nodes[k]};
+const IdealLightSampler::Table* IdealLightSampler::table(const RllView& v, const LightContext& ctx,
+                                                         uint32_t k, Table& scratch) const {
+  const detail::RllCut c = detail::rll_cut(v, ctx.cell);
+  const uint32_t begin = detail::rll_begin(c, k), end = c.ends[k];
+  if (m_at_point) {
+    // At the shading point itself: computed for every sample and pmf, seeded by the point.
+    uint64_t h = c.nodes[k];
+    for (float x : {ctx.p.x, ctx.p.y, ctx.p.z, ctx.n.x, ctx.n.y, ctx.n.z})
+      h = mix64(h ^ std::bit_cast<uint32_t>(x));
+    scratch = compute(ctx.p, ctx.n, begin, end, h);
+    return &scratch;
+  }
+  const Key key{v.table.key_of[ctx.cell], c.nodes[k]};
   Shard& shard = m_shards[KeyHash{}(key) % kShards];
   {
     std::lock_guard lock(shard.mutex);
@@ -146,7 +156,9 @@ const IdealLightSampler::Table* IdealLightSampler::table(const RllView& v, uint3
   }
   // Computed outside the lock; a function of the key alone, so a table two threads compute at
   // once is the same table (renders stay the same for any thread count).
-  auto made = std::make_unique<Table>(compute(v, cell, k));
+  const CellAnchor& a = v.cuts.anchor[ctx.cell];
+  auto made =
+      std::make_unique<Table>(compute(a.p, a.n, begin, end, mix64(key.cell_key ^ key.node)));
   std::lock_guard lock(shard.mutex);
   auto [it, inserted] = shard.tables.try_emplace(key, std::move(made));
   if (inserted) {
@@ -157,11 +169,10 @@ const IdealLightSampler::Table* IdealLightSampler::table(const RllView& v, uint3
 }
 
 float IdealLightSampler::within_pmf(const RllView& v, const LightContext& ctx, uint32_t k,
-                                    uint32_t l) const {
+                                    uint32_t l, const Table* t) const {
   const detail::RllCut c = detail::rll_cut(v, ctx.cell);
   const uint32_t begin = detail::rll_begin(c, k);
   const float rule = detail::rll_pmf_within(v, ctx, c.nodes[k], begin, c.ends[k], l);
-  const Table* t = table(v, ctx.cell, k);
   if (!t || t->cdf.empty()) return rule;
   return kDefensive * rule + (1 - kDefensive) * cdf_width(t->cdf, l - begin);
 }
@@ -178,7 +189,8 @@ SampledLight IdealLightSampler::sample(const LightContext& ctx, double u) const 
   double uw = 0;
   if (!detail::rll_table_draw(c, u, &k, &uw)) return {};
   const uint32_t begin = detail::rll_begin(c, k), end = c.ends[k];
-  const Table* t = table(v, ctx.cell, k);
+  Table scratch;
+  const Table* t = table(v, ctx, k, scratch);
   uint32_t l;
   if (!t || t->cdf.empty()) {
     l = detail::rll_sample_within(v, ctx, c.nodes[k], begin, end, uw).light;
@@ -193,7 +205,7 @@ SampledLight IdealLightSampler::sample(const LightContext& ctx, double u) const 
   d.target = v.cuts.vis[size_t(ctx.cell) * v.cuts.m + k];
   SampledLight s;
   s.light = l;
-  s.pmf = d.cluster_pmf * within_pmf(v, ctx, k, l);
+  s.pmf = d.cluster_pmf * within_pmf(v, ctx, k, l, t);
   set_cluster_draw(s, d);
   return s.pmf > 0 ? s : SampledLight{};
 }
@@ -204,7 +216,8 @@ float IdealLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
   const detail::RllCut c = detail::rll_cut(v, ctx.cell);
   const uint32_t k = detail::rll_cluster_of(c, light);
   if (k >= c.size) return 0;
-  return detail::rll_cdf_width(c, k) * within_pmf(v, ctx, k, light);
+  Table scratch;
+  return detail::rll_cdf_width(c, k) * within_pmf(v, ctx, k, light, table(v, ctx, k, scratch));
 }
 
 void IdealLightSampler::record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) {

@@ -1,8 +1,9 @@
 // The error budget's ideal light choice within a cluster (rll.ideal_light, docs/rll.md "The error
 // budget"): rll (or the oracle) as it is, except that inside the cluster its table chose, a light
 // is drawn in proportion to its contribution at the cell's anchor, visibility included, estimated
-// with rll.ideal_light shadow rays per light and cached per cell and cluster. A study, not a
-// sampler: host-only (the host kind, which device renderers refuse), and costly.
+// with rll.ideal_light shadow rays per light and cached per cell and cluster (or, with
+// rll.ideal_light_at=point, at each shading point, computed for each sample and pmf). A study, not
+// a sampler: host-only (the host kind, which device renderers refuse), and costly.
 #pragma once
 
 #include <algorithm>
@@ -37,9 +38,10 @@ inline Vec2 rotated_hammersley(uint32_t i, uint32_t n, Vec2 shift) {
 
 class IdealLightSampler final : public LightSampler {
  public:
-  // `inner`: rll or the oracle (a sampler whose view is rll's); `rays` per light of a cluster.
+  // `inner`: rll or the oracle (a sampler whose view is rll's); `rays` per light of a cluster;
+  // `at_point`: the distribution at each shading point itself, not at its cell's anchor.
   IdealLightSampler(std::unique_ptr<LightSampler> inner, const Scene& scene, const Accel& accel,
-                    uint32_t rays);
+                    uint32_t rays, bool at_point = false);
   SamplerView sampler_view() const override;
   void end_pass() override;
   void lights_changed(const Scene& scene) override;
@@ -66,15 +68,22 @@ class IdealLightSampler final : public LightSampler {
   };
   // The cached table of cluster `k` of the cell's cut, computed on first use; null where the
   // cache is full (rll's rule alone there).
-  const Table* table(const RllView& v, uint32_t cell, uint32_t k) const;
-  Table compute(const RllView& v, uint32_t cell, uint32_t k) const;
-  // The probability of light l (in cluster k of the cell's cut) within its cluster.
-  float within_pmf(const RllView& v, const LightContext& ctx, uint32_t k, uint32_t l) const;
+  // At the shading point instead (rll.ideal_light_at=point): computed into `scratch` every time.
+  const Table* table(const RllView& v, const LightContext& ctx, uint32_t k, Table& scratch) const;
+  // The table of the lights [begin, end) at point p with normal `normal`, its rays seeded by
+  // `seed`.
+  Table compute(const Vec3& p, const Vec3& normal, uint32_t begin, uint32_t end,
+                uint64_t seed) const;
+  // The probability of light l (in cluster k of the cell's cut) within its cluster, `t` the
+  // cluster's table (table()).
+  float within_pmf(const RllView& v, const LightContext& ctx, uint32_t k, uint32_t l,
+                   const Table* t) const;
 
   std::unique_ptr<LightSampler> m_inner;
   const Scene& m_scene;
   const Accel& m_accel;
   uint32_t m_rays;
+  bool m_at_point;
   SamplerView m_inner_view;
   struct Key {
     uint64_t cell_key;
