@@ -44,12 +44,12 @@ IdealLightSampler::IdealLightSampler(std::unique_ptr<LightSampler> inner, const 
                                      const Accel& accel, uint32_t rays, bool at_point)
     : LightSampler(inner->name(), inner->has_state()),
       m_inner(std::move(inner)),
-      m_scene(scene),
       m_accel(accel),
       m_rays(rays),
       m_at_point(at_point),
       m_shards(new Shard[kShards]) {
   m_budget_bytes = double(memory_budget_bytes()) / 4;
+  copy_lights(scene);
   m_inner_view = m_inner->sampler_view();
   set_host_calls(*this);
 }
@@ -63,8 +63,18 @@ void IdealLightSampler::end_pass() {
   m_inner_view = m_inner->sampler_view();
 }
 
+void IdealLightSampler::copy_lights(const Scene& scene) {
+  m_lights = scene.lights;
+  m_images.assign(m_lights.size(), TexelView{});
+  for (size_t l = 0; l < m_lights.size(); ++l)
+    if (m_lights[l].has_image()) m_images[l] = scene.textures[m_lights[l].triangle].texel_view();
+  m_center = scene.bounds.center();
+  m_radius = scene.radius;
+}
+
 void IdealLightSampler::lights_changed(const Scene& scene) {
   m_inner->lights_changed(scene);
+  copy_lights(scene);
   m_inner_view = m_inner->sampler_view();
   for (int i = 0; i < kShards; ++i) m_shards[i].tables.clear();
   m_bytes = 0;
@@ -97,9 +107,8 @@ IdealLightSampler::Table IdealLightSampler::compute(const Vec3& p, const Vec3& n
   std::vector<double> e(end - begin, 0.0);
   uint64_t traced = 0;
   for (uint32_t l = begin; l < end; ++l) {
-    const Light& light = m_scene.lights[l];
-    const TexelView image =
-        light.has_image() ? m_scene.textures[light.triangle].texel_view() : TexelView{};
+    const Light& light = m_lights[l];
+    const TexelView& image = m_images[l];
     const uint32_t rays = light.is_delta() ? 1 : m_rays;  // a delta light has one point
     const Vec2 shift{rng.next_float(), rng.next_float()};
     double sum = 0;
@@ -111,9 +120,7 @@ IdealLightSampler::Table IdealLightSampler::compute(const Vec3& p, const Vec3& n
       const float value = luminance(ls.L) * cos / ls.pdf;
       if (!(value > 0) || !std::isfinite(value)) continue;
       ++traced;
-      if (m_accel.occluded(
-              shadow_ray_to_light(p, n, light, ls, m_scene.bounds.center(), m_scene.radius)))
-        continue;
+      if (m_accel.occluded(shadow_ray_to_light(p, n, light, ls, m_center, m_radius))) continue;
       sum += double(value);
     }
     e[l - begin] = sum / double(rays);

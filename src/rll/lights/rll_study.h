@@ -15,7 +15,9 @@
 #include <unordered_map>
 #include <vector>
 
+#include "rll/core/image.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/scene/light.h"
 
 namespace rll {
 
@@ -80,7 +82,15 @@ class IdealLightSampler final : public LightSampler {
                    const Table* t) const;
 
   std::unique_ptr<LightSampler> m_inner;
-  const Scene& m_scene;
+  // What the estimates read of the scene, copied (the scene may move after construction, as a
+  // test's fixture does; lights_changed copies them again): the lights in tree order, each one's
+  // image where it has one (a view into the scene's texture, whose pixels a move keeps in place),
+  // and the scene's bounds for shadow rays to directional lights.
+  void copy_lights(const Scene& scene);
+  std::vector<Light> m_lights;
+  std::vector<TexelView> m_images;
+  Vec3 m_center;
+  float m_radius = 1;
   const Accel& m_accel;
   uint32_t m_rays;
   bool m_at_point;
