@@ -11,8 +11,9 @@
 #   (64: rll.ideal_point), DIRECTIONS (64: rll.ideal_bsdf), POINT_RAYS (4: rll.ideal_light with
 #   ideal_light_at=point), CONFIGS (default: rll cluster light lightpt point bsdf cells all;
 #   `light` is the distribution at the cell's anchor, `lightpt` at each shading point (slow on
-#   large clusters: spot-hall), `all` the four ideal components at once (the anchor's light), what
-#   no light sampling removes: the pixel's own noise, the paths' bounces).
+#   large clusters: spot-hall), `all` the cluster, the point and the BSDF side at once (not the
+#   anchor's light, which adds error), the floor those leave: mostly the pixel's own noise, the
+#   paths' bounces and the within-cluster choice).
 # Writes OUT_DIR/SCENE-INTEGRATOR/ (each `rll compare` run) and OUT_DIR/budget.md (the table).
 set -euo pipefail
 rll=$(realpath "$1") out=$2
@@ -38,7 +39,7 @@ spec() {
     bsdf) echo "rll:ideal_bsdf=$directions" ;;
     # Cells of half the size: half the radius in footprints, half the cap.
     cells) echo rll:footprint_scale=2:max_cell=0.025 ;;
-    all) echo "rll:ideal_cluster=1:ideal_light=$light_rays:ideal_point=$points:ideal_bsdf=$directions" ;;
+    all) echo "rll:ideal_cluster=1:ideal_point=$points:ideal_bsdf=$directions" ;;
   esac
 }
 samplers="" labels=""
