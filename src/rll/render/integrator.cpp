@@ -58,10 +58,13 @@ IntegratorSettings make_integrator_settings(const std::string& name, int max_dep
   s.nee_candidates = int(params.get_int_in("nee.candidates", 1, 1, kMaxNeeCandidates));
   s.nee_learnt_target =
       params.get_choice("nee.target", "unshadowed", {"unshadowed", "learnt"}) == "learnt";
-  // Read here by key, not by RllStudy's table: a sampler that is not rll must not take rll's
-  // other study keys as read (make_light_sampler reads those).
-  s.ideal_point = uint32_t(params.get_int_in("rll.ideal_point", 0, 0, 4096));
-  s.ideal_bsdf = uint32_t(params.get_int_in("rll.ideal_bsdf", 0, 0, 4096));
+  // Read here by key, not by RllStudy's table (a sampler that is not rll must not take rll's
+  // other study keys as read: make_light_sampler reads those), and only where given (so that
+  // another sampler's command does not count rll.* keys as known).
+  if (params.has("rll.ideal_point"))
+    s.ideal_point = uint32_t(params.get_int_in("rll.ideal_point", 0, 0, 4096));
+  if (params.has("rll.ideal_bsdf"))
+    s.ideal_bsdf = uint32_t(params.get_int_in("rll.ideal_bsdf", 0, 0, 4096));
   read_params(coated_params(), params, "coated", s);
   s.psf = make_psf_settings(filter, s.type == IntegratorType::Direct ? 1 : s.max_depth,
                             s.type == IntegratorType::Path, params);
