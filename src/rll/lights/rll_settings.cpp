@@ -23,6 +23,25 @@ const std::vector<ParamSpec<RllSettings>>& rll_params() {
   return table;
 }
 
+const std::vector<ParamSpec<RllStudy>>& rll_study_params() {
+  using S = RllStudy;
+  using R = ParamRange;
+  static const std::vector<ParamSpec<S>> table = {
+      int_param("ideal_cluster", R::closed(0, 1), field<S, &S::cluster>()),
+      int_param("ideal_light", R::closed(0, 4096), field<S, &S::light>()),
+      choice_param("ideal_light_at", {"anchor", "point"}, field<S, &S::light_at_point>()),
+      int_param("ideal_point", R::closed(0, 4096), field<S, &S::point>()),
+      int_param("ideal_bsdf", R::closed(0, 4096), field<S, &S::bsdf>()),
+  };
+  return table;
+}
+
+RllStudy rll_study_from(const Params& p) {
+  RllStudy s;
+  read_params(rll_study_params(), p, "rll", s);
+  return s;
+}
+
 RllSettings rll_settings_from(const Params& p, const std::string& prefix, RllSettings s) {
   auto key = [&](const char* k) { return prefix + "." + k; };
   auto bad = [&](const char* k, const char* what) { fail("--set {}: {}", key(k), what); };

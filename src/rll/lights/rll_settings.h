@@ -46,6 +46,34 @@ struct RllSettings {
   uint32_t reset_every = 0;
 };
 
+// The error budget's study settings (docs/rll.md, "The error budget"; issue 45): each swaps one
+// component of rll's estimator for an ideal one, to measure how much of rll's error that component
+// makes. Off by default, and then nothing changes: they are read apart from RllSettings (a state
+// saved with or without them is the same state) and only for `rll` (and `oracle`, which samples
+// with rll.*). Host-only (the megakernel on the CPU); every other renderer refuses them.
+struct RllStudy {
+  // The oracle's cluster table in place of the learnt one (the oracle sampler over rll's own cut:
+  // oracle.refine defaults to 0 here, so that only the choice among the same clusters changes).
+  bool cluster = false;
+  // Shadow rays per light of the exact within-cluster distribution at the cell's anchor (each
+  // light of the cluster in proportion to its contribution there, visibility included), cached
+  // per cell and cluster; 0: rll's own within-cluster rule.
+  uint32_t light = 0;
+  // Where that distribution is taken: at the cell's anchor (false: what a per-cell table could
+  // know at best) or at each shading point (true: the within-cluster choice's whole share,
+  // computed for every sample and pmf; slow).
+  bool light_at_point = false;
+  // Points on the chosen light per next-event sample, each with its shadow ray, averaged: the
+  // point's variance all but vanishes; 0: one point (rll's).
+  uint32_t point = 0;
+  // BSDF directions per vertex whose MIS-weighted emission replaces that of the path's own BSDF
+  // ray (the BSDF side of MIS averaged over this many directions); 0: the path's one ray.
+  uint32_t bsdf = 0;
+};
+const std::vector<ParamSpec<RllStudy>>& rll_study_params();
+// rll.ideal_* from `params`, each checked against its range (errors name the key).
+RllStudy rll_study_from(const Params& params);
+
 // Reads <prefix>.* parameters over `base` (see docs/rll.md for each): rll.* over rll's
 // defaults, fermat.* over fermat_settings(). Every key's range is checked as it is read, and the
 // rules between keys after; an error names PREFIX.KEY.

@@ -101,6 +101,22 @@ RLL_HD inline bool rll_descends(const RllView& v, uint32_t begin, uint32_t end) 
          (v.within == WithinCluster::Hybrid && end - begin > v.descend_above);
 }
 
+// A cluster k of a cell's baked CDF for uc in [0, 1): the first entry above uc, each compared as
+// a double, so that the interval of uc selecting k is exactly [cdf[k-1], cdf[k]), whose width
+// rll_cdf_width reports (zero-width entries are never returned); `u_within` is uc rescaled inside
+// that interval. False where k's width is zero.
+RLL_HD inline bool rll_table_draw(const RllCut& c, double uc, uint32_t* k, double* u_within) {
+  const uint32_t first = upper_bound_index(c.cdf, 0u, c.size, uc);
+  uint32_t j = std::min(first, c.size - 1);
+  while (j > 0 && c.cdf[j] == c.cdf[j - 1]) --j;
+  const double lo = j > 0 ? double(c.cdf[j - 1]) : 0.0;
+  const double q = double(c.cdf[j]) - lo;
+  if (!(q > 0)) return false;
+  *k = j;
+  *u_within = clamp((uc - lo) / q, 0.0, kBelowOne);
+  return true;
+}
+
 // Light inside cluster node `node` covering [begin, end), and its probability.
 RLL_HD inline SampledLight rll_sample_within(const RllView& v, const LightContext& ctx,
                                              uint32_t node, uint32_t begin, uint32_t end,
@@ -369,19 +385,9 @@ RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx,
     descent = &split;
     descent_pmf = t.pmf;
   } else {
-    // The learnt branch: a cluster from the cell's CDF (first entry above u; zero-width
-    // entries are never returned), then a light inside it. Compared and differenced in
-    // double: the interval of u that selects cluster k is exactly [cdf[k-1], cdf[k]), and its
-    // width is what the pmf reports (rll_cdf_width).
-    double uc = (u - eps) / (1 - eps);
-    // The first CDF entry above uc (each entry compared as a double).
-    const uint32_t first = upper_bound_index(c.cdf, 0u, c.size, uc);
-    k = std::min(first, c.size - 1);
-    while (k > 0 && c.cdf[k] == c.cdf[k - 1]) --k;
-    double lo = k > 0 ? double(c.cdf[k - 1]) : 0.0;
-    double q = double(c.cdf[k]) - lo;
-    if (!(q > 0)) return {};
-    double u_within = clamp((uc - lo) / q, 0.0, kBelowOne);
+    // The learnt branch: a cluster from the cell's CDF, then a light inside it.
+    double u_within = 0;
+    if (!rll_table_draw(c, (u - eps) / (1 - eps), &k, &u_within)) return {};
     SampledLight w = rll_sample_within(v, ctx, c.nodes[k], rll_begin(c, k), c.ends[k], u_within);
     if (!(w.pmf > 0)) return {};
     l = w.light;

@@ -32,6 +32,10 @@ struct IntegratorSettings {
   // pbrt-v4's images (docs/materials.md)
   CoatedWeights coated_weights = CoatedWeights::Unbiased;
   PsfSettings psf;  // --filter psf and its psf.* keys (render/psf.h)
+  // The error budget's studies of rll (rll.ideal_point, rll.ideal_bsdf; lights/rll_settings.h,
+  // RllStudy), the megakernel's alone: points on the chosen light per next-event sample, and BSDF
+  // directions whose MIS-weighted emission replaces the path's own BSDF ray's; 0: off.
+  uint32_t ideal_point = 0, ideal_bsdf = 0;
 };
 
 // Parses --integrator and the integrator's `--set` keys (path.strategy, path.rr_depth,
@@ -88,6 +92,15 @@ class Integrator {
   Rgb sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
                    const Rgb& beta, SampleStream& stream, RayCounters& counters,
                    CameraVertexSample* camera) const;
+  // rll.ideal_point: the next-event sample `d` with its light's contribution averaged over
+  // ideal_point points on it, each with its shadow ray (the MIS weights as for one point).
+  NeeResult ideal_point_nee(const NeeDraw& d, const LightContext& ctx, const Bsdf& bsdf,
+                            const Vec3& wo, const Rgb& beta, Vec2 shift,
+                            RayCounters& counters) const;
+  // rll.ideal_bsdf: the BSDF side of MIS at a vertex, the emission that BSDF rays find weighted
+  // against light sampling, averaged over ideal_bsdf directions (before the path throughput).
+  Rgb ideal_bsdf_side(const LightContext& ctx, const Bsdf& bsdf, const SurfaceHit& sh,
+                      const Vec3& wo, const BsdfNumbers& u, RayCounters& counters) const;
 
   const Scene& m_scene;
   const Accel& m_accel;
@@ -99,7 +112,8 @@ class Integrator {
 };
 
 // Throws rll::Error where the settings do not fit the sampler (nee.candidates above 1 with a
-// sampler that resamples its own candidates, rht); every renderer asks.
+// sampler that resamples its own candidates, rht) or the renderer (the megakernel's studies,
+// rll.ideal_point and ideal_bsdf, which the Integrator checks itself); every other renderer asks.
 void check_nee_settings(const IntegratorSettings& settings, const SamplerView& view,
                         const std::string& name);
 
