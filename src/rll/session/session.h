@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -74,6 +75,9 @@ class RenderSession {
   // its own parameters after colons, keys prefixed with the sampler's name unless they hold a
   // dot: "rll:within=uniform:reward=fullpdf" is rll with rll.within and rll.reward set. The
   // integrator's keys are a variant's too ("tree:nee.candidates=4"): integrator_for reads them.
+  // Name `restir` ("restir:source=rll:candidates=32") makes ReSTIR's source sampler
+  // (restir.source, fresh, its own keys from --set), which render() then renders with ReSTIR
+  // (render/restir.h) and the wavefront renderer.
   std::unique_ptr<LightSampler> make_sampler(const std::string& spec) const;
   // The integrator settings a sampler spec renders with: --set's, with the variant's own
   // integrator keys in their place, so that "tree" and "tree:nee.candidates=4" run side by side
@@ -142,6 +146,11 @@ class RenderSession {
   // render with psf.temporal); a render on another thread at the same time (Python) blends nothing.
   mutable std::mutex m_psf_mutex;
   mutable std::unique_ptr<PsfHistory> m_psf_history;
+  // ReSTIR: the integrator settings of each restir sampler made (by the source sampler it made),
+  // and on the CPU each one's history, kept from frame to frame (made at its first render).
+  mutable std::mutex m_restir_mutex;
+  mutable std::map<const LightSampler*, IntegratorSettings> m_restir;
+  mutable std::map<const LightSampler*, std::unique_ptr<RestirHistory>> m_restir_history;
 };
 
 }  // namespace rll

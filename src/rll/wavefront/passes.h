@@ -161,19 +161,19 @@ RenderProgress run_wavefront_passes(
     first_pass = false;
     driver.begin_pass();
     bool complete = true;
-    if (!driver.filters()) {
+    if (!driver.per_sample()) {
       complete = run_items(first, count, frame_seed, stop, rays);
     } else {
-      // Path-space filtering: a sample of every pixel at a time, its cut paths resolved before
-      // the next sample's (render/psf.h).
+      // Path-space filtering and ReSTIR: a sample of every pixel at a time, resolved before the
+      // next sample's (render/psf.h, render/restir.h).
       for (int s = 0; s < count && complete; ++s) {
         if (stop.stopped()) {
           complete = false;
           break;
         }
-        driver.begin_filter_batch();
+        driver.begin_sample();
         complete = run_items(first + s, 1, frame_seed, stop, rays);
-        driver.resolve_filter();
+        driver.end_sample(settings.first_sample + uint64_t(first + s), frame_seed, settings.points);
       }
     }
     bool copied = false;
