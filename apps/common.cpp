@@ -145,7 +145,9 @@ nlohmann::json session_stats(const RenderSession& session) {
                       {"filter", filter_json(is.psf)}};
   // The wavefront's path slots and what its device did, pass by pass (frame by frame in
   // interactive): docs/gpu.md.
-  if (session.settings().wavefront || session.gpu()) {
+  if (session.restir_bytes() > 0)  // (restir samplers render with the wavefront renderer)
+    j["restir"] = {{"bytes", session.restir_bytes()}, {"bytes_per_pixel", kRestirBytesPerPixel}};
+  if (session.settings().wavefront || session.gpu() || session.restir_bytes() > 0) {
     const WavefrontWork& w = session.wavefront_work();
     j["path_slots"] = {
         {"count", w.path_slots}, {"bytes", w.slot_bytes}, {"budget_bytes", w.budget_bytes}};

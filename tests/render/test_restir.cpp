@@ -80,34 +80,6 @@ bool same_bits(const Image& a, const Image& b) {
          std::memcmp(a.pixels().data(), b.pixels().data(), a.pixel_count() * sizeof(Rgb)) == 0;
 }
 
-// Mean and standard error over independent renders (seeds) of the image's mean and of each of its
-// 4 x 4 regions' means: spatial reuse shares samples between pixels, and temporal reuse between
-// the samples of a render, so neither its pixels nor its samples are independent; its renders are.
-struct SeedEstimates {
-  Estimate image;
-  std::vector<Estimate> regions;  // row by row
-};
-SeedEstimates over_seeds(const std::vector<Image>& renders) {
-  const int n = 4;
-  std::vector<std::vector<double>> values(1 + n * n);
-  for (const Image& img : renders) {
-    values[0].push_back(image_mean(img));
-    for (int ry = 0; ry < n; ++ry)
-      for (int rx = 0; rx < n; ++rx)
-        values[1 + ry * n + rx].push_back(image_mean(image_region(img, rx, ry, n, n)));
-  }
-  std::vector<Estimate> e;
-  for (const std::vector<double>& v : values) {
-    double mean = 0, var = 0;
-    for (double x : v) mean += x;
-    mean /= double(v.size());
-    for (double x : v) var += (x - mean) * (x - mean);
-    var /= double(v.size() - 1);
-    e.push_back({mean, std::sqrt(var / double(v.size()))});
-  }
-  return {e[0], std::vector<Estimate>(e.begin() + 1, e.end())};
-}
-
 // The seeds' estimates of `r` against the plain renderer's (the same sampler, 16 seeds each):
 // "" where the image and each region agree within 5.5 combined standard errors (15 degrees of
 // freedom: about 1e-4 a bound falsely fails), else what disagrees.

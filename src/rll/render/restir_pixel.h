@@ -175,16 +175,29 @@ RLL_HD inline void restir_combine(const PathConstants& c, Reservoir& n, const Re
   restir_stream(n, from.y, t.p_hat, t.p_hat * from.W * M, u);
 }
 
-// Whether the domain of vertex v (with its Bsdf) could have drawn sample y: its target with
-// visibility, a shadow ray from its surface (Alg. 6's test), counted in `rays`.
-template <class Tracer>
-RLL_HD inline bool restir_covers(const PathConstants& c, const Tracer& tracer,
-                                 const RestirSample& y, const RestirVertex& v, const Bsdf& bsdf,
-                                 uint64_t& rays) {
-  const RestirTarget t = restir_target(c, y, bsdf, v.ctx.p, v.ctx.wo);
-  if (!(t.p_hat > 0)) return false;
-  ++rays;
-  return !tracer.shadow(t.shadow);
+// Alg. 6's Z for sample y: the M of each domain i (domain(i, vertex, Bsdf, M); false: none; i = 0
+// the receiver's own) whose surface could have drawn y, its target with visibility (a shadow ray
+// from that surface, counted in `rays`). A receiver that does not see y gets Z = 0 (W = 0, as
+// visibility reuse's: every reservoir reused later then covers its own sample, which Z counts
+// on). One call of the tracer in one loop, so that the GPU keeps one traversal stack in the
+// frame (tests/unit/kernel_budgets.h).
+template <class Tracer, class Domain>
+RLL_HD inline float restir_z(const PathConstants& c, const Tracer& tracer, const RestirSample& y,
+                             int domains, const Domain& domain, uint64_t& rays) {
+  float Z = 0;
+  for (int i = 0; i < domains; ++i) {
+    const RestirVertex* v = nullptr;
+    const Bsdf* bsdf = nullptr;
+    float M = 0;
+    if (!domain(i, v, bsdf, M)) continue;
+    const RestirTarget t = restir_target(c, y, *bsdf, v->ctx.p, v->ctx.wo);
+    const bool seen = t.p_hat > 0 && (++rays, !tracer.shadow(t.shadow));
+    if (seen)
+      Z += M;
+    else if (i == 0)
+      return 0;
+  }
+  return Z;
 }
 
 // The pixel's stream, keyed by (pixel, sample), at dimension `dim`.
@@ -241,21 +254,43 @@ RLL_HD inline uint64_t restir_temporal(const PathConstants& c, const Tracer& tra
   restir_combine(c, n, prev, prev_M, v, b.bsdf[pixel], u.next());
   uint64_t rays = 0;
   float Z = n.M;
-  if (k.unbiased && n.p_hat > 0) {
-    // (A sample the pixel's surface does not see keeps W = 0, as visibility reuse's: every
-    // reservoir reused later then covers its own sample, which Alg. 6's Z counts on.)
-    const bool seen = restir_covers(c, tracer, n.y, v, b.bsdf[pixel], rays);
-    Z = seen ? own.M : 0.0f;
-    if (seen && restir_covers(c, tracer, n.y, pv, b.prev_bsdf[q], rays)) Z += prev_M;
-  }
+  if (k.unbiased && n.p_hat > 0)
+    Z = restir_z(
+        c, tracer, n.y, 2,
+        [&](int i, const RestirVertex*& dv, const Bsdf*& db, float& M) {
+          dv = i == 0 ? &v : &pv;
+          db = i == 0 ? &b.bsdf[pixel] : &b.prev_bsdf[q];
+          M = i == 0 ? own.M : prev_M;
+          return true;
+        },
+        rays);
   n.W = restir_weight(n, Z);
   b.reservoir[pixel] = n;
   return rays;
 }
 
-// Spatial reuse: up to restir.spatial neighbours drawn in a disk of restir.radius pixels, those
-// alike the pixel's vertex combined with its own (read from the sample's reservoirs, written to
-// the final ones, so that no pixel reads one being written). Returns the shadow rays traced.
+// Spatial reuse's neighbour j of the pixel: a pixel drawn in a disk of restir.radius pixels with
+// the numbers at its own dimensions (3 each: the offset, the keep), so that Alg. 6's Z draws the
+// same neighbours again rather than keep a list in the GPU's stack frame; false where it is off
+// the film, the pixel itself or not alike.
+template <class Sobol>
+RLL_HD inline bool restir_neighbour(const RestirConstants& k, const Sobol& sobol,
+                                    const RestirBuffers& b, uint64_t pixel, int j, uint32_t& q,
+                                    float& u_keep) {
+  SampleStream u = restir_stream_at(sobol, b, pixel, kRestirSpatialBase + 3 * uint32_t(j));
+  const Vec2 d = sample_uniform_disk_concentric(u.next2());
+  u_keep = u.next();
+  const int px = int(pixel % uint64_t(b.width)), py = int(pixel / uint64_t(b.width));
+  const int qx = px + int(std::floor(d.x * k.radius + 0.5f));
+  const int qy = py + int(std::floor(d.y * k.radius + 0.5f));
+  if (qx < 0 || qy < 0 || qx >= b.width || qy >= b.height || (qx == px && qy == py)) return false;
+  q = uint32_t(qy) * uint32_t(b.width) + uint32_t(qx);
+  return restir_similar(k, b.vertex[pixel], b.vertex[q]);
+}
+
+// Spatial reuse: up to restir.spatial neighbours (restir_neighbour), those alike the pixel's
+// vertex combined with its own (read from the sample's reservoirs, written to the final ones,
+// so that no pixel reads one being written). Returns the shadow rays traced.
 template <class Tracer, class Sobol>
 RLL_HD inline uint64_t restir_spatial(const PathConstants& c, const Tracer& tracer,
                                       const Sobol& sobol, const RestirBuffers& b, uint64_t pixel) {
@@ -266,32 +301,30 @@ RLL_HD inline uint64_t restir_spatial(const PathConstants& c, const Tracer& trac
     b.final_[pixel] = own;
     return 0;
   }
-  const int px = int(pixel % uint64_t(b.width)), py = int(pixel / uint64_t(b.width));
-  uint32_t used[kMaxRestirNeighbours];
-  int n_used = 0;
   Reservoir n;
   restir_combine(c, n, own, own.M, v, b.bsdf[pixel], 0.0f);
-  SampleStream u = restir_stream_at(sobol, b, pixel, kRestirSpatialBase);
   for (int j = 0; j < k.spatial; ++j) {
-    const Vec2 d = sample_uniform_disk_concentric(u.next2());
-    const float u_keep = u.next();
-    const int qx = px + int(std::floor(d.x * k.radius + 0.5f));
-    const int qy = py + int(std::floor(d.y * k.radius + 0.5f));
-    if (qx < 0 || qy < 0 || qx >= b.width || qy >= b.height || (qx == px && qy == py)) continue;
-    const uint32_t q = uint32_t(qy) * uint32_t(b.width) + uint32_t(qx);
-    if (!restir_similar(k, v, b.vertex[q])) continue;
+    uint32_t q = 0;
+    float u_keep = 0;
+    if (!restir_neighbour(k, sobol, b, pixel, j, q, u_keep)) continue;
     const Reservoir& r = b.reservoir[q];
     restir_combine(c, n, r, r.M, v, b.bsdf[pixel], u_keep);
-    used[n_used++] = q;
   }
   uint64_t rays = 0;
   float Z = n.M;
-  if (k.unbiased && n.p_hat > 0) {
-    Z = restir_covers(c, tracer, n.y, v, b.bsdf[pixel], rays) ? own.M : 0.0f;
-    for (int j = 0; j < n_used && Z > 0; ++j)  // (unseen here: W = 0, as in temporal reuse)
-      if (restir_covers(c, tracer, n.y, b.vertex[used[j]], b.bsdf[used[j]], rays))
-        Z += b.reservoir[used[j]].M;
-  }
+  if (k.unbiased && n.p_hat > 0)
+    Z = restir_z(
+        c, tracer, n.y, 1 + k.spatial,
+        [&](int i, const RestirVertex*& dv, const Bsdf*& db, float& M) {
+          uint32_t q = uint32_t(pixel);
+          float u_keep = 0;
+          if (i > 0 && !restir_neighbour(k, sobol, b, pixel, i - 1, q, u_keep)) return false;
+          dv = &b.vertex[q];
+          db = &b.bsdf[q];
+          M = b.reservoir[q].M;
+          return true;
+        },
+        rays);
   n.W = restir_weight(n, Z);
   b.final_[pixel] = n;
   return rays;

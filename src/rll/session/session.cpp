@@ -334,6 +334,14 @@ size_t RenderSession::psf_history_bytes() const {
   return m_psf_history ? m_psf_history->bytes() : 0;
 }
 
+size_t RenderSession::restir_bytes() const {
+  std::lock_guard lock(m_restir_mutex);
+  size_t bytes = 0;
+  for (const auto& [sampler, history] : m_restir_history)
+    if (history) bytes += size_t(double(history->frames().pixels) * kRestirBytesPerPixel);
+  return bytes;
+}
+
 void RenderSession::read_film(Film& film) const {
   if (m_gpu) m_gpu->download_film(film);
 }

@@ -116,6 +116,9 @@ class RenderSession {
   // The memory the path-space filter's temporal reuse keeps on the host for the next frame
   // (psf.temporal; render/psf.h), 0 before a render made it (--stats).
   size_t psf_history_bytes() const;
+  // The memory ReSTIR's renders took on the CPU (each restir sampler's reservoirs and vertex
+  // records: render/restir.h's kRestirBytesPerPixel a pixel), 0 before one rendered (--stats).
+  size_t restir_bytes() const;
 
  private:
   std::unique_ptr<LightSampler> make_sampler_on_host(const std::string& spec) const;
