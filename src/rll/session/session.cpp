@@ -106,10 +106,10 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler(const std::string& spe
       cuda::require_device_version(*s, spec);
     } else {
       try {
-        cuda::require_device_version(*s, restir_source_name(it->second.restir));
+        cuda::require_device_version(*s, restir_source_name(it->second.settings.restir));
       } catch (const Error& e) {
         fail("sampler '{}': --set restir.source={}: {}", shown_text(spec),
-             restir_source_name(it->second.restir), e.what());
+             restir_source_name(it->second.settings.restir), e.what());
       }
     }
   }
@@ -188,7 +188,7 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::str
   m_made.push_back(name);
   if (restir) {
     std::lock_guard lock(m_restir_mutex);
-    m_restir[sampler.get()] = is;
+    m_restir[sampler.get()] = {spec, is};
   }
   return sampler;
 }
@@ -247,10 +247,14 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
                                      const IntegratorSettings* integrator_settings) const {
   // A restir sampler renders with its spec's settings (make_sampler) unless told otherwise.
   const IntegratorSettings* made_as = nullptr;
+  std::string restir_spec;
   {
     std::lock_guard lock(m_restir_mutex);
     const auto it = m_restir.find(&sampler);
-    if (it != m_restir.end()) made_as = &it->second;  // (a map's elements stay where they are)
+    if (it != m_restir.end()) {
+      made_as = &it->second.settings;  // (a map's elements stay where they are)
+      restir_spec = it->second.spec;
+    }
   }
   const IntegratorSettings& is = integrator_settings ? *integrator_settings
                                  : made_as           ? *made_as
@@ -284,7 +288,7 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   // ReSTIR's on the CPU: the vertex records and reservoirs the sampler's last frame left.
   std::unique_lock restir_lock(m_restir_mutex, std::defer_lock);
   if (is.restir.on && !m_gpu && restir_lock.try_lock()) {
-    std::unique_ptr<RestirHistory>& h = m_restir_history[&sampler];
+    std::unique_ptr<RestirHistory>& h = m_restir_history[restir_spec];
     if (!h || h->frames().pixels != pixels) {
       h.reset();
       h = std::make_unique<RestirHistory>(pixels);
@@ -337,7 +341,7 @@ size_t RenderSession::psf_history_bytes() const {
 size_t RenderSession::restir_bytes() const {
   std::lock_guard lock(m_restir_mutex);
   size_t bytes = 0;
-  for (const auto& [sampler, history] : m_restir_history)
+  for (const auto& [spec, history] : m_restir_history)
     if (history) bytes += size_t(double(history->frames().pixels) * kRestirBytesPerPixel);
   return bytes;
 }

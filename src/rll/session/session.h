@@ -149,11 +149,17 @@ class RenderSession {
   // render with psf.temporal); a render on another thread at the same time (Python) blends nothing.
   mutable std::mutex m_psf_mutex;
   mutable std::unique_ptr<PsfHistory> m_psf_history;
-  // ReSTIR: the integrator settings of each restir sampler made (by the source sampler it made),
-  // and on the CPU each one's history, kept from frame to frame (made at its first render).
+  // ReSTIR: the spec and integrator settings of each restir sampler made (by the source sampler
+  // it made), and on the CPU each spec's history, kept from frame to frame (made at its first
+  // render; by spec, so that the restir samplers of an interleaved compare keep theirs apart and
+  // a fresh sampler of a spec finds its spec's).
+  struct RestirMade {
+    std::string spec;
+    IntegratorSettings settings;
+  };
   mutable std::mutex m_restir_mutex;
-  mutable std::map<const LightSampler*, IntegratorSettings> m_restir;
-  mutable std::map<const LightSampler*, std::unique_ptr<RestirHistory>> m_restir_history;
+  mutable std::map<const LightSampler*, RestirMade> m_restir;
+  mutable std::map<std::string, std::unique_ptr<RestirHistory>> m_restir_history;
 };
 
 }  // namespace rll
