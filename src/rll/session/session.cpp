@@ -338,6 +338,13 @@ size_t RenderSession::psf_history_bytes() const {
   return m_psf_history ? m_psf_history->bytes() : 0;
 }
 
+std::map<std::string, RestirSettings> RenderSession::restir_made() const {
+  std::lock_guard lock(m_restir_mutex);
+  std::map<std::string, RestirSettings> made;
+  for (const auto& [sampler, m] : m_restir) made[m.spec] = m.settings.restir;
+  return made;
+}
+
 size_t RenderSession::restir_bytes() const {
   std::lock_guard lock(m_restir_mutex);
   size_t bytes = 0;

@@ -119,6 +119,8 @@ class RenderSession {
   // The memory ReSTIR's renders took on the CPU (each restir sampler's reservoirs and vertex
   // records: render/restir.h's kRestirBytesPerPixel a pixel), 0 before one rendered (--stats).
   size_t restir_bytes() const;
+  // The restir samplers made, by spec, with their settings (--stats).
+  std::map<std::string, RestirSettings> restir_made() const;
 
  private:
   std::unique_ptr<LightSampler> make_sampler_on_host(const std::string& spec) const;
