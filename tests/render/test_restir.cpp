@@ -138,18 +138,23 @@ void expect_converges(const std::string& scene, const std::string& sampler,
 }  // namespace
 
 // Reservoir resampling of the candidates with the kept sample's shadow ray, no reuse: the
-// estimate of every pixel's every sample is unbiased on its own.
+// estimate of every pixel's every sample is unbiased on its own. Power, measured: the image's
+// bound is 3.5% of its mean (5.5 combined standard errors; 5% asserted). Checked to fail with W
+// scaled by 0.95, and with the BSDF ray's light at the ReSTIR vertex counted (+7%).
 TEST(Restir, CandidatesAloneConverge) {
   expect_converges("cornell-boxes-room", "tree",
                    {"restir.temporal=off", "restir.spatial=0", "restir.candidates=8"}, 16);
 }
 
-// Temporal and spatial reuse with Alg. 6's unbiased weights (the defaults but fewer candidates).
+// Temporal and spatial reuse with Alg. 6's unbiased weights (the defaults but fewer candidates),
+// 32 samples (frames) a render. Power, measured: 2.9% of the image's mean. Checked to fail with
+// the biased weights (1 / sum M: 17% darker here).
 TEST(Restir, UnbiasedReuseConverges) {
   expect_converges("cornell-boxes-room", "tree", {"restir.candidates=8"}, 32);
 }
 
-// The same with power's candidates on the occluded scene of many lights.
+// The same on the occluded scene of many lights (tree's candidates; power's are too noisy there
+// for the bound to see 5% at this size). Power, measured: 4.0%; the biased weights: 4% darker.
 TEST(Restir, UnbiasedReuseConvergesArch) {
   expect_converges("arch-interior", "tree", {"restir.candidates=8"}, 16);
 }

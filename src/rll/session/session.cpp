@@ -295,6 +295,7 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
     }
     wavefront.restir_history = h.get();
   }
+  wavefront.restir_spec = restir_spec;
   auto run = [&](const RenderSettings& r, const AfterPass& after) {
     if (m_gpu) return m_gpu->render(m_scene, sampler, is, film, r, cancel, after, wavefront);
     // The megakernel has no frame-wide step: ReSTIR renders with the wavefront renderer.

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "rll/accel/accel.h"
@@ -79,8 +80,10 @@ struct WavefrontSettings {
   PsfHistory* psf_history = nullptr;
   // The CPU's: ReSTIR's vertex records and final reservoirs of the last sample, kept there from
   // render to render (render/restir.h), so that a render that follows a frame reuses them
-  // (temporal reuse across frames); without it, a render starts afresh. The GPU keeps none yet.
+  // (temporal reuse across frames); without it, a render starts afresh. The GPU keeps its own,
+  // one for the last restir spec rendered (`restir_spec`: another spec starts it afresh).
   RestirHistory* restir_history = nullptr;
+  std::string restir_spec;
 };
 
 // As render() (render/render.h), with the wavefront renderer: the same pass loop, the same
