@@ -1,6 +1,7 @@
 // ReSTIR DI in the wavefront renderer (render/restir.h, docs/restir.md): its unbiased variants
 // converge to the plain renderer's image region by region, a seed gives the same image for any
-// thread count, bad restir.* values and a film whose reservoirs would not fit are refused.
+// thread count, bad restir.* values, a film whose reservoirs would not fit and a ReSTIR render
+// on the megakernel are refused.
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
@@ -228,4 +229,18 @@ TEST(Restir, MemoryThatWouldNotFitIsRefused) {
   expect_mentions(error_of([&] { f.render(r); }), {"ReSTIR", "4096 pixels", "more than"});
   r.plain = true;
   EXPECT_NO_THROW(f.render(r)) << "the film alone fits";
+}
+
+// The megakernel cannot run ReSTIR's frame-wide steps: it refuses rather than render plain NEE.
+TEST(Restir, MegakernelRefuses) {
+  const Fixture f("cornell-box", 16, 12);
+  const Params params = Params::parse({});
+  const IntegratorSettings is = make_integrator_settings("path", 3, params, "none", true);
+  auto sampler = make_light_sampler("tree", f.scene, f.tree, params, f.accel.get());
+  Integrator integrator(f.scene, *f.accel, *sampler, is);
+  Film film(f.scene.width, f.scene.height);
+  RenderSettings rs;
+  rs.spp = 1;
+  expect_mentions(error_of([&] { render(f.scene, integrator, *sampler, film, rs); }),
+                  {"restir", "wavefront"});
 }

@@ -418,7 +418,8 @@ RenderProgress GpuRenderer::render(
   CudaWavefrontBackend& backend = m.backend;
   backend.begin(wavefront.times);
   const size_t budget = device_slot_budget();
-  const size_t slots = render_path_slots(wavefront, film, settings, budget, kMaxPathSlots, draws);
+  const size_t slots = render_path_slots(wavefront, film, settings, budget, kMaxPathSlots, draws,
+                                         integrator.restir.on);
   WavefrontDriver<CudaWavefrontBackend, BvhTracer> driver(
       backend, k, slots, m.psf_cells(integrator, pixels), settings.follows_frame,
       m.restir_history(integrator, pixels, wavefront.restir_spec));

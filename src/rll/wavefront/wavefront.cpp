@@ -125,8 +125,8 @@ RenderProgress render_with(
   // A quarter of the memory budget for the path slots (the scene, its accel and the sampler's
   // tables take the rest).
   const size_t budget = memory_budget_bytes() / 4;
-  const size_t slots =
-      render_path_slots(wavefront, film, settings, budget, kHostMaxPathSlots, draws);
+  const size_t slots = render_path_slots(wavefront, film, settings, budget, kHostMaxPathSlots,
+                                         draws, integrator.restir.on);
   if (integrator.psf.on) check_psf_memory(size_t(film.width()) * film.height());
   if (integrator.restir.on) check_restir_memory(size_t(film.width()) * film.height());
   RestirFrames* restir = integrator.restir.on && wavefront.restir_history
