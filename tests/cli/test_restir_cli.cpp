@@ -4,6 +4,8 @@
 // lists restir and its keys.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -63,4 +65,22 @@ TEST(RestirCli, SamplersListsRestirAndItsKeys) {
   expect_mentions(keys.output, {"restir.source", "restir.candidates", "restir.temporal",
                                 "restir.history", "restir.spatial", "restir.radius",
                                 "restir.weights", "restir.normal", "restir.depth"});
+}
+
+// Frames of an animated scene (lights switching and sliding): each frame reuses the last one's
+// reservoirs, re-evaluated against the frame's lights; every frame renders, none with a
+// non-finite sample.
+TEST(RestirCli, AnimatedFramesReuseTheLastFrame) {
+  const TempDir dir;
+  const fs::path stats = dir.path() / "stats.json";
+  const CommandResult r =
+      run_rll({"render", "builtin:cornell-boxes-dynamic", "--res", "24x18", "--spp", "1",
+               "--frames", "4", "--sampler", "restir", "--quiet", "-o",
+               (dir.path() / "f.exr").string(), "--stats", stats.string()},
+              120);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (int f = 0; f < 4; ++f)
+    EXPECT_TRUE(fs::exists(dir.path() / fmt::format("f.{:04d}.exr", f))) << f;
+  const nlohmann::json j = nlohmann::json::parse(read_text(stats));
+  EXPECT_EQ(j.at("nonfinite_samples").get<int>(), 0);
 }
