@@ -145,7 +145,19 @@ nlohmann::json session_stats(const RenderSession& session) {
                       {"filter", filter_json(is.psf)}};
   // The wavefront's path slots and what its device did, pass by pass (frame by frame in
   // interactive): docs/gpu.md.
-  if (session.settings().wavefront || session.gpu()) {
+  if (const auto made = session.restir_made(); !made.empty()) {
+    // ReSTIR (docs/restir.md): each restir spec's settings, and the memory its renders took.
+    nlohmann::json samplers = nlohmann::json::object();
+    for (const auto& [spec, settings] : made) {
+      nlohmann::json s = nlohmann::json::object();
+      params_json(restir_params(), settings, s);
+      samplers[spec] = s;
+    }
+    j["restir"] = {{"samplers", samplers},
+                   {"bytes", session.restir_bytes()},
+                   {"bytes_per_pixel", kRestirBytesPerPixel}};
+  }
+  if (session.settings().wavefront || session.gpu() || session.restir_bytes() > 0) {
     const WavefrontWork& w = session.wavefront_work();
     j["path_slots"] = {
         {"count", w.path_slots}, {"bytes", w.slot_bytes}, {"budget_bytes", w.budget_bytes}};

@@ -157,7 +157,8 @@ void run(InteractiveOptions o) {
   if (!o.quiet)
     fmt::print("rll interactive: {} {}x{}, {} {} depth {}, sampler {}, {}, {} frames\n",
                o.session.scene, scene.width, scene.height, integrator_name(is.type),
-               strategy_name(is.strategy), is.max_depth, sampler->name(),
+               strategy_name(is.strategy), is.max_depth,
+               o.sampler.rfind("restir", 0) == 0 ? o.sampler : sampler->name(),  // (its source's)
                session.gpu() ? "GPU wavefront on " + session.gpu()->device_name()
                              : std::string("CPU wavefront"),
                o.frames);

@@ -4,6 +4,7 @@
 
 #include "commands.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/render/restir.h"
 
 namespace rll::cli {
 
@@ -17,9 +18,12 @@ void add_samplers_command(CLI::App& app) {
   cmd->callback([params] {
     if (params->empty()) {
       for (const auto& name : light_sampler_names()) fmt::print("{}\n", name);
+      fmt::print("restir\n");  // ReSTIR over a sampler's candidates (render/restir.h)
       return;
     }
-    const auto lines = light_sampler_parameters(*params);
+    const auto lines = *params == "restir"
+                           ? describe_params(restir_params(), "restir", RestirSettings{})
+                           : light_sampler_parameters(*params);
     if (lines.empty()) fmt::print("{} has no parameters of its own\n", *params);
     for (const auto& line : lines) fmt::print("{}\n", line);
   });

@@ -81,34 +81,6 @@ bool same_bits(const Image& a, const Image& b) {
          std::memcmp(a.pixels().data(), b.pixels().data(), a.pixel_count() * sizeof(Rgb)) == 0;
 }
 
-// Mean and standard error over independent renders (seeds) of the image's mean and of each of its
-// 4 x 4 regions' means: a filtered image's pixels share cells, which can span the whole image
-// (the furnace's first bounces), so that its pixels are not independent samples; its renders are.
-struct SeedEstimates {
-  Estimate image;
-  std::vector<Estimate> regions;  // row by row
-};
-SeedEstimates over_seeds(const std::vector<Image>& renders) {
-  const int n = 4;
-  std::vector<std::vector<double>> values(1 + n * n);
-  for (const Image& img : renders) {
-    values[0].push_back(image_mean(img));
-    for (int ry = 0; ry < n; ++ry)
-      for (int rx = 0; rx < n; ++rx)
-        values[1 + ry * n + rx].push_back(image_mean(image_region(img, rx, ry, n, n)));
-  }
-  std::vector<Estimate> e;
-  for (const std::vector<double>& v : values) {
-    double mean = 0, var = 0;
-    for (double x : v) mean += x;
-    mean /= double(v.size());
-    for (double x : v) var += (x - mean) * (x - mean);
-    var /= double(v.size() - 1);
-    e.push_back({mean, std::sqrt(var / double(v.size()))});
-  }
-  return {e[0], std::vector<Estimate>(e.begin() + 1, e.end())};
-}
-
 double furnace_value(int max_depth) {
   double sum = 0, ak = 1;
   for (int k = 0; k <= max_depth; ++k, ak *= kFurnaceAlbedo) sum += ak;

@@ -319,4 +319,25 @@ void run_in_bounded_memory(const std::function<void()>& read, size_t extra_bytes
   std::_Exit(may_succeed ? 0 : 2);
 }
 
+SeedEstimates over_seeds(const std::vector<Image>& renders) {
+  const int n = 4;
+  std::vector<std::vector<double>> values(1 + n * n);
+  for (const Image& img : renders) {
+    values[0].push_back(image_mean(img));
+    for (int ry = 0; ry < n; ++ry)
+      for (int rx = 0; rx < n; ++rx)
+        values[1 + ry * n + rx].push_back(image_mean(image_region(img, rx, ry, n, n)));
+  }
+  std::vector<Estimate> e;
+  for (const std::vector<double>& v : values) {
+    double mean = 0, var = 0;
+    for (double x : v) mean += x;
+    mean /= double(v.size());
+    for (double x : v) var += (x - mean) * (x - mean);
+    var /= double(v.size() - 1);
+    e.push_back({mean, std::sqrt(var / double(v.size()))});
+  }
+  return {e[0], std::vector<Estimate>(e.begin() + 1, e.end())};
+}
+
 }  // namespace rll::test

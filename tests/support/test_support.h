@@ -140,6 +140,15 @@ std::string region_disagreement(const Image& a, const Image& b);
 void expect_images_agree(const Image& a, const Image& b, const std::string& what);
 // Region (rx, ry) of the image cut into nx x ny regions (row by row: region_differences' regions).
 Image image_region(const Image& image, int rx, int ry, int nx, int ny);
+
+// Mean and standard error over independent renders (seeds) of the image's mean and of each of its
+// 4 x 4 regions' means, for renders whose pixels are not independent samples (path-space
+// filtering's shared cells, ReSTIR's spatial and temporal reuse); their renders are.
+struct SeedEstimates {
+  Estimate image;
+  std::vector<Estimate> regions;  // row by row
+};
+SeedEstimates over_seeds(const std::vector<Image>& renders);
 std::vector<Estimate> region_differences(const Image& a, const Image& b, int nx, int ny);
 
 // A small memory budget (core/memory_budget.h) for as long as it lives, so that readers' size

@@ -234,6 +234,43 @@ struct GpuRenderer::Impl {
     }
     return &psf_frames;
   }
+  // ReSTIR's history (render/restir.h): the last sample's vertex records, Bsdfs and final
+  // reservoirs, kept here from frame to frame, made at the first restir render; one history, so
+  // a render of another restir spec (WavefrontSettings::restir_spec) starts it afresh.
+  DeviceArray<RestirVertex> restir_vertex[2];
+  DeviceArray<Bsdf> restir_bsdf[2];
+  DeviceArray<Reservoir> restir_final[2];
+  RestirFrames restir_frames;
+  std::string restir_spec;
+  RestirFrames* restir_history(const IntegratorSettings& is, size_t pixels,
+                               const std::string& spec) {
+    if (!is.restir.on) return nullptr;
+    if (restir_frames.pixels != pixels) {
+      check_restir_memory(pixels);
+      restir_frames = RestirFrames{};
+      for (int i = 0; i < 2; ++i) {
+        restir_vertex[i] = DeviceArray<RestirVertex>();
+        restir_bsdf[i] = DeviceArray<Bsdf>();
+        restir_final[i] = DeviceArray<Reservoir>();
+        restir_vertex[i] = DeviceArray<RestirVertex>(pixels);
+        restir_bsdf[i] = DeviceArray<Bsdf>(pixels);
+        restir_final[i] = DeviceArray<Reservoir>(pixels);
+        restir_frames.vertex[i] = restir_vertex[i].view();
+        restir_frames.bsdf[i] = restir_bsdf[i].view();
+        restir_frames.final_[i] = restir_final[i].view();
+      }
+      restir_frames.pixels = pixels;
+    }
+    if (spec != restir_spec) restir_frames.holds = false;
+    restir_spec = spec;
+    return &restir_frames;
+  }
+  size_t restir_bytes() const {
+    size_t bytes = 0;
+    for (int i = 0; i < 2; ++i)
+      bytes += restir_vertex[i].bytes() + restir_bsdf[i].bytes() + restir_final[i].bytes();
+    return bytes;
+  }
   // The film that stayed here after the last render (WavefrontSettings::film_stays_on_device),
   // its host copy out of date, and its fewest samples per pixel.
   const Film* resident = nullptr;
@@ -381,15 +418,18 @@ RenderProgress GpuRenderer::render(
   CudaWavefrontBackend& backend = m.backend;
   backend.begin(wavefront.times);
   const size_t budget = device_slot_budget();
-  const size_t slots = render_path_slots(wavefront, film, settings, budget, kMaxPathSlots, draws);
+  const size_t slots = render_path_slots(wavefront, film, settings, budget, kMaxPathSlots, draws,
+                                         integrator.restir.on);
   WavefrontDriver<CudaWavefrontBackend, BvhTracer> driver(
-      backend, k, slots, m.psf_cells(integrator, pixels), settings.follows_frame);
+      backend, k, slots, m.psf_cells(integrator, pixels), settings.follows_frame,
+      m.restir_history(integrator, pixels, wavefront.restir_spec));
   m.render_bytes = 0;
   auto note_bytes = [&] {
-    m.render_bytes = std::max(
-        m.render_bytes, backend.bytes() + device_sampler.bytes() + (rll ? m.rll->bytes() : 0) +
-                            m.film_sum.bytes() + m.film_count.bytes() + m.psf_keys[0].bytes() +
-                            m.psf_keys[1].bytes() + m.psf_sums[0].bytes() + m.psf_sums[1].bytes());
+    m.render_bytes = std::max(m.render_bytes, backend.bytes() + device_sampler.bytes() +
+                                                  (rll ? m.rll->bytes() : 0) + m.film_sum.bytes() +
+                                                  m.film_count.bytes() + m.psf_keys[0].bytes() +
+                                                  m.psf_keys[1].bytes() + m.psf_sums[0].bytes() +
+                                                  m.psf_sums[1].bytes() + m.restir_bytes());
   };
   note_bytes();
   // rll's end of pass runs on its copy here (the learner's own end_pass: only the counters come

@@ -34,7 +34,8 @@ const std::vector<ParamSpec<IntegratorSettings>>& coated_params() {
 }
 
 IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
-                                            const Params& params, const std::string& filter) {
+                                            const Params& params, const std::string& filter,
+                                            bool restir) {
   IntegratorSettings s;
   if (name == "direct")
     s.type = IntegratorType::Direct;
@@ -68,6 +69,7 @@ IntegratorSettings make_integrator_settings(const std::string& name, int max_dep
   read_params(coated_params(), params, "coated", s);
   s.psf = make_psf_settings(filter, s.type == IntegratorType::Direct ? 1 : s.max_depth,
                             s.type == IntegratorType::Path, params);
+  if (restir) s.restir = make_restir_settings(params, filter);
   return s;
 }
 
@@ -85,6 +87,7 @@ PathConstants make_path_constants(const Scene& scene, const SceneView& view,
   c.nee_learnt_target = settings.nee_learnt_target;
   c.coated_weights = settings.coated_weights;
   c.psf = make_psf_constants(settings.psf, scene.bounds);
+  c.restir = make_restir_constants(settings.restir);
   return c;
 }
 

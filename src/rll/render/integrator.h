@@ -13,6 +13,7 @@
 #include "rll/render/film.h"
 #include "rll/render/path_vertex.h"
 #include "rll/render/psf.h"
+#include "rll/render/restir.h"
 #include "rll/scene/scene.h"
 #include "rll/scene/scene_view.h"
 
@@ -31,7 +32,8 @@ struct IntegratorSettings {
   // coated.weights: CoatedDiffuse's MIS weight in eval() (scene/bsdf.h); pbrt only to match
   // pbrt-v4's images (docs/materials.md)
   CoatedWeights coated_weights = CoatedWeights::Unbiased;
-  PsfSettings psf;  // --filter psf and its psf.* keys (render/psf.h)
+  PsfSettings psf;        // --filter psf and its psf.* keys (render/psf.h)
+  RestirSettings restir;  // a restir sampler's restir.* keys (render/restir.h)
   // The error budget's studies of rll (rll.ideal_point, rll.ideal_bsdf; lights/rll_settings.h,
   // RllStudy), the megakernel's alone: points on the chosen light per next-event sample, and BSDF
   // directions whose MIS-weighted emission replaces the path's own BSDF ray's; 0: off.
@@ -40,10 +42,12 @@ struct IntegratorSettings {
 
 // Parses --integrator and the integrator's `--set` keys (path.strategy, path.rr_depth,
 // nee.candidates, nee.target, coated.*), and with `filter` (--filter: none or psf) the filter's
-// (psf.*, make_psf_settings).
+// (psf.*, make_psf_settings); with `restir` (a restir sampler renders) ReSTIR's (restir.*,
+// make_restir_settings), which are left unread otherwise.
 IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
                                             const Params& params,
-                                            const std::string& filter = "none");
+                                            const std::string& filter = "none",
+                                            bool restir = false);
 // The coated.* keys (core/param_table.h): coated.weights=unbiased|pbrt.
 const std::vector<ParamSpec<IntegratorSettings>>& coated_params();
 const char* integrator_name(IntegratorType t);

@@ -13,6 +13,7 @@
 #include "rll/core/sampling.h"
 #include "rll/lights/light_context.h"
 #include "rll/render/psf.h"
+#include "rll/render/restir.h"
 #include "rll/scene/bsdf.h"
 #include "rll/scene/camera.h"
 #include "rll/scene/interaction.h"
@@ -83,7 +84,8 @@ struct PathConstants {
   int nee_candidates = 1;  // resampled next-event estimation (docs/nee.md): 1 = one light sample
   bool nee_learnt_target = false;  // its target times the sampler's factor (nee_target)
   CoatedWeights coated_weights = CoatedWeights::Unbiased;  // coated.weights (scene/bsdf.h)
-  PsfConstants psf;  // path-space filtering (render/psf.h); off unless --filter psf
+  PsfConstants psf;        // path-space filtering (render/psf.h); off unless --filter psf
+  RestirConstants restir;  // ReSTIR DI (render/restir.h); off unless a restir sampler renders
 };
 
 // What a path carries from one vertex to the next.

@@ -160,6 +160,12 @@ RenderProgress render(const Scene& scene, Integrator& integrator, LightSampler& 
                       const RenderSettings& settings, const std::atomic<bool>* cancel,
                       const std::function<void(const RenderProgress&, const Film&)>& after_pass,
                       PsfHistory* history) {
+  // ReSTIR's reuse is a frame-wide step after each sample of every pixel, which the megakernel's
+  // paths, pixel by pixel, cannot take (the session renders it with the wavefront renderer).
+  if (integrator.settings().restir.on)
+    fail(
+        "a restir sampler renders with the wavefront renderer (render_wavefront), not the "
+        "megakernel");
   const int w = film.width(), h = film.height(), ts = std::max(1, settings.tile_size);
   const bool tracks_vertex = film.camera_vertex() != nullptr;
   auto trace = [&](int x, int y, int s, uint64_t frame_seed, RayCounters& rays, PsfCut* cut) {

@@ -45,6 +45,17 @@ struct Camera {
     return r;
   }
   RLL_HD bool has_lens() const { return lens_radius > 0; }
+  // Where world point p lies on the film, in pixels (x, y; y down), as generate_ray's inverse
+  // through the lens's centre; false behind the camera. ReSTIR's temporal reuse reprojects by it.
+  RLL_HD bool raster(const Vec3& p, float& x, float& y) const {
+    const Vec3 d = p - position;
+    const float z = dot(d, m_forward);
+    if (!(z > 0)) return false;
+    const float sx = dot(d, m_right) / z, sy = dot(d, m_up) / z;
+    x = (sx - m_x0) / (m_x1 - m_x0) * float(m_width);
+    y = (m_y1 - sy) / (m_y1 - m_y0) * float(m_height);
+    return true;
+  }
   // Angle subtended by one pixel at the image centre (radians), for ray footprints.
   float pixel_angle() const { return m_pixel_angle; }
 

@@ -88,13 +88,31 @@ void RenderSession::check_film_memory(double bytes_per_pixel, const std::string&
 
 const char* RenderSession::renderer_name() const {
   if (m_gpu) return "cuda-wavefront";
-  if (!m_settings.wavefront) return "megakernel";
+  if (!m_settings.wavefront) {
+    // A restir sampler renders with the wavefront renderer whatever --wavefront says.
+    const size_t restirs = size_t(std::count(m_made.begin(), m_made.end(), "restir"));
+    if (restirs == 0) return "megakernel";
+    return restirs == m_made.size() ? "wavefront" : "megakernel, wavefront for restir";
+  }
   return m_settings.tracer == "bvh" ? "wavefront-bvh" : "wavefront";
 }
 
 std::unique_ptr<LightSampler> RenderSession::make_sampler(const std::string& spec) const {
   std::unique_ptr<LightSampler> s = make_sampler_on_host(spec);
-  if (m_gpu) cuda::require_device_version(*s, spec);
+  if (m_gpu) {
+    std::lock_guard lock(m_restir_mutex);
+    const auto it = m_restir.find(s.get());
+    if (it == m_restir.end()) {
+      cuda::require_device_version(*s, spec);
+    } else {
+      try {
+        cuda::require_device_version(*s, restir_source_name(it->second.settings.restir));
+      } catch (const Error& e) {
+        fail("sampler '{}': --set restir.source={}: {}", shown_text(spec),
+             restir_source_name(it->second.settings.restir), e.what());
+      }
+    }
+  }
   return s;
 }
 
@@ -131,7 +149,8 @@ Params RenderSession::variant_params(const std::string& spec, std::string& name,
 }
 
 std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::string& spec) const {
-  if (spec.find(':') == std::string::npos) {
+  const bool restir = spec.substr(0, spec.find(':')) == "restir";
+  if (spec.find(':') == std::string::npos && !restir) {
     auto sampler = make_light_sampler(spec, m_scene, m_tree, m_params, m_accel.get());
     m_made.push_back(spec);
     return sampler;
@@ -139,9 +158,15 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::str
   std::string name;
   std::vector<std::string> own;  // the keys as the spec gives them
   Params params = variant_params(spec, name, own);
-  auto sampler = make_light_sampler(name, m_scene, m_tree, params, m_accel.get());
   // The integrator's keys (nee.candidates, ...) are a variant's too: integrator_for reads them.
-  make_integrator_settings(m_settings.integrator, m_settings.max_depth, params, m_settings.filter);
+  // A restir sampler's are ReSTIR's too (restir.*), and its sampler is restir.source's.
+  const IntegratorSettings is = make_integrator_settings(
+      m_settings.integrator, m_settings.max_depth, params, m_settings.filter, restir);
+  if (restir)
+    check_film_memory(kRenderBytesPerPixel + kRestirBytesPerPixel,
+                      fmt::format("{}, and {}", kRenderPixelText, kRestirPixelText));
+  auto sampler = make_light_sampler(restir ? restir_source_name(is.restir) : name, m_scene, m_tree,
+                                    params, m_accel.get());
   // A variant's own keys must all be known, and are reported as the spec wrote them (not as
   // --set keys, which the user may never have given).
   std::vector<std::string> unknown;
@@ -161,6 +186,10 @@ std::unique_ptr<LightSampler> RenderSession::make_sampler_on_host(const std::str
   params.check_all_used();
   m_params.merge_used(params);
   m_made.push_back(name);
+  if (restir) {
+    std::lock_guard lock(m_restir_mutex);
+    m_restir[sampler.get()] = {spec, is};
+  }
   return sampler;
 }
 
@@ -169,6 +198,12 @@ void RenderSession::check_params_used() const {
   // keys of the samplers it does (the oracle reads rll.* too: those are known then).
   const std::set<std::string> known = m_params.known_keys();
   const std::vector<std::string>& samplers = light_sampler_names();
+  for (const auto& [key, value] : m_params.values())
+    if (key.rfind("restir.", 0) == 0 && !m_params.used(key))
+      fail(
+          "--set {}: a parameter of ReSTIR, which renders only with a restir sampler (--sampler "
+          "restir, or a spec such as restir:source=rll): leave it out, or render with restir",
+          shown_text(key));
   for (const auto& [key, value] : m_params.values()) {
     const size_t dot = key.find('.');
     if (m_params.used(key) || dot == std::string::npos) continue;
@@ -187,11 +222,12 @@ void RenderSession::check_params_used() const {
 }
 
 IntegratorSettings RenderSession::integrator_for(const std::string& spec) const {
-  if (spec.find(':') == std::string::npos) return m_integrator;
+  const bool restir = spec.substr(0, spec.find(':')) == "restir";
+  if (spec.find(':') == std::string::npos && !restir) return m_integrator;
   std::string name;
   std::vector<std::string> own;
   return make_integrator_settings(m_settings.integrator, m_settings.max_depth,
-                                  variant_params(spec, name, own), m_settings.filter);
+                                  variant_params(spec, name, own), m_settings.filter, restir);
 }
 
 void RenderSession::set_frame(int frame, LightSampler* sampler) {
@@ -209,7 +245,20 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
                                      bool show_progress, const std::atomic<bool>* cancel,
                                      const AfterPass& after_pass, WavefrontTimes* times,
                                      const IntegratorSettings* integrator_settings) const {
-  const IntegratorSettings& is = integrator_settings ? *integrator_settings : m_integrator;
+  // A restir sampler renders with its spec's settings (make_sampler) unless told otherwise.
+  const IntegratorSettings* made_as = nullptr;
+  std::string restir_spec;
+  {
+    std::lock_guard lock(m_restir_mutex);
+    const auto it = m_restir.find(&sampler);
+    if (it != m_restir.end()) {
+      made_as = &it->second.settings;  // (a map's elements stay where they are)
+      restir_spec = it->second.spec;
+    }
+  }
+  const IntegratorSettings& is = integrator_settings ? *integrator_settings
+                                 : made_as           ? *made_as
+                                                     : m_integrator;
   Integrator integrator(m_scene, *m_accel, sampler, is);
   ProgressBar bar(label, show_progress);
   RenderSettings rs = settings;
@@ -236,9 +285,21 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
     history = m_psf_history.get();
   }
   wavefront.psf_history = history;
+  // ReSTIR's on the CPU: the vertex records and reservoirs the sampler's last frame left.
+  std::unique_lock restir_lock(m_restir_mutex, std::defer_lock);
+  if (is.restir.on && !m_gpu && restir_lock.try_lock()) {
+    std::unique_ptr<RestirHistory>& h = m_restir_history[restir_spec];
+    if (!h || h->frames().pixels != pixels) {
+      h.reset();
+      h = std::make_unique<RestirHistory>(pixels);
+    }
+    wavefront.restir_history = h.get();
+  }
+  wavefront.restir_spec = restir_spec;
   auto run = [&](const RenderSettings& r, const AfterPass& after) {
     if (m_gpu) return m_gpu->render(m_scene, sampler, is, film, r, cancel, after, wavefront);
-    return m_settings.wavefront
+    // The megakernel has no frame-wide step: ReSTIR renders with the wavefront renderer.
+    return m_settings.wavefront || is.restir.on
                ? render_wavefront(m_scene, *m_accel, sampler, is, film, r, cancel, after, wavefront)
                : rll::render(m_scene, integrator, sampler, film, r, cancel, after, history);
   };
@@ -276,6 +337,21 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
 size_t RenderSession::psf_history_bytes() const {
   std::lock_guard lock(m_psf_mutex);
   return m_psf_history ? m_psf_history->bytes() : 0;
+}
+
+std::map<std::string, RestirSettings> RenderSession::restir_made() const {
+  std::lock_guard lock(m_restir_mutex);
+  std::map<std::string, RestirSettings> made;
+  for (const auto& [sampler, m] : m_restir) made[m.spec] = m.settings.restir;
+  return made;
+}
+
+size_t RenderSession::restir_bytes() const {
+  std::lock_guard lock(m_restir_mutex);
+  size_t bytes = 0;
+  for (const auto& [spec, history] : m_restir_history)
+    if (history) bytes += size_t(double(history->frames().pixels) * kRestirBytesPerPixel);
+  return bytes;
 }
 
 void RenderSession::read_film(Film& film) const {

@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -74,6 +75,9 @@ class RenderSession {
   // its own parameters after colons, keys prefixed with the sampler's name unless they hold a
   // dot: "rll:within=uniform:reward=fullpdf" is rll with rll.within and rll.reward set. The
   // integrator's keys are a variant's too ("tree:nee.candidates=4"): integrator_for reads them.
+  // Name `restir` ("restir:source=rll:candidates=32") makes ReSTIR's source sampler
+  // (restir.source, fresh, its own keys from --set), which render() then renders with ReSTIR
+  // (render/restir.h) and the wavefront renderer.
   std::unique_ptr<LightSampler> make_sampler(const std::string& spec) const;
   // The integrator settings a sampler spec renders with: --set's, with the variant's own
   // integrator keys in their place, so that "tree" and "tree:nee.candidates=4" run side by side
@@ -112,6 +116,11 @@ class RenderSession {
   // The memory the path-space filter's temporal reuse keeps on the host for the next frame
   // (psf.temporal; render/psf.h), 0 before a render made it (--stats).
   size_t psf_history_bytes() const;
+  // The memory ReSTIR's renders took on the CPU (each restir sampler's reservoirs and vertex
+  // records: render/restir.h's kRestirBytesPerPixel a pixel), 0 before one rendered (--stats).
+  size_t restir_bytes() const;
+  // The restir samplers made, by spec, with their settings (--stats).
+  std::map<std::string, RestirSettings> restir_made() const;
 
  private:
   std::unique_ptr<LightSampler> make_sampler_on_host(const std::string& spec) const;
@@ -142,6 +151,17 @@ class RenderSession {
   // render with psf.temporal); a render on another thread at the same time (Python) blends nothing.
   mutable std::mutex m_psf_mutex;
   mutable std::unique_ptr<PsfHistory> m_psf_history;
+  // ReSTIR: the spec and integrator settings of each restir sampler made (by the source sampler
+  // it made), and on the CPU each spec's history, kept from frame to frame (made at its first
+  // render; by spec, so that the restir samplers of an interleaved compare keep theirs apart and
+  // a fresh sampler of a spec finds its spec's).
+  struct RestirMade {
+    std::string spec;
+    IntegratorSettings settings;
+  };
+  mutable std::mutex m_restir_mutex;
+  mutable std::map<const LightSampler*, RestirMade> m_restir;
+  mutable std::map<std::string, std::unique_ptr<RestirHistory>> m_restir_history;
 };
 
 }  // namespace rll

@@ -28,16 +28,16 @@
 namespace rll {
 
 // The bytes of one path slot with `draws` next-event samples (nee_draws_per_vertex): its state
-// (PathSlots) and its place in each queue (`draws` places in the shadow rays'). What the slot
-// count is chosen from (wavefront_slot_count, wavefront/passes.h).
-inline size_t wavefront_slot_bytes(size_t draws = 1) {
+// (PathSlots) and its place in each queue (`draws` places in the shadow rays', one in ReSTIR's
+// where `restir`). What the slot count is chosen from (wavefront_slot_count, wavefront/passes.h).
+inline size_t wavefront_slot_bytes(size_t draws = 1, bool restir = false) {
   size_t bytes = 0;
   auto count = [&]<typename T>(size_t n) {
     bytes += n * sizeof(T);
     return View<T>{};
   };
-  PathSlots::make(count, 1, draws);
-  return bytes + (kWavefrontQueues - 1 + draws) * sizeof(uint32_t);
+  PathSlots::make(count, 1, draws, false, restir);
+  return bytes + (kWavefrontQueues - 2 + draws + (restir ? 1 : 0)) * sizeof(uint32_t);
 }
 
 template <typename Backend, typename Tracer>
@@ -48,16 +48,26 @@ class WavefrontDriver {
   // `k` holds the scene, camera, tables, tracer, sampler and film; the driver adds the path slots,
   // queues and tally, n_slots of each, taken from the backend once. With `frames` (the filter's
   // temporal reuse, render/psf.h: its two tables in the backend's memory, kept by the caller from
-  // render to render), the filter's cells are theirs; `follows_frame` as RenderSettings'.
+  // render to render), the filter's cells are theirs; `follows_frame` as RenderSettings'. With
+  // `restir` (ReSTIR's history, render/restir.h, kept by the caller), its vertex records and
+  // final reservoirs are theirs, and a render that follows a frame reuses the last one's.
   WavefrontDriver(Backend& backend, const Kernels& k, size_t n_slots,
-                  PsfFrameCells* frames = nullptr, bool follows_frame = false)
-      : m_backend(backend), m_k(k), m_slots(n_slots), m_frames(frames), m_follows(follows_frame) {
+                  PsfFrameCells* frames = nullptr, bool follows_frame = false,
+                  RestirFrames* restir = nullptr)
+      : m_backend(backend),
+        m_k(k),
+        m_slots(n_slots),
+        m_frames(frames),
+        m_follows(follows_frame),
+        m_restir(restir) {
     auto take = [&]<typename T>(size_t n) { return m_backend.template take<T>(n); };
     m_k.draws = uint32_t(nee_draws_per_vertex(m_k.sampler));
-    m_k.p = PathSlots::make(take, n_slots, m_k.draws, filters());
+    m_k.p = PathSlots::make(take, n_slots, m_k.draws, filters(), restirs());
     for (uint32_t q = 0; q < kWavefrontQueues; ++q)
       m_k.queue_slots[q] =
-          m_backend.template take<uint32_t>(q == kShadows ? n_slots * m_k.draws : n_slots);
+          m_backend.template take<uint32_t>(q == kShadows                ? n_slots * m_k.draws
+                                            : q == kRestir && !restirs() ? 1
+                                                                         : n_slots);
     m_sizes = m_backend.template take<uint32_t>(2 * kWavefrontQueues).data;
     m_k.tally = m_backend.template take<WavefrontTally>(1).data;
     if (filters()) {
@@ -71,6 +81,97 @@ class WavefrontDriver {
       }
       m_k.psf_records = m_backend.template take<PsfRecord>(pixels);
     }
+    if (restirs()) {
+      // ReSTIR: a sample of every pixel at a time (render/restir.h).
+      const size_t pixels = m_k.film.count.size;
+      if (m_restir && m_restir->pixels != pixels) m_restir = nullptr;  // (not this film's)
+      if (!m_restir) {
+        for (int i = 0; i < 2; ++i) {
+          m_own_restir.vertex[i] = m_backend.template take<RestirVertex>(pixels);
+          m_own_restir.bsdf[i] = m_backend.template take<Bsdf>(pixels);
+          m_own_restir.final_[i] = m_backend.template take<Reservoir>(pixels);
+        }
+        m_own_restir.pixels = pixels;
+        m_restir = &m_own_restir;
+      }
+      m_k.restir.reservoir = m_backend.template take<Reservoir>(pixels);
+      m_k.restir.kept = m_backend.template take<RestirKept>(pixels);
+      m_k.restir.pixel = m_backend.template take<RestirPixel>(pixels);
+      m_k.restir.width = m_k.film.width;
+      m_k.restir.height = int(pixels / size_t(m_k.film.width));
+    }
+  }
+
+  // Whether a restir sampler renders: its passes then run a sample of every pixel at a time, as
+  // the filter's.
+  bool restirs() const { return m_k.c.restir.on; }
+  // Whether the passes run a sample of every pixel at a time, begin_sample() before and
+  // end_sample() after each.
+  bool per_sample() const { return filters() || restirs(); }
+  void begin_sample() {
+    if (filters()) begin_filter_batch();
+    if (restirs()) begin_restir_sample();
+  }
+  // `sample` the sample index (RenderSettings::first_sample + the pass's sample) and the pass's
+  // frame_seed and points: the keys of the pixels' streams.
+  void end_sample(uint64_t sample, uint64_t frame_seed, PointSet points) {
+    if (filters()) resolve_filter();
+    if (restirs()) resolve_restir(sample, frame_seed, points);
+  }
+
+  // The sample's vertex records and final reservoirs are the history's other half; the half the
+  // last sample filled is the one temporal reuse reads, where this render follows it (an earlier
+  // sample of this render, or a frame where the render follows one).
+  void begin_restir_sample() {
+    const RestirFrames& f = *m_restir;
+    const int next = 1 - f.last;
+    RestirBuffers& b = m_k.restir;
+    b.vertex = f.vertex[next];
+    b.bsdf = f.bsdf[next];
+    b.final_ = f.final_[next];
+    b.prev_vertex = f.vertex[f.last];
+    b.prev_bsdf = f.bsdf[f.last];
+    b.prev_final = f.final_[f.last];
+    b.prev_camera = f.camera;
+    b.has_prev = f.holds && (m_restir_samples > 0 || m_follows);
+    m_backend.timed(WavefrontStage::RestirCandidates, [&] {
+      m_backend.zero(b.vertex.data, b.vertex.size * sizeof(RestirVertex));
+      m_backend.zero(b.pixel.data, b.pixel.size * sizeof(RestirPixel));
+    });
+  }
+  // After the batches of a sample: visibility, temporal and spatial reuse, shading, each launched
+  // over the pixels.
+  void resolve_restir(uint64_t sample, uint64_t frame_seed, PointSet points) {
+    m_k.restir.sample = sample;
+    m_k.restir.frame_seed = frame_seed;
+    m_k.restir.points = points;
+    const size_t pixels = m_k.restir.pixel.size;
+    pixel_step<WavefrontStage::RestirVisibility>(pixels);
+    pixel_step<WavefrontStage::RestirTemporal>(pixels);
+    pixel_step<WavefrontStage::RestirSpatial>(pixels);
+    pixel_step<WavefrontStage::RestirShade>(pixels);
+    m_restir->last = 1 - m_restir->last;
+    m_restir->holds = true;
+    m_restir->camera = m_k.camera;
+    ++m_restir_samples;
+  }
+  // Launches ReSTIR's step S over the pixels. (Public: CUDA's extended lambdas may not live in
+  // private member functions.)
+  template <WavefrontStage S>
+  void pixel_step(size_t pixels) {
+    m_backend.timed(S, [&] {
+      const Kernels k = m_k;
+      m_backend.launch(pixels, [k] RLL_HD(size_t pixel) {
+        if constexpr (S == WavefrontStage::RestirVisibility)
+          k.restir_visibility_stage(uint64_t(pixel));
+        else if constexpr (S == WavefrontStage::RestirTemporal)
+          k.restir_temporal_stage(uint64_t(pixel));
+        else if constexpr (S == WavefrontStage::RestirSpatial)
+          k.restir_spatial_stage(uint64_t(pixel));
+        else
+          k.restir_shade_stage(uint64_t(pixel));
+      });
+    });
   }
 
   // Whether the render filters its paths (--filter psf): its passes then run a sample of every
@@ -119,6 +220,7 @@ class WavefrontDriver {
   // Runs every path of the batch to its end and adds them to the film and their counts to the
   // pass's; reads nothing back.
   void run_batch(const WavefrontBatch& b) {
+    m_k.batch_first = b.first_item;
     m_k.queue_sizes = m_sizes;
     m_k.next_queue_sizes = m_sizes + kWavefrontQueues;
     m_backend.zero(m_sizes, 2 * kWavefrontQueues * sizeof(uint32_t));
@@ -142,6 +244,7 @@ class WavefrontDriver {
       stage<WavefrontStage::ClosestHit>(kRays, b.n);
       stage<WavefrontStage::Emission>(kHits, b.n);
       if (depth == max_depth) break;
+      if (restirs()) stage<WavefrontStage::RestirCandidates>(kRestir, b.n);
       stage<WavefrontStage::NeeSample>(kNee, b.n);
       stage<WavefrontStage::Shadow>(kShadows, b.n * m_k.draws);
       stage<WavefrontStage::NeeFinish>(kNee, b.n);
@@ -178,6 +281,9 @@ class WavefrontDriver {
   PsfFrameCells* m_frames = nullptr;  // temporal reuse's tables, where it is on
   bool m_follows = false;             // the render follows a frame
   bool m_blend = false;               // the sample in flight blends the last one's cells
+  RestirFrames* m_restir = nullptr;   // ReSTIR's history, the caller's or m_own_restir
+  RestirFrames m_own_restir;
+  uint64_t m_restir_samples = 0;  // the samples this render resolved
 };
 
 }  // namespace rll

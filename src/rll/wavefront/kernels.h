@@ -16,6 +16,7 @@
 #include "rll/render/film.h"
 #include "rll/render/nee_draw.h"
 #include "rll/render/path_vertex.h"
+#include "rll/render/restir_pixel.h"
 #include "rll/scene/camera.h"
 #include "rll/wavefront/stages.h"
 
@@ -41,6 +42,7 @@ enum WavefrontQueueId : uint32_t {
   kNee,
   kShadows,
   kBounces,
+  kRestir,  // the paths at their ReSTIR vertex (render/restir.h; empty unless a restir sampler)
   kWavefrontQueues
 };
 
@@ -70,12 +72,16 @@ struct PathSlots {
   View<NeeRecord> record;
   // Path-space filtering (render/psf.h): each path's cut; none unless the render filters.
   View<PsfCut> cut;
+  // ReSTIR (render/restir.h): 0 before the path's ReSTIR vertex, 1 from it to the next vertex
+  // (whose emission the BSDF ray found: restir_after_vertex), 2 after; none without ReSTIR.
+  View<uint8_t> restir;
 
   // Takes every array from `take(count, tag)`, a function of the memory that holds them (host or
   // device) called as take.template operator()<T>(n); `draws` next-event samples per slot; the
   // cuts where `filters`.
   template <typename Take>
-  static PathSlots make(Take& take, size_t n, size_t draws, bool filters = false) {
+  static PathSlots make(Take& take, size_t n, size_t draws, bool filters = false,
+                        bool restir = false) {
     PathSlots p;
     p.stream = take.template operator()<SampleStream>(n);
     p.ray = take.template operator()<Ray>(n);
@@ -99,6 +105,7 @@ struct PathSlots {
     p.occluded = take.template operator()<uint8_t>(n * draws);
     p.record = take.template operator()<NeeRecord>(n * draws);
     if (filters) p.cut = take.template operator()<PsfCut>(n);
+    if (restir) p.restir = take.template operator()<uint8_t>(n);
     return p;
   }
 
@@ -176,6 +183,10 @@ struct WavefrontKernels {
   PsfTableView psf_table;
   View<PsfRecord> psf_records;
   PsfTableView psf_last;  // temporal reuse: the last sample's cells, where this one blends them
+  // ReSTIR (render/restir.h; c.restir.on): the sample's per-pixel arrays, and the batch's first
+  // item (its pixel: a ReSTIR render's batches hold one sample of each pixel).
+  RestirBuffers restir;
+  uint64_t batch_first = 0;
 
   RLL_HD WavefrontQueue queue(WavefrontQueueId q) const {
     return {queue_slots[q], q == kNextRays ? &next_queue_sizes[kRays] : &queue_sizes[q]};
@@ -194,6 +205,7 @@ struct WavefrontKernels {
     p.depth[i] = 0;
     p.store(i, start_path(c));
     if (c.psf.on) p.cut[i] = PsfCut{};
+    if (c.restir.on) p.restir[i] = 0;
     queue_slots[kRays][i] = i;
   }
 
@@ -211,9 +223,13 @@ struct WavefrontKernels {
     const int depth = p.depth[i];
     const SurfaceHit sh = make_surface_hit(c.scene.mesh, p.hit[i]);
     const Vec3 wo = -p.ray[i].d;
-    const HitEmission e = hit_emission(c, s, sh, wo, depth);
-    add_emission(c, s, sh, e,
-                 e.needs_light_pmf ? light_pmf(sampler, s.prev_ctx, uint32_t(sh.light)) : 0.0f);
+    HitEmission e = hit_emission(c, s, sh, wo, depth);
+    const float pmf = e.needs_light_pmf ? light_pmf(sampler, s.prev_ctx, uint32_t(sh.light)) : 0.0f;
+    if (c.restir.on && p.restir[i] == 1) {  // the BSDF ray that left the ReSTIR vertex
+      restir_after_vertex(e, pmf);
+      p.restir[i] = 2;
+    }
+    add_emission(c, s, sh, e, pmf);
     if (depth >= c.max_depth) return p.store(i, s);
     SampleStream& stream = p.stream[i];
     const BsdfNumbers u = bsdf_numbers(stream, depth);
@@ -229,7 +245,14 @@ struct WavefrontKernels {
     p.surface[i] = sh;
     p.numbers[i] = u;
     p.ctx[i] = ctx;
-    if (samples_light(c, *bsdf)) queue(kNee).push(i);
+    if (samples_light(c, *bsdf)) {
+      if (c.restir.on && p.restir[i] == 0) {  // the path's ReSTIR vertex: no next-event sample
+        p.restir[i] = 1;
+        queue(kRestir).push(i);
+      } else {
+        queue(kNee).push(i);
+      }
+    }
     queue(kBounces).push(i);
   }
 
@@ -250,6 +273,26 @@ struct WavefrontKernels {
                if (d.setup.traces) queue(kShadows).push(j);
              });
     p.draws[i] = uint8_t(n);
+  }
+
+  // ReSTIR's candidates at the path's ReSTIR vertex (slot i holds the batch's pixel
+  // batch_first + i): the pixel's initial reservoir, its vertex record and Bsdf.
+  RLL_HD void restir_candidates_stage(uint32_t i) const {
+    const uint64_t pixel = batch_first + i;
+    const LightContext& ctx = p.ctx[i];
+    const Bsdf& bsdf = p.bsdf[i];
+    SampleStream stream = p.stream[i];  // (a copy: the path's own numbers stay where they are)
+    const RestirDraw d = restir_candidates(c, ctx, bsdf, p.beta[i], stream,
+                                           [&](double u) { return sample_light(sampler, ctx, u); });
+    restir.reservoir[pixel] = d.r;
+    restir.kept[pixel] = d.kept;
+    RestirVertex v;
+    v.ctx = ctx;
+    v.beta = p.beta[i];
+    v.depth = length(ctx.p - camera.position);
+    v.valid = 1;
+    restir.vertex[pixel] = v;
+    new (&restir.bsdf[pixel]) Bsdf(bsdf);
   }
 
   // Shadow ray of next-event sample j.
@@ -319,6 +362,8 @@ struct WavefrontKernels {
       rewards_stage(i);
     else if constexpr (S == WavefrontStage::BsdfSample)
       bsdf_sample_stage(i);
+    else if constexpr (S == WavefrontStage::RestirCandidates)
+      restir_candidates_stage(i);
     else
       static_assert(S == WavefrontStage::BsdfSample, "not a queue stage");
   }
@@ -328,6 +373,10 @@ struct WavefrontKernels {
   RLL_HD void accumulate_stage(const WavefrontBatch& b, uint64_t j) const {
     const uint64_t pixel = b.first_pixel() + j, count = uint64_t(b.count);
     if (c.psf.on) return psf_accumulate(pixel, uint32_t(pixel - b.first_item));
+    if (c.restir.on) {  // (the film's sample is the shading's, after the pixels' reuse)
+      restir.pixel[pixel] = RestirPixel{p.L[uint32_t(pixel - b.first_item)], 1u};
+      return;
+    }
     const uint64_t begin = pixel * count > b.first_item ? pixel * count : b.first_item;
     const uint64_t end_item = b.first_item + b.n, pixel_end = (pixel + 1) * count;
     const uint64_t end = pixel_end < end_item ? pixel_end : end_item;
@@ -360,6 +409,35 @@ struct WavefrontKernels {
   // After every path of the sample: pixel's cut path gets its cell's mean (psf_resolve_pixel).
   RLL_HD void psf_resolve_stage(uint64_t pixel) const {
     psf_resolve_pixel(c.psf, psf_table, film, psf_records, size_t(pixel));
+  }
+
+  // ReSTIR's steps over the pixels, after every path of the sample (render/restir_pixel.h), with
+  // their shadow rays counted.
+  RLL_HD void restir_visibility_stage(uint64_t pixel) const {
+    bool visible = false;
+    NeeRecord record;
+    if (restir_visibility(c, tracer, restir, pixel, visible, record) > 0) {
+      atomic_add(&tally->shadow, uint64_t(1));
+      if (visible) atomic_add(&tally->shadow_visible, uint64_t(1));
+    }
+    const RestirKept& kept = restir.kept[pixel];
+    if (sampler.learns && restir.vertex[pixel].valid && kept.light.pmf > 0)
+      record_nee(sampler, restir.vertex[pixel].ctx, kept.light, record);
+  }
+  RLL_HD void restir_temporal_stage(uint64_t pixel) const {
+    const uint64_t rays = restir_temporal(c, tracer, sobol, restir, pixel);
+    if (rays > 0) atomic_add(&tally->shadow, rays);
+  }
+  RLL_HD void restir_spatial_stage(uint64_t pixel) const {
+    const uint64_t rays = restir_spatial(c, tracer, sobol, restir, pixel);
+    if (rays > 0) atomic_add(&tally->shadow, rays);
+  }
+  RLL_HD void restir_shade_stage(uint64_t pixel) const {
+    uint64_t shadow = 0, visible = 0;
+    if (!restir_shade(c, tracer, restir, film, pixel, shadow, visible))
+      atomic_add(&tally->nonfinite, uint64_t(1));
+    if (shadow > 0) atomic_add(&tally->shadow, shadow);
+    if (visible > 0) atomic_add(&tally->shadow_visible, visible);
   }
 
   // ... and the sample's cells counted (one thread).

@@ -53,14 +53,16 @@ inline int largest_pass_spp(const RenderSettings& s) {
 // rll::Error if not one slot fits.
 inline size_t wavefront_slot_count(uint32_t path_slots, const Film& film,
                                    const RenderSettings& settings, size_t budget_bytes,
-                                   size_t max_slots = kMaxPathSlots, size_t draws = 1) {
+                                   size_t max_slots = kMaxPathSlots, size_t draws = 1,
+                                   bool restir = false) {
   const size_t pixels = size_t(film.width()) * film.height();
   size_t n = std::min(max_slots, pixels * size_t(largest_pass_spp(settings)));
   if (path_slots > 0) n = std::min<size_t>(n, path_slots);
-  const size_t fit = budget_bytes / wavefront_slot_bytes(draws);
+  const size_t fit = budget_bytes / wavefront_slot_bytes(draws, restir);
   if (fit < 1)
     fail("the wavefront renderer's path slots take {} each, more than the {} they may use",
-         format_bytes(double(wavefront_slot_bytes(draws))), format_bytes(double(budget_bytes)));
+         format_bytes(double(wavefront_slot_bytes(draws, restir))),
+         format_bytes(double(budget_bytes)));
   return std::max<size_t>(1, std::min(n, fit));
 }
 
@@ -68,12 +70,12 @@ inline size_t wavefront_slot_count(uint32_t path_slots, const Film& film,
 // (--stats' path_slots) where the caller keeps one.
 inline size_t render_path_slots(const WavefrontSettings& wavefront, const Film& film,
                                 const RenderSettings& settings, size_t budget_bytes,
-                                size_t max_slots, size_t draws) {
-  const size_t slots =
-      wavefront_slot_count(wavefront.path_slots, film, settings, budget_bytes, max_slots, draws);
+                                size_t max_slots, size_t draws, bool restir = false) {
+  const size_t slots = wavefront_slot_count(wavefront.path_slots, film, settings, budget_bytes,
+                                            max_slots, draws, restir);
   if (wavefront.work) {
     wavefront.work->path_slots = slots;
-    wavefront.work->slot_bytes = slots * wavefront_slot_bytes(draws);
+    wavefront.work->slot_bytes = slots * wavefront_slot_bytes(draws, restir);
     wavefront.work->budget_bytes = budget_bytes;
   }
   return slots;
@@ -161,19 +163,19 @@ RenderProgress run_wavefront_passes(
     first_pass = false;
     driver.begin_pass();
     bool complete = true;
-    if (!driver.filters()) {
+    if (!driver.per_sample()) {
       complete = run_items(first, count, frame_seed, stop, rays);
     } else {
-      // Path-space filtering: a sample of every pixel at a time, its cut paths resolved before
-      // the next sample's (render/psf.h).
+      // Path-space filtering and ReSTIR: a sample of every pixel at a time, resolved before the
+      // next sample's (render/psf.h, render/restir.h).
       for (int s = 0; s < count && complete; ++s) {
         if (stop.stopped()) {
           complete = false;
           break;
         }
-        driver.begin_filter_batch();
+        driver.begin_sample();
         complete = run_items(first + s, 1, frame_seed, stop, rays);
-        driver.resolve_filter();
+        driver.end_sample(settings.first_sample + uint64_t(first + s), frame_seed, settings.points);
       }
     }
     bool copied = false;

@@ -19,6 +19,14 @@ enum class WavefrontStage {
   NeeFinish,
   Rewards,
   BsdfSample,
+  // ReSTIR's (render/restir.h): the candidates at the ReSTIR vertex (a bounce's), then over the
+  // pixels after the sample's paths: the kept samples' shadow rays, temporal and spatial reuse
+  // (with their shadow rays) and the final shading.
+  RestirCandidates,
+  RestirVisibility,
+  RestirTemporal,
+  RestirSpatial,
+  RestirShade,
   Accumulate,
   EndPass,
   Count
@@ -26,8 +34,13 @@ enum class WavefrontStage {
 inline constexpr size_t kWavefrontStages = size_t(WavefrontStage::Count);
 // Their names in --stats files and tables.
 inline constexpr std::array<const char*, kWavefrontStages> kWavefrontStageNames = {
-    "camera",     "closest_hit", "emission",    "nee_sample", "shadow",
-    "nee_finish", "rewards",     "bsdf_sample", "accumulate", "end_pass"};
+    "camera",          "closest_hit",    "emission",     "nee_sample",        "shadow",
+    "nee_finish",      "rewards",        "bsdf_sample",  "restir_candidates", "restir_visibility",
+    "restir_temporal", "restir_spatial", "restir_shade", "accumulate",        "end_pass"};
+// Whether stage s is ReSTIR's (a render without a restir sampler spends nothing there).
+inline constexpr bool is_restir_stage(size_t s) {
+  return s >= size_t(WavefrontStage::RestirCandidates) && s <= size_t(WavefrontStage::RestirShade);
+}
 
 // Where the time of a render went, stage by stage, summed over its batches and bounces. On the
 // CPU each stage's loop is timed by the wall clock; a device version records the same stages

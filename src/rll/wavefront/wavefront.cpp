@@ -125,13 +125,18 @@ RenderProgress render_with(
   // A quarter of the memory budget for the path slots (the scene, its accel and the sampler's
   // tables take the rest).
   const size_t budget = memory_budget_bytes() / 4;
-  const size_t slots =
-      render_path_slots(wavefront, film, settings, budget, kHostMaxPathSlots, draws);
+  const size_t slots = render_path_slots(wavefront, film, settings, budget, kHostMaxPathSlots,
+                                         draws, integrator.restir.on);
   if (integrator.psf.on) check_psf_memory(size_t(film.width()) * film.height());
+  if (integrator.restir.on) check_restir_memory(size_t(film.width()) * film.height());
+  RestirFrames* restir = integrator.restir.on && wavefront.restir_history
+                             ? &wavefront.restir_history->frames()
+                             : nullptr;
   PsfFrameCells* frames = integrator.psf.on && integrator.psf.temporal > 0 && wavefront.psf_history
                               ? &wavefront.psf_history->cells()
                               : nullptr;
-  WavefrontDriver<HostBackend, Tracer> driver(backend, k, slots, frames, settings.follows_frame);
+  WavefrontDriver<HostBackend, Tracer> driver(backend, k, slots, frames, settings.follows_frame,
+                                              restir);
   auto end_pass = [&] {
     backend.timed(WavefrontStage::EndPass, [&] { light_sampler.end_pass(); });
     driver.set_sampler(light_sampler.sampler_view());

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "rll/accel/accel.h"
@@ -77,6 +78,12 @@ struct WavefrontSettings {
   // The CPU's: the path-space filter's temporal reuse keeps its cells there from render to
   // render (render/psf.h; without it, no sample blends another's). The GPU keeps its own.
   PsfHistory* psf_history = nullptr;
+  // The CPU's: ReSTIR's vertex records and final reservoirs of the last sample, kept there from
+  // render to render (render/restir.h), so that a render that follows a frame reuses them
+  // (temporal reuse across frames); without it, a render starts afresh. The GPU keeps its own,
+  // one for the last restir spec rendered (`restir_spec`: another spec starts it afresh).
+  RestirHistory* restir_history = nullptr;
+  std::string restir_spec;
 };
 
 // As render() (render/render.h), with the wavefront renderer: the same pass loop, the same
