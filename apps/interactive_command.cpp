@@ -311,7 +311,7 @@ void add_interactive_command(CLI::App& app) {
   cmd->add_option("--sampler", o->sampler,
                   fmt::format("Light sampler, one for all frames (what it learns in a frame is "
                               "used by the next): {}",
-                              fmt::join(light_sampler_names(), ", ")))
+                              fmt::join(sampler_names(), ", ")))
       ->capture_default_str();
   cmd->add_option("--frames", o->frames,
                   fmt::format("Frames to render, 1 spp each, at most {}; an animated scene "

@@ -276,7 +276,7 @@ void add_render_command(CLI::App& app) {
   add_session_options(cmd, o->session);
   add_wavefront_option(cmd, o->session);
   cmd->add_option("--sampler", o->sampler,
-                  fmt::format("Light sampler: {}", fmt::join(light_sampler_names(), ", ")))
+                  fmt::format("Light sampler: {}", fmt::join(sampler_names(), ", ")))
       ->capture_default_str();
   cmd->add_option("--spp", o->spp, "Samples per pixel (an upper limit when --time is given)")
       ->capture_default_str()

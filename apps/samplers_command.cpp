@@ -17,8 +17,7 @@ void add_samplers_command(CLI::App& app) {
                   "its range or choices");
   cmd->callback([params] {
     if (params->empty()) {
-      for (const auto& name : light_sampler_names()) fmt::print("{}\n", name);
-      fmt::print("restir\n");  // ReSTIR over a sampler's candidates (render/restir.h)
+      for (const auto& name : sampler_names()) fmt::print("{}\n", name);
       return;
     }
     const auto lines = *params == "restir"

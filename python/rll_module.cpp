@@ -757,7 +757,7 @@ PYBIND11_MODULE(rll, m) {
         return d;
       },
       "The built-in scenes, name -> description (load them as 'builtin:NAME').");
-  m.def("samplers", &light_sampler_names, "The light sampler names render() takes.");
+  m.def("samplers", &sampler_names, "The sampler names render() takes (the light samplers and restir).");
 
   py::class_<PyScene, std::shared_ptr<PyScene>>(
       m, "Scene", "A loaded scene with its light tree and ray-tracing structure (rll.load).")

@@ -14,6 +14,15 @@
 
 namespace rll {
 
+const std::vector<std::string>& sampler_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n = light_sampler_names();
+    n.push_back("restir");
+    return n;
+  }();
+  return names;
+}
+
 LoadOptions parse_resolution(const std::string& res) {
   LoadOptions lo;
   if (res.empty()) return lo;

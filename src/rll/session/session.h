@@ -25,6 +25,11 @@
 
 namespace rll {
 
+// The samplers a session renders with, as `rll samplers` and Python's rll.samplers() list them:
+// every light sampler (light_sampler_names()), then `restir` (ReSTIR DI over one's candidates,
+// render/restir.h).
+const std::vector<std::string>& sampler_names();
+
 struct SessionSettings {
   std::string scene;       // a scene file or builtin:NAME
   std::string resolution;  // "WIDTHxHEIGHT", or empty for the scene's own
