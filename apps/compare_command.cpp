@@ -156,7 +156,8 @@ struct ChosenReference {
 };
 
 // --reference, or the cache's reference, or a new one rendered into the cache.
-ChosenReference choose_reference(const CompareOptions& o, const RenderSession& session) {
+// `frame`: the frame the session was moved to, for an animated scene (-1: a static one).
+ChosenReference choose_reference(const CompareOptions& o, const RenderSession& session, int frame) {
   ChosenReference ref;
   const Scene& scene = session.scene();
   if (!o.reference.empty()) {
@@ -173,6 +174,7 @@ ChosenReference choose_reference(const CompareOptions& o, const RenderSession& s
   request.pass_spp = o.pass_spp;
   request.max_pass_spp = o.max_pass_spp;
   request.seed_allowed = [&](uint64_t s) { return !reference_shares_a_run_seed(o, s); };
+  request.frame = frame;
   ObtainedReference got = obtain_reference(session, cache, request, !o.quiet, interrupt_flag());
   if (!got.complete)
     throw Interrupted("interrupted while rendering the reference; nothing was written");
@@ -365,7 +367,7 @@ void run(const CompareOptions& o) {
   for (int f = o.every_frame ? 0 : o.frames - 1; f < o.frames; ++f) {
     session.set_frame(f, nullptr);
     if (o.every_frame) fmt::print(stderr, "frame {} of {}: ", f + 1, o.frames);
-    frame_refs.push_back(choose_reference(o, session));
+    frame_refs.push_back(choose_reference(o, session, scene.animate ? f : -1));
   }
   const ChosenReference& ref = frame_refs.back();
   std::vector<FrameReference> frame_references;

@@ -130,6 +130,7 @@ void run(InteractiveOptions o) {
           request.seed, request.seed, request.seed + 1, o.seed);
     for (int f = 0; f < (animated ? o.frames : 1); ++f) {
       session.set_frame(f, nullptr);
+      request.frame = animated ? f : -1;
       set_activity(fmt::format("the reference of frame {}", f + 1));
       ObtainedReference got = obtain_reference(session, cache, request, !o.quiet, interrupt_flag());
       if (!got.complete) throw Interrupted("interrupted while rendering a reference");

@@ -59,6 +59,7 @@ std::optional<ReferenceInfo> info_from_json(const nlohmann::json& j, const fs::p
     info.spp = j.at("spp").get<int>();
     info.seed = j.at("seed").get<uint64_t>();
     info.seconds = j.at("seconds").get<double>();
+    info.frame = j.value("frame", -1);
     if (j.value("halves", false)) {
       info.half = exr;
       info.half.replace_extension(".half.exr");
@@ -176,7 +177,8 @@ ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image,
   info.image = m_dir / (stem + ".exr");
   const std::string settings_hex = fmt::format("{:016x}", key.settings);
 
-  // Entries left behind by an earlier version of this scene can never be found again.
+  // Entries left behind by an earlier version of this scene can never be found again (another
+  // frame of an animated scene is not one).
   for (const auto& entry : fs::directory_iterator(m_dir, ec)) {
     const fs::path& p = entry.path();
     if (p.extension() != ".json") continue;
@@ -184,7 +186,8 @@ ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image,
     if (!j || j->value("key", std::string()) == key.hex()) continue;
     auto old = info_from_json(*j, p);
     if (!old || old->scene != info.scene || old->width != info.width ||
-        old->height != info.height || j->value("settings_hash", std::string()) != settings_hex)
+        old->height != info.height || old->frame != info.frame ||
+        j->value("settings_hash", std::string()) != settings_hex)
       continue;
     fs::path exr = p;
     exr.replace_extension(".exr");
@@ -212,6 +215,7 @@ ReferenceInfo ReferenceCache::store(const ReferenceKey& key, const Image& image,
   j["seed"] = info.seed;
   j["seconds"] = info.seconds;
   j["halves"] = first_half != nullptr;
+  if (info.frame >= 0) j["frame"] = info.frame;
   j["cache_version"] = kReferenceCacheVersion;
   // The metadata goes last: an entry without it is never found, so a crash mid-store is harmless.
   write_file_atomic(m_dir / (stem + ".json"), j.dump(2) + "\n");
@@ -319,6 +323,7 @@ ObtainedReference obtain_reference(const RenderSession& session, const Reference
   out.info.scene = canonical_scene_spec(session.settings().scene);
   out.info.sampler = request.sampler;
   out.info.seed = request.seed;
+  out.info.frame = request.frame;
   out.info.width = width;
   out.info.height = height;
   if (!out.complete) {

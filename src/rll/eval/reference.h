@@ -48,6 +48,9 @@ struct ReferenceInfo {
   int spp = 0;
   uint64_t seed = 0;
   double seconds = 0;
+  // The frame of an animated scene it shows (ReferenceRequest::frame), -1 for a static scene:
+  // the cache keeps one entry per frame.
+  int frame = -1;
 };
 
 // A folder of references: for key K, K-<spp>spp-seed<seed>.exr and a .json beside it.
@@ -99,10 +102,14 @@ struct ReferenceRequest {
   // Tree sampling: visibility-blind, without learning state, and far better behaved than power
   // on occluded scenes (whose lamps power sampling gives pmfs near 1e-7).
   std::string sampler = "tree";
-  int spp = 1024;  // at least this many samples per pixel
+  int spp = 1024;                         // at least this many samples per pixel
   uint64_t seed = kDefaultReferenceSeed;  // of the first half; the second half uses seed + 1
-  int pass_spp = 1, max_pass_spp = 8;  // as in RenderSettings
-  bool force = false;                  // render and store even when the cache holds one
+  int pass_spp = 1, max_pass_spp = 8;     // as in RenderSettings
+  bool force = false;                     // render and store even when the cache holds one
+  // The frame of an animated scene the session has moved to (RenderSession::set_frame), -1 for
+  // a static scene: storing it leaves the other frames' entries in the cache (they differ in
+  // content from it, as an edited scene's would).
+  int frame = -1;
   // When given, cached references with a seed it rejects are not used.
   std::function<bool(uint64_t)> seed_allowed;
 };
