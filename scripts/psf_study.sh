@@ -71,26 +71,21 @@ for width in none 3 1.5 0.75; do
       --quiet -o "$bias/w$width.s$s.exr" "${flags[@]}"
   done
 done
-"${PYTHON:-/usr/bin/python3}" - "$bias" "$seeds" <<'PY' | tee "$out/bias.md"
+"${PYTHON:-/usr/bin/python3}" - "$(dirname "$0")" "$bias" "$seeds" <<'PY' | tee "$out/bias.md"
 import sys
 import numpy as np
 import rll
-d, seeds = sys.argv[1], int(sys.argv[2])
+sys.path.insert(0, sys.argv[1])
+from seed_bias import over_seeds
+d, seeds = sys.argv[2], int(sys.argv[3])
 ref = rll.read_exr(f"{d}/reference.exr").astype(np.float64)
-w = 1.0 / (ref * ref + 0.01)  # relMSE's weight
 print(f"power, {seeds} seeds: per pixel the mean over seeds against the reference (bias^2) and "
       "the variance over seeds, relative as relMSE (means over pixels and channels)\n")
 print("| psf.width | relative bias^2 | relative variance | relMSE of one render |")
 print("|---|---|---|---|")
 for width in ("none", "3", "1.5", "0.75"):
-    imgs = np.stack([rll.read_exr(f"{d}/w{width}.s{s}.exr") for s in range(1, seeds + 1)])
-    imgs = imgs.astype(np.float64)
-    mean = imgs.mean(axis=0)
-    var = imgs.var(axis=0, ddof=1) if seeds > 1 else np.zeros_like(mean)
-    # The mean's own noise (var / seeds) is taken out of its squared distance to the reference.
-    bias2 = np.mean(w * ((mean - ref) ** 2 - var / seeds))
-    one = np.mean(w * (imgs - ref) ** 2)
-    print(f"| {width} | {bias2:.4g} | {np.mean(w * var):.4g} | {one:.4g} |")
+    r = over_seeds([rll.read_exr(f"{d}/w{width}.s{s}.exr") for s in range(1, seeds + 1)], ref)
+    print(f"| {width} | {r['bias2']:.4g} | {r['variance']:.4g} | {r['one']:.4g} |")
 PY
 fi
 

@@ -32,14 +32,16 @@ for ((v = 0; v < ${#variants[@]}; ++v)); do
       --seed "$s" --quiet -o "$out/v$v.s$s.exr"
   done
 done
-"${PYTHON:-/usr/bin/python3}" - "$out" "$seeds" "$scene" "$spp" "${variants[@]}" <<'PY' | tee "$out/bias.md"
+"${PYTHON:-/usr/bin/python3}" - "$(dirname "$0")" "$out" "$seeds" "$scene" "$spp" \
+  "${variants[@]}" <<'PY' | tee "$out/bias.md"
 import sys
 import numpy as np
 import rll
-d, seeds, scene, spp = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
-variants = sys.argv[5:]
+sys.path.insert(0, sys.argv[1])
+from seed_bias import over_seeds
+d, seeds, scene, spp = sys.argv[2], int(sys.argv[3]), sys.argv[4], sys.argv[5]
+variants = sys.argv[6:]
 ref = rll.read_exr(f"{d}/reference.exr").astype(np.float64)
-w = 1.0 / (ref * ref + 0.01)  # relMSE's weight
 print(f"{scene}, path, {spp} spp, {seeds} seeds: per pixel the mean over seeds against the "
       "reference (bias^2, the mean's own noise taken out) and the variance over seeds, relative "
       "as relMSE (means over pixels and channels); the image mean's relative bias with its "
@@ -48,14 +50,7 @@ print("| sampler | relative bias^2 | relative variance | relMSE of one render | 
       "image bias (%) |")
 print("|---|---|---|---|---|")
 for v, name in enumerate(variants):
-    imgs = np.stack([rll.read_exr(f"{d}/v{v}.s{s}.exr") for s in range(1, seeds + 1)])
-    imgs = imgs.astype(np.float64)
-    mean = imgs.mean(axis=0)
-    var = imgs.var(axis=0, ddof=1) if seeds > 1 else np.zeros_like(mean)
-    bias2 = np.mean(w * ((mean - ref) ** 2 - var / seeds))
-    one = np.mean(w * (imgs - ref) ** 2)
-    means = imgs.mean(axis=(1, 2, 3)) / ref.mean() - 1
-    se = means.std(ddof=1) / np.sqrt(seeds) if seeds > 1 else 0.0
-    print(f"| {name} | {bias2:.4g} | {np.mean(w * var):.4g} | {one:.4g} | "
-          f"{100 * means.mean():+.2f} +- {100 * se:.2f} |")
+    r = over_seeds([rll.read_exr(f"{d}/v{v}.s{s}.exr") for s in range(1, seeds + 1)], ref)
+    print(f"| {name} | {r['bias2']:.4g} | {r['variance']:.4g} | {r['one']:.4g} | "
+          f"{100 * r['image_bias']:+.2f} +- {100 * r['image_bias_se']:.2f} |")
 PY
