@@ -127,6 +127,29 @@ TEST(CliErrors, NeeCandidates) {
                       {"builtin:cornell-box", "--res", "8x8", "--spp", "1", "--set",
                        "nee.target=shadowed"},
                       {"nee.target", "unshadowed", "learnt"});
+  // Candidates from one cluster: a listed value, more than one candidate, a sampler that draws
+  // a cluster first, and a rule inside the cluster that does not depend on how it was chosen.
+  const std::vector<std::string> base = {"builtin:cornell-box", "--res", "8x8", "--spp", "1"};
+  auto with = [&](std::vector<std::string> more) {
+    std::vector<std::string> a = base;
+    a.insert(a.end(), more.begin(), more.end());
+    return a;
+  };
+  expect_render_error(dir, with({"--set", "nee.draw=clusters"}), {"nee.draw", "full", "cluster"});
+  expect_render_error(dir, with({"--sampler", "rll", "--set", "nee.draw=cluster"}),
+                      {"nee.draw", "nee.candidates"});
+  expect_render_error(
+      dir, with({"--sampler", "tree", "--set", "nee.draw=cluster", "--set", "nee.candidates=4"}),
+      {"nee.draw", "tree"});
+  expect_render_error(
+      dir,
+      with({"--sampler", "rll", "--set", "nee.draw=cluster", "--set", "nee.candidates=4", "--set",
+            "rll.defensive=tree", "--set", "rll.within=power"}),
+      {"nee.draw", "rll.defensive", "rll.within"});
+  CommandResult ok = run_rll({"render", "builtin:cornell-box", "--res", "8x8", "--spp", "2",
+                              "--sampler", "rll", "--set", "nee.draw=cluster", "--set",
+                              "nee.candidates=4", "--quiet", "-o", (dir / "c.exr").string()});
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
 }
 
 // rht's parameters are checked against their ranges, the error naming the key; rht draws several

@@ -34,6 +34,20 @@ RLL_HD inline SampledLight sample_light(const SamplerView& s, const LightContext
   return {};
 }
 
+// Whether the sampler draws a cluster first and can draw more lights from it
+// (sample_in_cluster): rll (and the oracle, which samples with rll's view).
+RLL_HD inline bool draws_clusters(const SamplerView& s) {
+  return s.kind == SamplerKind::Rll && rll_cluster_draws(*s.rll);
+}
+
+// Another light from the cluster that `first` (a draw of sample_light at ctx) came from, with
+// its full pmf: resampled NEE's candidates from one cluster (nee.draw=cluster). Only where
+// draws_clusters(s); nothing otherwise.
+RLL_HD inline SampledLight sample_in_cluster(const SamplerView& s, const LightContext& ctx,
+                                             const SampledLight& first, double u) {
+  return s.kind == SamplerKind::Rll ? rll_sample_in_cluster(*s.rll, ctx, first, u) : SampledLight{};
+}
+
 // The probability that sample_light(s, ctx, .) returns `light`.
 RLL_HD inline float light_pmf(const SamplerView& s, const LightContext& ctx, uint32_t light) {
   switch (s.kind) {

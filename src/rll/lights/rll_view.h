@@ -403,6 +403,39 @@ RLL_HD inline SampledLight rll_sample(const RllView& v, const LightContext& ctx,
   return s.pmf > 0 ? s : SampledLight{};
 }
 
+// Another light from the cluster of `first` (a draw of rll_sample at the same point, pmf > 0),
+// drawn from the same distribution over the cluster's lights that rll_sample draws from once
+// that cluster is chosen: resampled NEE's candidates from one cluster (nee.draw=cluster,
+// docs/nee.md), which pay the cell's table draw once. Its pmf is the full source pmf of the light,
+// the cluster's probability (from first's record) times the within-cluster probability, as
+// rll_sample forms it; the record is first's (the same cluster, probability and target). Exact
+// where that within-cluster distribution does not depend on how the cluster was chosen: every
+// setting but defensive=tree with a within rule other than the descent (rll_cluster_draws).
+RLL_HD inline SampledLight rll_sample_in_cluster(const RllView& v, const LightContext& ctx,
+                                                 const SampledLight& first, double u) {
+  using namespace detail;
+  const RllCut c = rll_cut(v, ctx.cell);
+  const ClusterDraw d = cluster_draw(first);
+  if (!(first.pmf > 0) || d.cluster >= c.size) return {};
+  const uint32_t k = d.cluster;
+  // A point without a cut and not cold-uniform draws like the tree: below the cluster's node, the
+  // rest of the tree's descent (the node lies on every path to the cluster's lights).
+  SampledLight w = !rll_has_cut(v, ctx.cell) && !v.cold_uniform
+                       ? sampled_light(tree_descend(v.tree, c.nodes[k], ctx.p, ctx.n, u))
+                       : rll_sample_within(v, ctx, c.nodes[k], rll_begin(c, k), c.ends[k], u);
+  if (!(w.pmf > 0)) return {};
+  w.pmf = d.cluster_pmf * w.pmf;
+  w.record = first.record;
+  return w.pmf > 0 ? w : SampledLight{};
+}
+
+// Whether rll_sample_in_cluster draws from the distribution rll_sample draws from given the
+// cluster: not where the defensive term is the tree's own descent and the cluster's lights are
+// drawn otherwise (a light of the cluster then comes from a mixture of two rules).
+RLL_HD inline bool rll_cluster_draws(const RllView& v) {
+  return !(v.defensive == Defensive::Tree && v.within != WithinCluster::Tree);
+}
+
 // The probability that rll_sample(v, ctx, .) returns `light`.
 RLL_HD inline float rll_pmf(const RllView& v, const LightContext& ctx, uint32_t light) {
   using namespace detail;

@@ -59,6 +59,7 @@ IntegratorSettings make_integrator_settings(const std::string& name, int max_dep
   s.nee_candidates = int(params.get_int_in("nee.candidates", 1, 1, kMaxNeeCandidates));
   s.nee_learnt_target =
       params.get_choice("nee.target", "unshadowed", {"unshadowed", "learnt"}) == "learnt";
+  s.nee_cluster = params.get_choice("nee.draw", "full", {"full", "cluster"}) == "cluster";
   // Read here by key, not by RllStudy's table (a sampler that is not rll must not take rll's
   // other study keys as read: make_light_sampler reads those), and only where given (so that
   // another sampler's command does not count rll.* keys as known).
@@ -85,6 +86,7 @@ PathConstants make_path_constants(const Scene& scene, const SceneView& view,
   c.rr_depth = settings.rr_depth;
   c.nee_candidates = settings.nee_candidates;
   c.nee_learnt_target = settings.nee_learnt_target;
+  c.nee_cluster = settings.nee_cluster;
   c.coated_weights = settings.coated_weights;
   c.psf = make_psf_constants(settings.psf, scene.bounds);
   c.restir = make_restir_constants(settings.restir);
@@ -97,6 +99,21 @@ void check_candidates(const IntegratorSettings& settings, const SamplerView& vie
   if (draws_several(view) && settings.nee_candidates != 1)
     fail("--set nee.candidates={}: sampler '{}' resamples its own candidates (leave it at 1)",
          settings.nee_candidates, name);
+  if (!settings.nee_cluster) return;
+  if (settings.nee_candidates < 2)
+    fail(
+        "--set nee.draw=cluster draws candidates 2..M from the first one's cluster: set "
+        "nee.candidates above 1");
+  if (view.kind == SamplerKind::Rll && !draws_clusters(view))
+    fail(
+        "--set nee.draw=cluster: with rll.defensive=tree a cluster's lights come from a mixture "
+        "of two rules unless rll.within=tree; use one of those, or nee.draw=full");
+  if (!draws_clusters(view))
+    fail(
+        "--set nee.draw=cluster: sampler '{}' does not draw a cluster first (rll, fermat and "
+        "oracle do); "
+        "use nee.draw=full",
+        name);
 }
 
 // The error budget's studies of the megakernel (rll.ideal_point, ideal_bsdf): rll's (and the

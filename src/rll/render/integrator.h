@@ -29,6 +29,8 @@ struct IntegratorSettings {
   int nee_candidates = 1;  // resampled next-event estimation's M (docs/nee.md)
   // nee.target=learnt: its target carries the sampler's learnt factor (nee_target)
   bool nee_learnt_target = false;
+  // nee.draw=cluster: candidates 2..M from the first one's cluster (docs/nee.md)
+  bool nee_cluster = false;
   // coated.weights: CoatedDiffuse's MIS weight in eval() (scene/bsdf.h); pbrt only to match
   // pbrt-v4's images (docs/materials.md)
   CoatedWeights coated_weights = CoatedWeights::Unbiased;
@@ -41,8 +43,8 @@ struct IntegratorSettings {
 };
 
 // Parses --integrator and the integrator's `--set` keys (path.strategy, path.rr_depth,
-// nee.candidates, nee.target, coated.*), and with `filter` (--filter: none or psf) the filter's
-// (psf.*, make_psf_settings); with `restir` (a restir sampler renders) ReSTIR's (restir.*,
+// nee.candidates, nee.target, nee.draw, coated.*), and with `filter` (--filter: none or psf) the
+// filter's (psf.*, make_psf_settings); with `restir` (a restir sampler renders) ReSTIR's (restir.*,
 // make_restir_settings), which are left unread otherwise.
 IntegratorSettings make_integrator_settings(const std::string& name, int max_depth,
                                             const Params& params,

@@ -38,24 +38,35 @@ RLL_HD inline void draw_nee(const PathConstants& c, const SamplerView& s, const 
 #endif
   const NeeChoice ch = resample_nee(
       c, ctx, bsdf, wo, stream, depth, [&](double u) { return sample_light(s, ctx, u); },
+      [&](const SampledLight& first, double u) { return sample_in_cluster(s, ctx, first, u); },
       [&](const SampledLight& l) { return nee_target(s, l); });
   if (!(ch.light.pmf > 0)) return;
   NeeDraw d;
   d.setup = ch.setup;
   d.light = ch.light;
-  // nee_finish_resampled's ratio (sum w / M) / w_kept, where a candidate was kept.
+  // Resampling's ratio (sum w / M) / w_kept, where a candidate was kept.
   if (ch.weight > 0) d.scale = (ch.weight_sum / float(c.nee_candidates)) / ch.weight;
   emit(d);
 }
 
 // One sample's contribution after its shadow ray (before the path throughput): nee_finish's
 // value, f Le G V m_L / (pmf x pdf of the point), times the draw's scale; the record is the
-// sample's with its pmf, for a learning sampler (record_nee).
+// sample's with its pmf, for a learning sampler (record_nee). With candidates from one cluster
+// (nee.draw=cluster) the record's values carry the scale too: estimate / P(l | cluster) times
+// it is resampling's estimate of the cluster's whole visible contribution, unbiased for any
+// target (the candidates are i.i.d. within the cluster), which is what the cluster's reward
+// estimates (docs/rll.md); unoccluded and max_rgb alike, so that their ratios to it stay the
+// sample's own.
 RLL_HD inline NeeResult finish_nee_draw(const PathConstants& c, const NeeDraw& d, bool occluded,
                                         const Bsdf& bsdf, const Vec3& wo, const Rgb& beta) {
   NeeResult r =
       nee_finish(d.setup, occluded, bsdf, wo, beta, d.light.pmf, c.strategy == LightStrategy::Mis);
   if (!is_black(r.value)) r.value *= d.scale;
+  if (c.nee_cluster) {
+    r.record.estimate *= d.scale;
+    r.record.unoccluded *= d.scale;
+    r.record.max_rgb *= d.scale;
+  }
   return r;
 }
 

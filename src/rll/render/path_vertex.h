@@ -83,6 +83,8 @@ struct PathConstants {
   int rr_depth = 3;
   int nee_candidates = 1;  // resampled next-event estimation (docs/nee.md): 1 = one light sample
   bool nee_learnt_target = false;  // its target times the sampler's factor (nee_target)
+  // nee.draw=cluster: candidates 1..M-1 come from candidate 0's cluster (sample_in_cluster)
+  bool nee_cluster = false;
   CoatedWeights coated_weights = CoatedWeights::Unbiased;  // coated.weights (scene/bsdf.h)
   PsfConstants psf;        // path-space filtering (render/psf.h); off unless --filter psf
   RestirConstants restir;  // ReSTIR DI (render/restir.h); off unless a restir sampler renders
@@ -314,17 +316,35 @@ struct NeeChoice {
 // is not evaluated (it cancels): one light sample, as before resampling. With
 // c.nee_learnt_target each weight is multiplied by `target(candidate)`, the sampler's learnt
 // factor of the candidate (nee_target, lights/light_dispatch.h: the target p_hat times that
-// factor; nee_finish_resampled's ratio uses the same weights).
-template <class SampleLight, class Target>
+// factor; finish_nee_draw's ratio uses the same weights). With c.nee_cluster, candidates
+// 1..M-1 are drawn by `in_cluster(first, u)` from candidate 0's cluster (sample_in_cluster):
+// given the cluster, all M are i.i.d. from the sampler's distribution over its lights, and each
+// weight's pmf is the full one (the cluster's probability times the light's within it), so the
+// ratio (sum w / M) / w_kept is that of resampling within the cluster (docs/nee.md).
+// The number u in [0, 1) moved into stratum i of n: [i / n, (i + 1) / n).
+RLL_HD inline double stratum(int i, int n, double u) {
+  return std::min((double(i) + u) / double(n), 0x1.fffffffffffffp-1);
+}
+
+template <class SampleLight, class InCluster, class Target>
 RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext& ctx,
                                      const Bsdf& bsdf, const Vec3& wo, SampleStream& stream,
-                                     int depth, const SampleLight& sample, const Target& target) {
+                                     int depth, const SampleLight& sample,
+                                     const InCluster& in_cluster, const Target& target) {
   NeeChoice ch;
   const bool mis = c.strategy == LightStrategy::Mis;
+  SampledLight first;
   for (int i = 0; i < c.nee_candidates; ++i) {
     const CandidateNumbers u = candidate_numbers(stream, depth, i);
-    const SampledLight sl = sample(u.light.u_light);
-    if (!(sl.pmf > 0)) continue;
+    const SampledLight sl =
+        c.nee_cluster && i > 0
+            ? in_cluster(first, stratum(i - 1, c.nee_candidates - 1, u.light.u_light))
+            : sample(u.light.u_light);
+    if (i == 0) first = sl;
+    if (!(sl.pmf > 0)) {
+      if (c.nee_cluster && i == 0) break;  // no cluster to draw the others from
+      continue;
+    }
     const NeeSetup n = nee_setup(c, ctx, bsdf, wo, sl.light, u.light.u_pos);
     const float w = c.nee_candidates == 1 ? (n.traces ? 1.0f : 0.0f)
                     : c.nee_learnt_target ? resample_weight(n, bsdf, wo, sl.pmf, mis) * target(sl)
@@ -355,19 +375,6 @@ struct NeeDraw {
   SampledLight light;
   float scale = 1;
 };
-
-// The kept candidate after the shadow ray: nee_finish's value (its contribution over its source
-// pmf, MIS-weighted) times the unbiased contribution weight's ratio (sum w / M) / w_kept; the
-// record is the kept sample's with its source pmf (docs/rll.md).
-RLL_HD inline NeeResult nee_finish_resampled(const PathConstants& c, const NeeChoice& ch,
-                                             bool occluded, const Bsdf& bsdf, const Vec3& wo,
-                                             const Rgb& beta) {
-  NeeResult r = nee_finish(ch.setup, occluded, bsdf, wo, beta, ch.light.pmf,
-                           c.strategy == LightStrategy::Mis);
-  if (ch.weight > 0 && !is_black(r.value))
-    r.value *= (ch.weight_sum / float(c.nee_candidates)) / ch.weight;
-  return r;
-}
 
 // The last vertex's BSDF ray only finds emission, which light sampling alone leaves out (except
 // through Dirac lobes, which light sampling never sees): false where the path ends before it.
