@@ -25,6 +25,16 @@ class Accel;
 class BinaryWriter;
 class BinaryReader;
 class ResidentLearner;
+class RllLightSampler;
+class OracleLightSampler;
+
+// The learnt cells a diagnostic reads (--aov, compare's cell chart, python's State), as the
+// sampler that holds them says: rll's and fermat's own, the oracle's frozen rll's. `oracle` is set
+// for the oracle, whose `rewards` are the shadow rays of its estimates (it learns from none).
+struct LearntCells {
+  const RllLightSampler* rll = nullptr;
+  const OracleLightSampler* oracle = nullptr;
+};
 
 class LightSampler {
  public:
@@ -57,11 +67,15 @@ class LightSampler {
   // fermat while they learn; the GPU renderer makes its copy from it); null for a sampler that
   // learns nothing or whose tables a device renderer uploads for each render.
   ResidentLearner* resident_learner() const { return m_resident; }
+  // Its learnt cells (above); both null for a sampler without cells. Not a virtual method: the
+  // sampler sets them (set_learnt_cells) when it makes or remakes its cells.
+  const LearntCells& learnt_cells() const { return m_cells; }
 
  protected:
   explicit LightSampler(std::string name, bool has_state = false)
       : m_name(std::move(name)), m_has_state(has_state) {}
   void set_resident_learner(ResidentLearner* r) { m_resident = r; }
+  void set_learnt_cells(const LearntCells& c) { m_cells = c; }
 
   // The host kind of a sampler with no device version: set_host_calls(*this) once (in the
   // constructor) takes T's const prepare(ctx, float), sample(ctx, double), pmf(ctx, light) and
@@ -82,6 +96,7 @@ class LightSampler {
   std::string m_name;
   bool m_has_state = false;
   ResidentLearner* m_resident = nullptr;
+  LearntCells m_cells;
   HostSampler m_host;
 };
 
