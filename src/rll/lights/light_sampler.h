@@ -78,8 +78,8 @@ class LightSampler {
   void set_learnt_cells(const LearntCells& c) { m_cells = c; }
 
   // The host kind of a sampler with no device version: set_host_calls(*this) once (in the
-  // constructor) takes T's const prepare(ctx, float), sample(ctx, double), pmf(ctx, light) and
-  // its record(ctx, sampled, r) if T has them (T's own, private ones too where T befriends
+  // constructor) takes T's prepare(ctx, float), const sample(ctx, double), const pmf(ctx, light)
+  // and its record(ctx, sampled, r) if T has them (T's own, private ones too where T befriends
   // LightSampler); host_view() is then its view.
   template <typename T>
   void set_host_calls(const T& self);
@@ -103,9 +103,13 @@ class LightSampler {
 template <typename T>
 void LightSampler::set_host_calls(const T& self) {
   m_host.self = &self;
+  // prepare may change the sampler too (ltc makes a point's entry there, thread-safely): then it
+  // is called, as record is, on the object the view holds as const.
   m_host.prepare = [](const void* s, LightContext& ctx, float u) {
     if constexpr (requires(const T& t) { t.prepare(ctx, u); })
       static_cast<const T*>(s)->prepare(ctx, u);
+    else if constexpr (requires(T & t) { t.prepare(ctx, u); })
+      const_cast<T*>(static_cast<const T*>(s))->prepare(ctx, u);
   };
   m_host.sample = [](const void* s, const LightContext& ctx, double u) {
     return static_cast<const T*>(s)->sample(ctx, u);
