@@ -15,6 +15,7 @@
 #include "rll/accel/accel.h"
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
+#include "rll/cuda/wavefront.h"
 #include "rll/lights/light_dispatch.h"
 #include "rll/lights/oracle_sampler.h"
 #include "rll/lights/rll_sampler.h"
@@ -261,6 +262,15 @@ TEST(SamplerView, EverySamplerHasAView) {
     EXPECT_NE(make_light_sampler(name, f.scene, *f.tree, Params{})->sampler_view().kind,
               SamplerKind::Host)
         << name;
+  // Every sampler with a device view renders on the GPU, rht too (its reservoirs in the path
+  // slots' memory); ltc, the host kind, is refused by name.
+  for (const char* name : {"uniform", "power", "tree", "rll", "fermat", "rht"})
+    EXPECT_NO_THROW(
+        cuda::require_device_version(*make_light_sampler(name, f.scene, *f.tree, Params{}), name))
+        << name;
+  EXPECT_THROW(
+      cuda::require_device_version(*make_light_sampler("ltc", f.scene, *f.tree, Params{}), "ltc"),
+      Error);
 }
 
 // The learnt cells the diagnostics read are what the sampler says it holds (no cast to its class):
