@@ -121,8 +121,8 @@ void add_wavefront_option(CLI::App* cmd, SessionSettings& s) {
 void add_device_options(CLI::App* cmd, SessionSettings& s) {
   cmd->add_option("--device", s.device,
                   "cpu, or cuda: the wavefront renderer on the GPU (an NVIDIA GPU of compute "
-                  "capability 9.0 or newer; rays traced by rll's own BVH; samplers uniform, "
-                  "power, tree, rll and fermat). Without a GPU, cuda exits with an error")
+                  "capability 9.0 or newer; rays traced by rll's own BVH; every sampler but "
+                  "ltc). Without a GPU, cuda exits with an error")
       ->capture_default_str()
       ->check(CLI::IsMember({"cpu", "cuda"}));
   cmd->add_option("--tracer", s.tracer,

@@ -399,10 +399,8 @@ void run(const CompareOptions& o) {
       runs.push_back(run_once(o, session, name, r, ref, frame_references, image,
                               r == 0 ? &sampler : nullptr, r == 0 ? &aovs : nullptr));
       if (!aovs.empty()) first_aovs.emplace(name, std::move(aovs));
-      const auto* as_oracle = dynamic_cast<const OracleLightSampler*>(sampler.get());
-      if (as_oracle) oracle = as_oracle;
-      if (as_oracle || dynamic_cast<const RllLightSampler*>(sampler.get()))
-        charted.emplace(name, std::move(sampler));
+      if (sampler && sampler->learnt_cells().oracle) oracle = sampler->learnt_cells().oracle;
+      if (sampler && sampler->learnt_cells().rll) charted.emplace(name, std::move(sampler));
       write_image(out / image_name(name, r), image);
       if (r == 0) first_images.emplace(name, std::move(image));
     }
@@ -508,9 +506,11 @@ void run(const CompareOptions& o) {
   for (const auto& name : samplers) {
     const auto it = charted.find(name);
     if (it == charted.end()) continue;
-    if (auto* rll = dynamic_cast<const RllLightSampler*>(it->second.get()))
+    // The oracle's cells are charted as its bars beside a learner's, not as a chart of their own.
+    const LearntCells& cells = it->second->learnt_cells();
+    if (cells.rll && !cells.oracle)
       report.cell_charts.push_back(
-          cell_chart(scene, session.accel(), session.integrator(), *rll, name, oracle));
+          cell_chart(scene, session.accel(), session.integrator(), *cells.rll, name, oracle));
   }
   write_file_atomic(out / "report.html", report_html(report));
 

@@ -1,6 +1,6 @@
 // The wavefront renderer on the GPU (cuda/wavefront.h) against the CPU (issue 31): the same image
-// within noise region by region as the CPU wavefront traced by the same BVH, for power, tree and
-// rll, direct and path, on the paper's scenes, with the bound's power shown on an image 5% too
+// within noise region by region as the CPU wavefront traced by the same BVH, for power, tree, rll
+// and rht, direct and path, on the paper's scenes, with the bound's power shown on an image 5% too
 // bright or dark; the same image for the same seed twice; rll's cell table learnt on the GPU
 // passes the light-sampler checks; a sampler without a device version is refused by name.
 #include <gtest/gtest.h>
@@ -60,7 +60,8 @@ TEST(GpuWavefront, EqualsTheCpuWithinNoiseByRegion) {
     const Accel accel(scene.mesh);
     cuda::GpuRenderer gpu(scene);
     for (const IntegratorType type : {IntegratorType::Direct, IntegratorType::Path}) {
-      for (const char* name : {"power", "tree", "rll"}) {
+      // rht: its reservoirs in the path slots' memory (render/rht_nee.h), as on the CPU wavefront.
+      for (const char* name : {"power", "tree", "rll", "rht"}) {
         SCOPED_TRACE(c.scene + " " + integrator_name(type) + " " + name);
         const int spp = type == IntegratorType::Direct ? c.spp_direct : c.spp_path;
         auto on_cpu = make_light_sampler(name, scene, tree, Params{}, &accel);

@@ -7,12 +7,17 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <filesystem>
+#include <fstream>
+#include <regex>
 #include <type_traits>
 
 #include "rll/accel/accel.h"
 #include "rll/core/params.h"
 #include "rll/core/rng.h"
+#include "rll/cuda/wavefront.h"
 #include "rll/lights/light_dispatch.h"
+#include "rll/lights/oracle_sampler.h"
 #include "rll/lights/rll_sampler.h"
 #include "rll/lights/simple_samplers.h"
 #include "rll/lighttree/light_tree.h"
@@ -257,6 +262,73 @@ TEST(SamplerView, EverySamplerHasAView) {
     EXPECT_NE(make_light_sampler(name, f.scene, *f.tree, Params{})->sampler_view().kind,
               SamplerKind::Host)
         << name;
+  // Every sampler with a device view renders on the GPU, rht too (its reservoirs in the path
+  // slots' memory); ltc, the host kind, is refused by name.
+  for (const char* name : {"uniform", "power", "tree", "rll", "fermat", "rht"})
+    EXPECT_NO_THROW(
+        cuda::require_device_version(*make_light_sampler(name, f.scene, *f.tree, Params{}), name))
+        << name;
+  EXPECT_THROW(
+      cuda::require_device_version(*make_light_sampler("ltc", f.scene, *f.tree, Params{}), "ltc"),
+      Error);
+}
+
+// The learnt cells the diagnostics read are what the sampler says it holds (no cast to its class):
+// rll's and fermat's own, the oracle's frozen rll's with the oracle beside it, none elsewhere.
+TEST(SamplerView, LearntCellsAreTheSamplersOwn) {
+  Fixture& f = fixture("cornell-boxes-room");
+  for (const char* name : {"uniform", "power", "tree", "ltc", "rht"}) {
+    const auto s = make_light_sampler(name, f.scene, *f.tree, Params{});
+    EXPECT_EQ(s->learnt_cells().rll, nullptr) << name;
+    EXPECT_EQ(s->learnt_cells().oracle, nullptr) << name;
+  }
+  for (const char* name : {"rll", "fermat"}) {
+    const auto s = make_light_sampler(name, f.scene, *f.tree, Params{});
+    EXPECT_EQ(static_cast<const LightSampler*>(s->learnt_cells().rll), s.get()) << name;
+    EXPECT_EQ(s->learnt_cells().oracle, nullptr) << name;
+  }
+  Params fast = Params::parse({"oracle.discovery_spp=1", "oracle.points=1", "oracle.rays=1",
+                               "oracle.refine=0", "oracle.bounces=0"});
+  const auto o = make_light_sampler("oracle", f.scene, *f.tree, fast, f.accel.get());
+  ASSERT_NE(o->learnt_cells().oracle, nullptr);
+  EXPECT_EQ(static_cast<const LightSampler*>(o->learnt_cells().oracle), o.get());
+  EXPECT_EQ(o->learnt_cells().rll, &o->learnt_cells().oracle->rll());
+  // Remade with the lights, the knowledge is the new rll's.
+  o->lights_changed(f.scene);
+  EXPECT_EQ(o->learnt_cells().rll, &o->learnt_cells().oracle->rll());
+}
+
+// Outside the factory (lights/light_sampler.cpp) nothing asks a sampler its class: no
+// dynamic_cast to a sampler in the library, the command-line tool or the Python module (tests
+// may); and the class keeps the host's lifecycle only, at most 7 virtual methods with the
+// destructor.
+TEST(SamplerView, ContractIsNarrowAndUncast) {
+  namespace fs = std::filesystem;
+  const fs::path root = RLL_SOURCE_DIR;
+  const std::regex cast(R"(dynamic_cast<[^>]*LightSampler\b)");
+  std::vector<std::string> found;
+  for (const char* dir : {"src", "apps", "python"})
+    for (const auto& e : fs::recursive_directory_iterator(root / dir)) {
+      const std::string ext = e.path().extension().string();
+      if (!e.is_regular_file() || (ext != ".cpp" && ext != ".h" && ext != ".cu")) continue;
+      if (e.path().filename() == "light_sampler.cpp") continue;
+      std::ifstream in(e.path());
+      std::string line;
+      for (int n = 1; std::getline(in, line); ++n)
+        if (std::regex_search(line, cast))
+          found.push_back(fs::relative(e.path(), root).string() + ":" + std::to_string(n));
+    }
+  EXPECT_TRUE(found.empty()) << "a dynamic_cast to a sampler at "
+                             << ::testing::PrintToString(found);
+
+  std::ifstream in(root / "src/rll/lights/light_sampler.h");
+  ASSERT_TRUE(in) << "light_sampler.h";
+  std::string line;
+  int virtuals = 0;
+  while (std::getline(in, line))
+    if (std::regex_search(line, std::regex(R"(^\s*virtual\b)"))) ++virtuals;
+  EXPECT_GE(virtuals, 1);
+  EXPECT_LE(virtuals, 7) << "LightSampler keeps the host's lifecycle only";
 }
 
 // The power table's sample is the index whose interval of the CDF holds u, for a CDF summed here

@@ -419,7 +419,7 @@ RenderProgress GpuRenderer::render(
   backend.begin(wavefront.times);
   const size_t budget = device_slot_budget();
   const size_t slots = render_path_slots(wavefront, film, settings, budget, kMaxPathSlots, draws,
-                                         integrator.restir.on);
+                                         integrator.restir.on, draws_several(sampler_view()));
   WavefrontDriver<CudaWavefrontBackend, BvhTracer> driver(
       backend, k, slots, m.psf_cells(integrator, pixels), settings.follows_frame,
       m.restir_history(integrator, pixels, wavefront.restir_spec));

@@ -23,14 +23,13 @@
 namespace rll::cuda {
 
 // Throws rll::Error naming `label` (the sampler as the user gave it) unless the sampler has a
-// device version (sampler_view() not the host kind: ltc has none; rht's draw is left out of the
-// device build, render/nee_draw.h).
+// device version (sampler_view() not the host kind: ltc has none).
 inline void require_device_version(const LightSampler& sampler, const std::string& label) {
   const SamplerKind kind = sampler.sampler_view().kind;
-  if (kind == SamplerKind::None || kind == SamplerKind::Host || kind == SamplerKind::Rht)
+  if (kind == SamplerKind::None || kind == SamplerKind::Host)
     fail(
         "sampler '{}' has no device version: --device cuda renders with uniform, power, tree, "
-        "rll, fermat and oracle (use --device cpu for it)",
+        "rll, fermat, rht and oracle (use --device cpu for it)",
         label);
 }
 

@@ -453,7 +453,7 @@ RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell,
       v.count[b + k] = 0;
     }
     // The next pass's unit: the largest learnt sqrt(M2).
-    if (largest > 0 && std::isfinite(largest)) v.inv_unit[cell] = 1 / largest;
+    next_unit(v.inv_unit[cell], largest);
     // Split-collapse on the new values: split by the cluster's share of the cell's variance
     // (the standard deviation of its reward) under target=moment, by value (the paper's Q)
     // under target=mean. (The prior is unchanged: folding touches no node or weight.)

@@ -20,12 +20,10 @@
 
 namespace rll {
 
-
 // What sampling from a CutStore and recording rewards read and write (DESIGN 6): per cell, the
 // cut (clusters' nodes and light ranges, m of them at most) and its baked CDF, the shared
 // initial cut, the anchor, the unit of the sums, and the exact sums and counts of this pass.
 struct CutStoreView {
-  static constexpr double kMaxRootOfSquare = 0x1p18;  // squares saturate at 2^36 too
   uint32_t m = 0;             // clusters per cell at most: the stride of the per-cluster arrays
   View<const uint32_t> size;  // K per cell; 0: no cut yet
   View<const uint32_t> node, end;
@@ -45,12 +43,7 @@ struct CutStoreView {
 // Adds one reward to cluster k of `cell` (see CutStore::record).
 RLL_HD inline void cut_record(const CutStoreView& v, uint32_t cell, uint32_t k, float reward) {
   const size_t i = size_t(cell) * v.m + k;
-  const double x = double(reward) * v.inv_unit[cell];
-  if (x > 0) {  // (a zero reward, an occluded sample, only counts)
-    v.sum[i].add(x);
-    const double c = std::min(x, double(CutStoreView::kMaxRootOfSquare));
-    v.sq[i].add(c * c);
-  }
+  add_reward(v.sum[i], v.sq[i], double(reward) * v.inv_unit[cell]);
   atomic_add(&v.count[i], 1u);
 }
 

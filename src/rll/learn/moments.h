@@ -21,6 +21,8 @@ namespace rll {
 // values or 2^31 ordinary ones fit in a pass. Resolution and range together span 2^76 (1e23).
 struct ExactSum {
   static constexpr double kMax = 0x1p36;
+  // A square summed saturates with the sum: the root of kMax.
+  static constexpr double kMaxRoot = 0x1p18;
   // Signed 64-bit words in two's complement, added with core/device.h's atomic_add (DESIGN 6).
   uint64_t hi = 0, lo = 0;
   RLL_HD void add(double x) {  // x: the value in units of scale, >= 0
@@ -34,6 +36,23 @@ struct ExactSum {
   }
   RLL_HD void reset() { hi = lo = 0; }  // between passes
 };
+
+// Adds a reward x (in the unit of the sums) to a cluster's exact sums of rewards and of their
+// squares, and returns the square it added (0 for x <= 0: an occluded sample only counts), for a
+// learner that sums part of the squares again (ltc, by child).
+RLL_HD inline double add_reward(ExactSum& sum, ExactSum& sq, double x) {
+  if (!(x > 0)) return 0;
+  sum.add(x);
+  const double c = std::min(x, double(ExactSum::kMaxRoot));
+  sq.add(c * c);
+  return c * c;
+}
+
+// The unit of a cell's sums for the next pass: its largest learnt sqrt(M2) where it has one
+// (`largest`), else the unit it had.
+RLL_HD inline void next_unit(double& inv_unit, double largest) {
+  if (largest > 0 && std::isfinite(largest)) inv_unit = 1 / largest;
+}
 
 // A pass's rewards of a cluster, n of them with absolute sum `sum` and sum of squares `sq`: their
 // mean and second moment (E[r^2] >= E[r]^2 also where squares fell below the sums' resolution).

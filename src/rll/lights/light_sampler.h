@@ -25,6 +25,16 @@ class Accel;
 class BinaryWriter;
 class BinaryReader;
 class ResidentLearner;
+class RllLightSampler;
+class OracleLightSampler;
+
+// The learnt cells a diagnostic reads (--aov, compare's cell chart, python's State), as the
+// sampler that holds them says: rll's and fermat's own, the oracle's frozen rll's. `oracle` is set
+// for the oracle, whose `rewards` are the shadow rays of its estimates (it learns from none).
+struct LearntCells {
+  const RllLightSampler* rll = nullptr;
+  const OracleLightSampler* oracle = nullptr;
+};
 
 class LightSampler {
  public:
@@ -57,15 +67,19 @@ class LightSampler {
   // fermat while they learn; the GPU renderer makes its copy from it); null for a sampler that
   // learns nothing or whose tables a device renderer uploads for each render.
   ResidentLearner* resident_learner() const { return m_resident; }
+  // Its learnt cells (above); both null for a sampler without cells. Not a virtual method: the
+  // sampler sets them (set_learnt_cells) when it makes or remakes its cells.
+  const LearntCells& learnt_cells() const { return m_cells; }
 
  protected:
   explicit LightSampler(std::string name, bool has_state = false)
       : m_name(std::move(name)), m_has_state(has_state) {}
   void set_resident_learner(ResidentLearner* r) { m_resident = r; }
+  void set_learnt_cells(const LearntCells& c) { m_cells = c; }
 
   // The host kind of a sampler with no device version: set_host_calls(*this) once (in the
-  // constructor) takes T's const prepare(ctx, float), sample(ctx, double), pmf(ctx, light) and
-  // its record(ctx, sampled, r) if T has them (T's own, private ones too where T befriends
+  // constructor) takes T's prepare(ctx, float), const sample(ctx, double), const pmf(ctx, light)
+  // and its record(ctx, sampled, r) if T has them (T's own, private ones too where T befriends
   // LightSampler); host_view() is then its view.
   template <typename T>
   void set_host_calls(const T& self);
@@ -82,15 +96,20 @@ class LightSampler {
   std::string m_name;
   bool m_has_state = false;
   ResidentLearner* m_resident = nullptr;
+  LearntCells m_cells;
   HostSampler m_host;
 };
 
 template <typename T>
 void LightSampler::set_host_calls(const T& self) {
   m_host.self = &self;
+  // prepare may change the sampler too (ltc makes a point's entry there, thread-safely): then it
+  // is called, as record is, on the object the view holds as const.
   m_host.prepare = [](const void* s, LightContext& ctx, float u) {
     if constexpr (requires(const T& t) { t.prepare(ctx, u); })
       static_cast<const T*>(s)->prepare(ctx, u);
+    else if constexpr (requires(T & t) { t.prepare(ctx, u); })
+      const_cast<T*>(static_cast<const T*>(s))->prepare(ctx, u);
   };
   m_host.sample = [](const void* s, const LightContext& ctx, double u) {
     return static_cast<const T*>(s)->sample(ctx, u);

@@ -15,6 +15,7 @@
 #include "rll/core/search.h"
 #include "rll/learn/moments.h"
 #include "rll/lights/cluster_draw.h"
+#include "rll/lights/rll_view.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/scene/scene.h"
 
@@ -158,8 +159,6 @@ std::vector<uint32_t> power_cut(const LightTree& tree, int size) {
 // --- The sampler --------------------------------------------------------------------------------
 
 namespace {
-constexpr double kMaxRootOfSquare = 0x1p18;  // r^2 saturates where ExactSum does
-
 // The learning rate of the t-th visit of an entry (t >= 1).
 inline double rate(double t) {
   return 1.0 / (4.0 * std::pow(std::max(t, 1.0), 0.857));
@@ -288,33 +287,32 @@ constexpr uint32_t kClaimed = 0xffffffffu,
                    kFull = 0xfffffffeu;  // m_slot's states besides entry + 1
 }  // namespace
 
-void LtcLightSampler::prepare(LightContext& ctx, float u) const {
+void LtcLightSampler::prepare(LightContext& ctx, float u) {
   (void)u;
   ctx.cell = kNoCell;
   if (length_sq(ctx.n) == 0) return;
   const uint32_t key = entry_key(ctx);
-  auto& self = const_cast<LtcLightSampler&>(*this);
   uint32_t v = m_slot[key].load(std::memory_order_acquire);
   if (v == 0) {
     // Create the entry: claim the key's slot, then take the next free entry, so that each new
     // key of a pass takes exactly one while they last. The accumulators every entry records
     // into are already there, so a new entry needs nothing else until end_pass.
     uint32_t expected = 0;
-    if (self.m_slot[key].compare_exchange_strong(expected, kClaimed, std::memory_order_acq_rel,
-                                                 std::memory_order_acquire)) {
+    if (m_slot[key].compare_exchange_strong(expected, kClaimed, std::memory_order_acq_rel,
+                                            std::memory_order_acquire)) {
       const uint32_t i = m_next_free.load(std::memory_order_relaxed) < m_free.size()
-                             ? self.m_next_free.fetch_add(1, std::memory_order_relaxed)
+                             ? m_next_free.fetch_add(1, std::memory_order_relaxed)
                              : uint32_t(m_free.size());
       if (i < m_free.size()) {
         const uint32_t e = m_free[i];
-        self.m_key[e] = key;
-        self.m_born[e] = m_pass;
+        m_key[e] = key;
+        m_born[e] = m_pass;
         v = e + 1;
       } else {
-        self.m_failed.fetch_add(1, std::memory_order_relaxed);
+        m_failed.fetch_add(1, std::memory_order_relaxed);
         v = kFull;
       }
-      self.m_slot[key].store(v, std::memory_order_release);
+      m_slot[key].store(v, std::memory_order_release);
     } else {
       v = expected;
     }
@@ -325,21 +323,20 @@ void LtcLightSampler::prepare(LightContext& ctx, float u) const {
   }
   // New keys count their visits: if they outnumber the free entries, the most visited get them.
   if (v == kFull) {
-    self.m_request[key].fetch_add(1, std::memory_order_relaxed);
+    m_request[key].fetch_add(1, std::memory_order_relaxed);
     return;  // table full: the plain tree for this point
   }
-  if (m_born[v - 1] == m_pass) self.m_request[key].fetch_add(1, std::memory_order_relaxed);
+  if (m_born[v - 1] == m_pass) m_request[key].fetch_add(1, std::memory_order_relaxed);
   ctx.cell = v - 1;
 }
 
-float LtcLightSampler::node_probability(uint32_t entry, uint32_t k) const {
-  const float* cdf = &m_cdf[size_t(entry) * m_m];
-  return float(double(cdf[k]) - (k > 0 ? double(cdf[k - 1]) : 0.0));
+detail::RllCut LtcLightSampler::cut(uint32_t entry) const {
+  const size_t base = size_t(entry) * m_m;
+  return {m_size[entry], &m_end[base], &m_node[base], &m_cdf[base]};
 }
 
-uint32_t LtcLightSampler::find_node(uint32_t entry, uint32_t light) const {
-  const uint32_t* ends = &m_end[size_t(entry) * m_m];
-  return upper_bound_index(ends, 0u, m_size[entry], light);
+float LtcLightSampler::node_probability(uint32_t entry, uint32_t k) const {
+  return detail::rll_cdf_width(cut(entry), k);
 }
 
 SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
@@ -355,31 +352,26 @@ SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
     SampledLight s = sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &split));
     if (!(s.pmf > 0)) return {};
     ClusterDraw d;
-    d.cluster =
-        upper_bound_index(m_initial_ends.data(), 0u, uint32_t(m_initial_ends.size()), s.light);
+    d.cluster = detail::rll_cluster_of(
+        {uint32_t(m_initial.size()), m_initial_ends.data(), m_initial.data(), nullptr}, s.light);
     const float within = split.cluster == d.cluster ? split.below : 0.0f;
     d.cluster_pmf = within > 0 ? s.pmf / within : 0.0f;
     set_cluster_draw(s, d);
     return s;
   }
-  // A node from the entry's CDF, compared and differenced in double: the interval of u that
-  // selects node k is [cdf[k-1], cdf[k]), and its width is what node_probability reports.
-  const size_t base = size_t(e) * m_m;
-  const float* cdf = &m_cdf[base];
-  const uint32_t K = m_size[e];
-  uint32_t k = upper_bound_index(cdf, 0u, K, u);  // each entry compared as a double
-  k = std::min(k, K - 1);
-  while (k > 0 && cdf[k] == cdf[k - 1]) --k;
-  const double lo = k > 0 ? double(cdf[k - 1]) : 0.0, q = double(cdf[k]) - lo;
-  if (!(q > 0)) return {};
-  const double uw = std::clamp((u - lo) / q, 0.0, 0x1.fffffffffffffp-1);
-  const TreeSample w = tree_descend(m_tree, m_node[base + k], ctx.p, ctx.n, uw);
+  // A node from the entry's CDF as rll's table draws a cluster (rll_view.h): the interval of u
+  // that selects node k is [cdf[k-1], cdf[k]) in double, its width what node_probability reports.
+  const detail::RllCut c = cut(e);
+  uint32_t k = 0;
+  double uw = 0;
+  if (!detail::rll_table_draw(c, u, &k, &uw)) return {};
+  const TreeSample w = tree_descend(m_tree, c.nodes[k], ctx.p, ctx.n, uw);
   if (!(w.pmf > 0)) return {};
   SampledLight s;
   s.light = w.light;
   ClusterDraw d;
   d.cluster = k;
-  d.cluster_pmf = float(q);
+  d.cluster_pmf = detail::rll_cdf_width(c, k);
   s.pmf = d.cluster_pmf * w.pmf;
   set_cluster_draw(s, d);
   return s.pmf > 0 ? s : SampledLight{};
@@ -388,10 +380,11 @@ SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
 float LtcLightSampler::pmf(const LightContext& ctx, uint32_t light) const {
   const uint32_t e = ctx.cell;
   if (!has_cut(e)) return tree_descend_pmf(m_tree, LightTree::kRoot, light, ctx.p, ctx.n);
-  const uint32_t k = find_node(e, light);
-  if (k >= m_size[e]) return 0;
-  const float within = tree_descend_pmf(m_tree, m_node[size_t(e) * m_m + k], light, ctx.p, ctx.n);
-  return node_probability(e, k) * within;
+  const detail::RllCut c = cut(e);
+  const uint32_t k = detail::rll_cluster_of(c, light);
+  if (k >= c.size) return 0;
+  const float within = tree_descend_pmf(m_tree, c.nodes[k], light, ctx.p, ctx.n);
+  return detail::rll_cdf_width(c, k) * within;
 }
 
 void LtcLightSampler::record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r) {
@@ -402,14 +395,11 @@ void LtcLightSampler::record(const LightContext& ctx, const SampledLight& s, con
   if (!(F >= 0) || !std::isfinite(F)) return;
   // r = F / P(l | node): the node's own estimator, whose second moment the node learns.
   const double within = double(s.pmf) / double(d.cluster_pmf);
-  const double x = double(F) / within * m_inv_unit[e];
   const size_t i = size_t(e) * m_m + d.cluster;
-  m_sum[i].add(x);
-  const double xc = std::min(x, kMaxRootOfSquare);
-  m_sum2[i].add(xc * xc);
+  const double square = add_reward(m_sum[i], m_sum2[i], double(F) / within * m_inv_unit[e]);
   // The first pass records into the global cut, whose nodes' children are known from the tree.
   const uint32_t mid = has_cut(e) ? m_mid[i] : m_initial_mid[d.cluster];
-  if (s.light < mid) m_sum2_0[i].add(xc * xc);
+  if (s.light < mid) m_sum2_0[i].add(square);
   m_count[i].fetch_add(1, std::memory_order_relaxed);
 }
 
@@ -417,7 +407,14 @@ float LtcLightSampler::bound(uint32_t entry, uint32_t node) const {
   return m_tree.importance(node, m_clusters.centre(m_key[entry] / (m_s.bins * m_s.bins)), Vec3(0));
 }
 
-void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
+void LtcLightSampler::clear_pass(size_t slot) {
+  m_sum[slot].reset();
+  m_sum2[slot].reset();
+  m_sum2_0[slot].reset();
+  m_count[slot].store(0, std::memory_order_relaxed);
+}
+
+void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, uint32_t& splits) {
   const size_t base = size_t(e) * m_m;
   const bool fresh = m_size[e] == 0;
   const uint32_t K0 = fresh ? uint32_t(m_initial.size()) : m_size[e];
@@ -427,7 +424,8 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
     return;  // nothing new: the cut and CDF stand (a new entry keeps sampling like the tree)
 
   // This pass's mean reward and mean squared reward per node, in scene units.
-  thread_local std::vector<double> mean_r, mean_r2, mean_r2_0, cnt;
+  std::vector<double>&mean_r = scratch.mean_r, &mean_r2 = scratch.mean_r2,
+  &mean_r2_0 = scratch.mean_r2_0, &cnt = scratch.count;
   mean_r.assign(K0, 0.0);
   mean_r2.assign(K0, 0.0);
   mean_r2_0.assign(K0, 0.0);
@@ -437,14 +435,12 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
     const size_t i = base + k;
     cnt[k] = m_count[i].load(std::memory_order_relaxed);
     if (cnt[k] > 0) {
-      mean_r[k] = m_sum[i].value() * unit / cnt[k];
-      mean_r2[k] = std::max(m_sum2[i].value() * unit * unit / cnt[k], mean_r[k] * mean_r[k]);
+      const RewardMoments r(cnt[k], m_sum[i].value() * unit, m_sum2[i].value() * unit * unit);
+      mean_r[k] = r.mean;
+      mean_r2[k] = r.mean2;
       mean_r2_0[k] = std::min(m_sum2_0[i].value() * unit * unit / cnt[k], mean_r2[k]);
     }
-    m_sum[i].reset();
-    m_sum2[i].reset();
-    m_sum2_0[i].reset();
-    m_count[i].store(0, std::memory_order_relaxed);
+    clear_pass(i);
   }
 
   if (fresh) {
@@ -455,7 +451,7 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
     // node does not inflate all the others). Being a mean, it is at most sqrt(M2) and gives way to
     // the learnt second moments wherever rewards vary.
     const uint32_t K = K0;
-    thread_local std::vector<double> b;
+    std::vector<double>& b = scratch.bound;
     b.assign(K, 0.0);
     double bsum = 0;
     for (uint32_t k = 0; k < K; ++k) bsum += b[k] = bound(e, m_initial[k]);
@@ -507,7 +503,7 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
       var_sum += std::max(0.0, double(m_sq[i]) - double(m_mean[i]) * m_mean[i]);
       mean_sum += m_mean[i];
     }
-    thread_local std::vector<std::pair<double, uint32_t>> chosen;  // (variance share, node index)
+    auto& chosen = scratch.chosen;  // (variance share, node index)
     chosen.clear();
     if (var_sum > 0 && mean_sum > 0) {
       const double v_rel = var_sum / (mean_sum * mean_sum);
@@ -585,17 +581,17 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, uint32_t& splits) {
   double largest = 0;
   for (uint32_t k = 0; k < m_size[e]; ++k)
     largest = std::max(largest, std::sqrt(double(m_w[base + k])));
-  if (largest > 0 && std::isfinite(largest)) m_inv_unit[e] = 1 / largest;
-  bake(e);
+  next_unit(m_inv_unit[e], largest);
+  bake(e, scratch);
 }
 
-void LtcLightSampler::bake(uint32_t e) {
+void LtcLightSampler::bake(uint32_t e, LearnScratch& scratch) {
   const size_t base = size_t(e) * m_m;
   const uint32_t K = m_size[e];
   if (K == 0) return;
   // Defensive distribution: half the prior share (bound at the cluster's centre, or power),
   // half uniform over the nodes with power, so every node that can contribute keeps P > 0.
-  thread_local std::vector<double> d, v;
+  std::vector<double>&d = scratch.defensive, &v = scratch.value;
   d.assign(K, 0.0);
   v.assign(K, 0.0);
   double bsum = 0, vsum = 0;
@@ -640,12 +636,7 @@ void LtcLightSampler::admit_by_visits() {
       ++used;
       continue;
     }
-    for (size_t i = size_t(e) * m_m, end = i + K0; i < end; ++i) {
-      m_sum[i].reset();
-      m_sum2[i].reset();
-      m_sum2_0[i].reset();
-      m_count[i].store(0, std::memory_order_relaxed);
-    }
+    for (size_t i = size_t(e) * m_m, end = i + K0; i < end; ++i) clear_pass(i);
     m_slot[m_key[e]].store(0, std::memory_order_relaxed);
     m_key[e] = kNoCell;
   }
@@ -691,7 +682,8 @@ void LtcLightSampler::end_pass() {
   const uint64_t pass = m_pass;
   parallel_for(entries.size(), 64, [&](size_t b, size_t end) {
     uint32_t sp = 0;
-    for (size_t j = b; j < end; ++j) learn(entries[j], pass, sp);
+    LearnScratch scratch;
+    for (size_t j = b; j < end; ++j) learn(entries[j], pass, scratch, sp);
     splits += sp;
   });
   m_splits_per_pass.push_back(splits.load());
@@ -706,8 +698,9 @@ void LtcLightSampler::end_pass() {
 void LtcLightSampler::lights_changed(const Scene& scene) {
   (void)scene;
   parallel_for(m_s.capacity, 256, [&](size_t b, size_t e) {
+    LearnScratch scratch;
     for (size_t i = b; i < e; ++i)
-      if (m_key[i] != kNoCell) bake(uint32_t(i));
+      if (m_key[i] != kNoCell) bake(uint32_t(i), scratch);
   });
 }
 

@@ -65,6 +65,7 @@
 #include "rll/learn/cut.h"
 #include "rll/learn/moments.h"
 #include "rll/lights/light_sampler.h"
+#include "rll/lights/rll_view.h"
 #include "rll/lights/tree_sampler.h"
 
 namespace rll {
@@ -75,8 +76,8 @@ struct LtcSettings {
   uint32_t capacity = 65536;  // entries (cluster, bin) with a cut, allocated up front
   int initial_cut = 8;
   int max_cut = 64;
-  float epsilon = 0.1f;       // weight of the defensive distribution
-  uint32_t no_change = 128;   // visits without a split after which an entry stops splitting
+  float epsilon = 0.1f;      // weight of the defensive distribution
+  uint32_t no_change = 128;  // visits without a split after which an entry stops splitting
 };
 
 // Reads ltc.* parameters (see docs/ltc.md), each checked against its range (errors name the key),
@@ -97,7 +98,8 @@ class SpatialClusters {
   uint32_t size() const { return uint32_t(m_centre.size()); }
   uint32_t find(const Vec3& p) const {
     uint32_t i = 0;
-    while (m_node[i].axis < 3) i = m_node[i].child + (p[m_node[i].axis] >= m_node[i].split ? 1u : 0u);
+    while (m_node[i].axis < 3)
+      i = m_node[i].child + (p[m_node[i].axis] >= m_node[i].split ? 1u : 0u);
     return m_node[i].child;
   }
   // Mean of the build points in a cluster.
@@ -107,7 +109,7 @@ class SpatialClusters {
  private:
   struct Node {
     float split = 0;
-    uint32_t axis = 3;  // 3: leaf, `child` is then the cluster id
+    uint32_t axis = 3;   // 3: leaf, `child` is then the cluster id
     uint32_t child = 0;  // inner: first of two adjacent children
   };
   std::vector<Node> m_node;
@@ -136,25 +138,35 @@ class LtcLightSampler final : public LightSampler {
   const uint32_t* cut_nodes(uint32_t entry) const { return &m_node[size_t(entry) * m_m]; }
   // Probability of node k of an entry's cut (the width of its CDF interval).
   float node_probability(uint32_t entry, uint32_t k) const;
+  // An entry's cut as rll's table draw and lookups read one (rll_view.h).
+  detail::RllCut cut(uint32_t entry) const;
   const std::vector<uint32_t>& initial_cut() const { return m_initial; }
   size_t bytes() const;
 
  private:
   friend class LightSampler;  // its host kind's calls (set_host_calls)
-  // The host kind's calls: find the point's entry (ctx.cell), draw a light, its probability,
-  // accumulate a sample's reward (thread-safe; applied at end_pass).
-  void prepare(LightContext& ctx, float u) const;
+  // The host kind's calls: find the point's entry (ctx.cell; made there for a new key,
+  // thread-safely), draw a light, its probability, accumulate a sample's reward (thread-safe;
+  // applied at end_pass).
+  void prepare(LightContext& ctx, float u);
   SampledLight sample(const LightContext& ctx, double u) const;
   float pmf(const LightContext& ctx, uint32_t light) const;
   void record(const LightContext& ctx, const SampledLight& s, const NeeRecord& r);
 
   // Refuses (rll::Error naming the keys) tables beyond the memory budget, before they exist.
   static void check_memory(const SpatialClusters& clusters, uint32_t keys, const LtcSettings& s);
-  uint32_t find_node(uint32_t entry, uint32_t light) const;
   // Importance of a node at an entry's cluster centre (no receiver normal): the prior bound.
   float bound(uint32_t entry, uint32_t node) const;
-  void learn(uint32_t entry, uint64_t pass, uint32_t& splits);
-  void bake(uint32_t entry);
+  // The end of pass's per-entry lists, one set per worker (reused from entry to entry).
+  struct LearnScratch {
+    std::vector<double> mean_r, mean_r2, mean_r2_0, count;  // per node: this pass's moments
+    std::vector<double> bound, defensive, value;
+    std::vector<std::pair<double, uint32_t>> chosen;  // nodes to split
+  };
+  void learn(uint32_t entry, uint64_t pass, LearnScratch& scratch, uint32_t& splits);
+  void bake(uint32_t entry, LearnScratch& scratch);
+  // Empties a node slot's accumulators of the pass.
+  void clear_pass(size_t slot);
 
   const LightTree& m_tree;  // the render session's (it outlives its samplers)
   LtcSettings m_s;
@@ -186,15 +198,17 @@ class LtcLightSampler final : public LightSampler {
   std::vector<double> m_no_change;   // visits since the last split
   std::vector<float> m_prior_scale;  // prior(node) = scale x bound(node) (power where no bound)
   std::vector<uint8_t> m_prior_power;
-  std::vector<double> m_inv_unit;    // 1 / unit of the entry's accumulators during the pass
+  std::vector<double> m_inv_unit;  // 1 / unit of the entry's accumulators during the pass
   // Per node slot (entry * max_cut + k).
   std::vector<uint32_t> m_node, m_end;
-  std::vector<float> m_cdf, m_w;     // sampling CDF; learnt second moment w ~ M2
-  std::vector<float> m_n, m_mean, m_sq;  // node statistics since it entered the cut: count, E[r], E[r^2]
-  std::vector<float> m_sq0;   // ... and E[r^2 1{light under the first child}]: how a split shares M2
-  std::vector<float> m_pi;    // the share of w still made of the prior: prod (1 - a) over its visits
+  std::vector<float> m_cdf, m_w;  // sampling CDF; learnt second moment w ~ M2
+  std::vector<float> m_n, m_mean,
+      m_sq;                  // node statistics since it entered the cut: count, E[r], E[r^2]
+  std::vector<float> m_sq0;  // ... and E[r^2 1{light under the first child}]: how a split shares M2
+  std::vector<float> m_pi;   // the share of w still made of the prior: prod (1 - a) over its visits
   std::vector<uint32_t> m_mid;  // end of the node's first child's range (0 for a leaf)
-  std::unique_ptr<ExactSum[]> m_sum, m_sum2, m_sum2_0;  // this pass: sums of r, r^2, r^2 under child 0
+  std::unique_ptr<ExactSum[]> m_sum, m_sum2,
+      m_sum2_0;  // this pass: sums of r, r^2, r^2 under child 0
   std::unique_ptr<std::atomic<uint32_t>[]> m_count;
 
   uint64_t m_pass = 0;

@@ -113,6 +113,7 @@ void OracleLightSampler::precompute(const Scene& scene) {
   fixed.cut.pool_levels = 0;      // it knows each cell's clusters: nothing to pool
   fixed.cut.pool_up = 0;
   m_rll = std::make_unique<RllLightSampler>(scene, m_tree, fixed);
+  set_learnt_cells({m_rll.get(), this});
   const SamplerView view = m_rll->sampler_view();  // its cells found as a render finds them
   const LightTree& tree = m_tree;
 

@@ -44,6 +44,7 @@ void check_memory(const RllSettings& s) {
 RllLightSampler::RllLightSampler(const Scene& scene, const LightTree& tree, const RllSettings& s)
     : LightSampler(s.name, true), m_tree(tree), m_s(s), m_keyer(s.grid, scene.bounds) {
   set_resident_learner(this);
+  set_learnt_cells({this, nullptr});
   check_memory(s);
   m_table = std::make_unique<CellTable>(s.capacity);
   // Guided: the rewards are ratios to the tree's importance, of the order of a reflectance.

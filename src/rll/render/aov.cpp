@@ -50,9 +50,7 @@ std::vector<Aov> parse_aovs(const std::string& list, const char* flag) {
 }
 
 const RllLightSampler* sampler_cells(const LightSampler& sampler) {
-  if (const auto* r = dynamic_cast<const RllLightSampler*>(&sampler)) return r;
-  if (const auto* o = dynamic_cast<const OracleLightSampler*>(&sampler)) return &o->rll();
-  return nullptr;
+  return sampler.learnt_cells().rll;
 }
 
 double cell_entropy(const CutStore& cuts, uint32_t cell) {
@@ -74,7 +72,7 @@ std::vector<std::pair<std::string, std::vector<float>>> resolve_aovs(const Film&
   const RllLightSampler* rll = sampler_cells(sampler);
   // The oracle's cuts come from shadow rays, not rewards (its own count is a stand-in of 1e30
   // that keeps the learnt share whole): its `rewards` are the shadow rays of the cell's estimates.
-  const auto* oracle = dynamic_cast<const OracleLightSampler*>(&sampler);
+  const OracleLightSampler* oracle = sampler.learnt_cells().oracle;
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   const size_t n = v->cell.size();
   // A pixel's cell, if the sampler still has it.

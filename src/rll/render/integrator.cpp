@@ -217,7 +217,7 @@ Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Ve
   Rgb sum(0);
   float pmf_sum = 0;
   int count = 0;
-  draw_nee(m_constants, m_view, ctx, bsdf, wo, stream, depth, [&](const NeeDraw& d) {
+  draw_nee(m_constants, m_view, ctx, bsdf, wo, stream, depth, nullptr, [&](const NeeDraw& d) {
     NeeResult r;
     if (m_settings.ideal_point > 0) {
       // The draw's own point is the set's shift (the stream's numbers, by dimension).

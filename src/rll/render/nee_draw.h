@@ -24,18 +24,23 @@ RLL_HD inline bool draws_several(const SamplerView& s) {
 }
 
 // Draws the vertex's next-event samples with sampler s, calling emit(const NeeDraw&) for each
-// that has a light (pmf > 0), at most nee_draws_per_vertex(s).
+// that has a light (pmf > 0), at most nee_draws_per_vertex(s). `rht_memory`: the vertex's
+// reservoirs for a sampler that draws several (draws_several), in the path slot's memory (the
+// wavefront's); null: on this thread's stack, on the CPU only (a GPU thread's stack holding them
+// took the next-event stage over its budgets, tests/unit/kernel_budgets.h).
 template <class Emit>
 RLL_HD inline void draw_nee(const PathConstants& c, const SamplerView& s, const LightContext& ctx,
                             const Bsdf& bsdf, const Vec3& wo, SampleStream& stream, int depth,
-                            Emit&& emit) {
-#if !RLL_DEVICE_CODE
-  // rht's draw holds its reservoirs on the thread's stack: 1968 bytes and 136 registers in the
-  // GPU's next-event stage (sm_90), over its budgets (tests/unit/kernel_budgets.h), so the
-  // device build leaves it out and --device cuda refuses rht (require_device_version) until the
-  // reservoirs live in the path slots' memory.
-  if (s.kind == SamplerKind::Rht) return rht_nee(c, s.rht, ctx, bsdf, wo, stream, depth, emit);
+                            RhtReservoirMemory* rht_memory, Emit&& emit) {
+  if (s.kind == SamplerKind::Rht) {
+#if RLL_DEVICE_CODE
+    if (rht_memory) rht_nee(c, s.rht, ctx, bsdf, wo, stream, depth, *rht_memory, emit);
+#else
+    RhtReservoirMemory own;
+    rht_nee(c, s.rht, ctx, bsdf, wo, stream, depth, rht_memory ? *rht_memory : own, emit);
 #endif
+    return;
+  }
   const NeeChoice ch = resample_nee(
       c, ctx, bsdf, wo, stream, depth, [&](double u) { return sample_light(s, ctx, u); },
       [&](const SampledLight& first, double u) { return sample_in_cluster(s, ctx, first, u); },

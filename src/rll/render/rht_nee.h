@@ -69,6 +69,23 @@ struct RhtReservoirs {
 inline constexpr float kR2x = 0.75487767f, kR2y = 0.56984029f;
 }  // namespace detail
 
+// The two stages' reservoirs of one vertex's draw (672 bytes): on the thread's stack on the CPU,
+// in the path slot's memory on the GPU (the wavefront's PathSlots::rht), where a thread's stack
+// holding them took the next-event stage over its budgets (tests/unit/kernel_budgets.h).
+struct RhtReservoirMemory {
+  struct Kept {  // a first-stage survivor
+    uint32_t light;
+    float pdf, weight, sum;
+  };
+  struct Second {
+    Vec2 u;     // the kept survivor's light point numbers
+    int first;  // its first-stage reservoir
+    float weight, sum;
+  };
+  Kept first[kRhtMaxReservoirs];
+  Second second[kRhtMaxSamples];
+};
+
 // Draws the vertex's samples, calling emit(const NeeDraw&) for each (at most v.samples): with
 // probability rht_directional_probability a
 // directional light (one sample), else the split descent's candidates, kept by the first stage's
@@ -76,11 +93,11 @@ inline constexpr float kR2x = 0.75487767f, kR2y = 0.56984029f;
 // by its unshadowed contribution with the MIS weight against BSDF sampling folded in, and kept by
 // the second stage's reservoirs (v.samples of them). The second stage keeps which survivor each
 // reservoir holds and makes its light sample again at the end (the same function of the same
-// numbers): a GPU thread's stack holds no light samples.
+// numbers): a GPU thread's stack holds no light samples. The reservoirs are `memory`'s.
 template <class Emit>
 RLL_HD inline void rht_nee(const PathConstants& c, const RhtView& v, const LightContext& ctx,
                            const Bsdf& bsdf, const Vec3& wo, SampleStream& stream, int depth,
-                           Emit&& emit) {
+                           RhtReservoirMemory& memory, Emit&& emit) {
   const RhtNumbers u = rht_numbers(stream, depth);
   const float p_dir = rht_directional_probability(v);
   double u_light = u.light.u_light;
@@ -97,11 +114,8 @@ RLL_HD inline void rht_nee(const PathConstants& c, const RhtView& v, const Light
   u_light = std::min((u_light - p_dir) / (1 - p_dir), double(detail::kBelowOne));
 
   // First stage: the descent's candidates by tree importance over candidate probability.
-  struct Kept {
-    uint32_t light;
-    float pdf, weight, sum;
-  };
-  Kept first[kRhtMaxReservoirs];
+  using Kept = RhtReservoirMemory::Kept;
+  Kept* const first = memory.first;
   for (int i = 0; i < v.reservoirs; ++i) first[i] = Kept{0, 0, 0, 0};
   detail::RhtReservoirs h(v.reservoirs, mix64(u.key + 1));
   rht_descend(v, ctx.p, ctx.n, u_light, u.u_split, u.key, 1 - p_dir,
@@ -119,12 +133,8 @@ RLL_HD inline void rht_nee(const PathConstants& c, const RhtView& v, const Light
   // Second stage: each survivor's light sample, weighed by f Le G / (its density as the light
   // strategy draws it + the BSDF's pdf), the balance heuristic's MIS weight folded in.
   const bool mis = c.strategy == LightStrategy::Mis;
-  struct Second {
-    Vec2 u;     // the kept survivor's light point numbers
-    int first;  // its first-stage reservoir
-    float weight, sum;
-  };
-  Second second[kRhtMaxSamples];
+  using Second = RhtReservoirMemory::Second;
+  Second* const second = memory.second;
   for (int i = 0; i < v.samples; ++i) second[i].weight = second[i].sum = 0;
   detail::RhtReservoirs f(v.samples, mix64(u.key + 2));
   Vec2 u_pos = u.light.u_pos;

@@ -28,15 +28,16 @@
 namespace rll {
 
 // The bytes of one path slot with `draws` next-event samples (nee_draws_per_vertex): its state
-// (PathSlots) and its place in each queue (`draws` places in the shadow rays', one in ReSTIR's
-// where `restir`). What the slot count is chosen from (wavefront_slot_count, wavefront/passes.h).
-inline size_t wavefront_slot_bytes(size_t draws = 1, bool restir = false) {
+// (PathSlots, with rht's reservoirs where `reservoirs`: draws_several) and its place in each queue
+// (`draws` places in the shadow rays', one in ReSTIR's where `restir`). What the slot count is
+// chosen from (wavefront_slot_count, wavefront/passes.h).
+inline size_t wavefront_slot_bytes(size_t draws = 1, bool restir = false, bool reservoirs = false) {
   size_t bytes = 0;
   auto count = [&]<typename T>(size_t n) {
     bytes += n * sizeof(T);
     return View<T>{};
   };
-  PathSlots::make(count, 1, draws, false, restir);
+  PathSlots::make(count, 1, draws, false, restir, reservoirs);
   return bytes + (kWavefrontQueues - 2 + draws + (restir ? 1 : 0)) * sizeof(uint32_t);
 }
 
@@ -62,7 +63,8 @@ class WavefrontDriver {
         m_restir(restir) {
     auto take = [&]<typename T>(size_t n) { return m_backend.template take<T>(n); };
     m_k.draws = uint32_t(nee_draws_per_vertex(m_k.sampler));
-    m_k.p = PathSlots::make(take, n_slots, m_k.draws, filters(), restirs());
+    m_k.p =
+        PathSlots::make(take, n_slots, m_k.draws, filters(), restirs(), draws_several(m_k.sampler));
     for (uint32_t q = 0; q < kWavefrontQueues; ++q)
       m_k.queue_slots[q] =
           m_backend.template take<uint32_t>(q == kShadows                ? n_slots * m_k.draws

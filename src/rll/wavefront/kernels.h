@@ -70,6 +70,8 @@ struct PathSlots {
   View<float> scale;  // NeeDraw::scale
   View<uint8_t> occluded;
   View<NeeRecord> record;
+  // rht's reservoirs (draws_several: render/rht_nee.h), one set per slot; none for other samplers.
+  View<RhtReservoirMemory> rht;
   // Path-space filtering (render/psf.h): each path's cut; none unless the render filters.
   View<PsfCut> cut;
   // ReSTIR (render/restir.h): 0 before the path's ReSTIR vertex, 1 from it to the next vertex
@@ -78,10 +80,10 @@ struct PathSlots {
 
   // Takes every array from `take(count, tag)`, a function of the memory that holds them (host or
   // device) called as take.template operator()<T>(n); `draws` next-event samples per slot; the
-  // cuts where `filters`.
+  // cuts where `filters`; rht's reservoirs where `reservoirs`.
   template <typename Take>
   static PathSlots make(Take& take, size_t n, size_t draws, bool filters = false,
-                        bool restir = false) {
+                        bool restir = false, bool reservoirs = false) {
     PathSlots p;
     p.stream = take.template operator()<SampleStream>(n);
     p.ray = take.template operator()<Ray>(n);
@@ -106,6 +108,7 @@ struct PathSlots {
     p.record = take.template operator()<NeeRecord>(n * draws);
     if (filters) p.cut = take.template operator()<PsfCut>(n);
     if (restir) p.restir = take.template operator()<uint8_t>(n);
+    if (reservoirs) p.rht = take.template operator()<RhtReservoirMemory>(n);
     return p;
   }
 
@@ -263,7 +266,7 @@ struct WavefrontKernels {
     const LightContext& ctx = p.ctx[i];
     uint32_t n = 0;
     draw_nee(c, sampler, ctx, p.bsdf[i], -p.ray[i].d, p.stream[i], p.depth[i],
-             [&](const NeeDraw& d) {
+             p.rht.size > 0 ? &p.rht[i] : nullptr, [&](const NeeDraw& d) {
                const uint32_t j = i * draws + n++;
                p.light[j] = d.light;
                p.nee[j] = d.setup;

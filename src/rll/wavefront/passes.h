@@ -49,20 +49,20 @@ inline int largest_pass_spp(const RenderSettings& s) {
 
 // The path slots of a render: as many as its largest pass has paths, at most `max_slots` (the
 // device's: kMaxPathSlots on the GPU, kHostMaxPathSlots on the CPU), at most `path_slots` where
-// that is not 0, and as many as `budget_bytes` hold at wavefront_slot_bytes(draws) each. Throws
-// rll::Error if not one slot fits.
+// that is not 0, and as many as `budget_bytes` hold at wavefront_slot_bytes(draws, restir,
+// reservoirs) each. Throws rll::Error if not one slot fits.
 inline size_t wavefront_slot_count(uint32_t path_slots, const Film& film,
                                    const RenderSettings& settings, size_t budget_bytes,
                                    size_t max_slots = kMaxPathSlots, size_t draws = 1,
-                                   bool restir = false) {
+                                   bool restir = false, bool reservoirs = false) {
   const size_t pixels = size_t(film.width()) * film.height();
   size_t n = std::min(max_slots, pixels * size_t(largest_pass_spp(settings)));
   if (path_slots > 0) n = std::min<size_t>(n, path_slots);
-  const size_t fit = budget_bytes / wavefront_slot_bytes(draws, restir);
+  const size_t slot_bytes = wavefront_slot_bytes(draws, restir, reservoirs);
+  const size_t fit = budget_bytes / slot_bytes;
   if (fit < 1)
     fail("the wavefront renderer's path slots take {} each, more than the {} they may use",
-         format_bytes(double(wavefront_slot_bytes(draws, restir))),
-         format_bytes(double(budget_bytes)));
+         format_bytes(double(slot_bytes)), format_bytes(double(budget_bytes)));
   return std::max<size_t>(1, std::min(n, fit));
 }
 
@@ -70,12 +70,13 @@ inline size_t wavefront_slot_count(uint32_t path_slots, const Film& film,
 // (--stats' path_slots) where the caller keeps one.
 inline size_t render_path_slots(const WavefrontSettings& wavefront, const Film& film,
                                 const RenderSettings& settings, size_t budget_bytes,
-                                size_t max_slots, size_t draws, bool restir = false) {
+                                size_t max_slots, size_t draws, bool restir = false,
+                                bool reservoirs = false) {
   const size_t slots = wavefront_slot_count(wavefront.path_slots, film, settings, budget_bytes,
-                                            max_slots, draws, restir);
+                                            max_slots, draws, restir, reservoirs);
   if (wavefront.work) {
     wavefront.work->path_slots = slots;
-    wavefront.work->slot_bytes = slots * wavefront_slot_bytes(draws, restir);
+    wavefront.work->slot_bytes = slots * wavefront_slot_bytes(draws, restir, reservoirs);
     wavefront.work->budget_bytes = budget_bytes;
   }
   return slots;

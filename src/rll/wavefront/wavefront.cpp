@@ -126,7 +126,7 @@ RenderProgress render_with(
   // tables take the rest).
   const size_t budget = memory_budget_bytes() / 4;
   const size_t slots = render_path_slots(wavefront, film, settings, budget, kHostMaxPathSlots,
-                                         draws, integrator.restir.on);
+                                         draws, integrator.restir.on, draws_several(view));
   if (integrator.psf.on) check_psf_memory(size_t(film.width()) * film.height());
   if (integrator.restir.on) check_restir_memory(size_t(film.width()) * film.height());
   RestirFrames* restir = integrator.restir.on && wavefront.restir_history
