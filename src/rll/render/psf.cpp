@@ -26,6 +26,9 @@ const std::vector<ParamSpec<PsfSettings>>& psf_params() {
       float_param("clamp", ParamRange::at_least(0), field<S, &S::clamp>(), "0 clamps nothing"),
       float_param("temporal", ParamRange{0, 1, false, true}, field<S, &S::temporal>(),
                   "the weight of the sample before in frames that follow frames; 0 is off"),
+      int_param("demodulate", ParamRange::closed(0, 1), field<S, &S::demodulate>(),
+                "1 filters the diffuse lobe divided by its albedo and sends the glossy lobe to the "
+                "film; 0 filters the whole radiance"),
   };
   return table;
 }
@@ -69,6 +72,7 @@ PsfConstants make_psf_constants(const PsfSettings& s, const Bounds3& scene_bound
   c.min_dist = s.min_dist;
   c.clamp = s.clamp;
   c.temporal = s.temporal;
+  c.demodulate = s.demodulate;
   // Fermat's hash: a cell of `width` footprints in radius, at most the scene's extent across,
   // the level of detail rounded at random, 4 bins per axis of the normal's square map; the
   // jitter is each path's own (psf_key), never the pass's.
