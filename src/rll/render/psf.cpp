@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 #include <nlohmann/json.hpp>
 
@@ -123,6 +124,7 @@ PsfTable::PsfTable(size_t pixels, bool cells) {
     m_sums.resize(6 * m_keys.size());
   }
   m_records.resize(pixels);
+  m_ends.resize(pixels);
 }
 
 PsfHistory::PsfHistory(size_t pixels) {
@@ -157,6 +159,38 @@ void clear_psf_cells(const PsfTableView& t) {
 void PsfTable::clear() {
   clear_psf_cells(view());
   zero_in_parallel(m_records.data(), m_records.size() * sizeof(PsfRecord));
+  for (PsfPathEnd& e : m_ends) e.traced = false;
+}
+
+void psf_end_paths(const PsfConstants& f, const PsfTableView& t, const FilmView& film,
+                   View<PsfRecord> records, View<const PsfPathEnd> ends, uint64_t& paths,
+                   uint64_t& nonfinite) {
+  // Far enough ahead for a miss to come back (a few hundred cycles), near enough to stay cached.
+  constexpr size_t kAhead = 8;
+  std::atomic<uint64_t> filtered{0}, dropped{0};
+  parallel_for(ends.size, 4096, [&](size_t begin, size_t end) {
+    uint64_t n = 0, bad = 0;
+    for (size_t p = begin; p < end; ++p) {
+      if (p + kAhead < end) {
+        const uint64_t key = ends[p + kAhead].cut.key;
+        if (key != 0) {
+          const size_t slot = psf_home_slot(t, key);
+          __builtin_prefetch(&t.keys[slot], 1);
+          __builtin_prefetch(&t.sums[6 * slot], 1);
+          __builtin_prefetch(&t.sums[6 * slot + 5], 1);
+        }
+      }
+      const PsfPathEnd& e = ends[p];
+      if (!e.traced) continue;
+      const PsfEnd r = psf_end_path(f, t, film, records, p, e.cut, e.L);
+      n += r == PsfEnd::Filtered;
+      bad += r == PsfEnd::NonFinite;
+    }
+    filtered.fetch_add(n, std::memory_order_relaxed);
+    dropped.fetch_add(bad, std::memory_order_relaxed);
+  });
+  paths += filtered.load();
+  nonfinite += dropped.load();
 }
 
 }  // namespace rll

@@ -156,10 +156,15 @@ RLL_HD inline size_t psf_capacity(size_t paths) {
   return 2 * paths + 1;
 }
 
+// The slot where the probe for `key` starts.
+RLL_HD inline uint32_t psf_home_slot(const PsfTableView& t, uint64_t key) {
+  return uint32_t((key >> 1) % uint32_t(t.keys.size));
+}
+
 // The cell of `key` (!= 0), taken if free; thread-safe.
 RLL_HD inline uint32_t psf_cell(const PsfTableView& t, uint64_t key) {
   const uint32_t n = uint32_t(t.keys.size);
-  uint32_t slot = uint32_t((key >> 1) % n);
+  uint32_t slot = psf_home_slot(t, key);
   for (;;) {
     const uint64_t seen = atomic_cas(&t.keys[slot], 0, key);
     if (seen == 0) {
@@ -254,7 +259,7 @@ inline constexpr uint32_t kPsfNoCell = 0xffffffffu;
 // The cell of `key` (!= 0) in a table that no thread writes to, or kPsfNoCell.
 RLL_HD inline uint32_t psf_find(const PsfTableView& t, uint64_t key) {
   const uint32_t n = uint32_t(t.keys.size);
-  uint32_t slot = uint32_t((key >> 1) % n);
+  uint32_t slot = psf_home_slot(t, key);
   for (uint32_t probes = 0; probes < n; ++probes) {
     const uint64_t seen = t.keys[slot];
     if (seen == key) return slot;
@@ -302,10 +307,20 @@ struct PsfFrameCells {
   }
 };
 
+// The megakernel's path of a batch, ended in a loop of their own (psf_end_paths) rather than
+// each as it is traced: their cells' cache lines, random in a table of 16 MB at 320 x 240, are
+// then fetched ahead of their inserts instead of one miss after another within the tracing.
+struct PsfPathEnd {
+  PsfCut cut;
+  Rgb L{0};
+  bool traced = false;  // (a stopped batch leaves pixels untraced: they add nothing)
+};
+
 // The bytes the filter takes per pixel of the film: a record, psf_capacity cells of a key and six
-// sums for its batch of one path per pixel, and (the wavefront's) a path slot's cut.
+// sums for its batch of one path per pixel, and a path's end (the megakernel's per pixel, with
+// its radiance; the wavefront's cut per path slot, smaller).
 inline constexpr double kPsfBytesPerPixel =
-    sizeof(PsfRecord) + 2.0 * (sizeof(uint64_t) + 6 * sizeof(ExactSum)) + sizeof(PsfCut);
+    sizeof(PsfRecord) + 2.0 * (sizeof(uint64_t) + 6 * sizeof(ExactSum)) + sizeof(PsfPathEnd);
 inline constexpr const char* kPsfPixelText = "the path-space filter's cells and path records";
 
 // The bytes a pixel temporal reuse adds: the second table of cells.
@@ -355,12 +370,24 @@ class PsfTable {
   View<PsfRecord> records() { return view_of(m_records); }
   uint32_t used() const { return m_used; }
 
+  // The megakernel's paths of the batch (PsfPathEnd).
+  View<PsfPathEnd> ends() { return view_of(m_ends); }
+
  private:
   std::vector<uint64_t> m_keys;
   std::vector<ExactSum> m_sums;
   std::vector<PsfRecord> m_records;
+  std::vector<PsfPathEnd> m_ends;
   uint32_t m_used = 0;
 };
+
+// The ends of the megakernel's paths of a batch (PsfPathEnd) as psf_end_path's, each pixel's
+// in turn (in parallel), the cells of the paths kPsfPrefetch pixels ahead prefetched; their
+// counts added to `paths` (filtered) and `nonfinite`. The cells' sums are exact, so the image is
+// the one of ending each path as it is traced, to the bit.
+void psf_end_paths(const PsfConstants& f, const PsfTableView& t, const FilmView& film,
+                   View<PsfRecord> records, View<const PsfPathEnd> ends, uint64_t& paths,
+                   uint64_t& nonfinite);
 
 // Temporal reuse's cells in the host's memory (the megakernel's and the CPU wavefront's), kept by
 // the session from frame to frame.
