@@ -159,7 +159,9 @@ void clear_psf_cells(const PsfTableView& t) {
 void PsfTable::clear() {
   clear_psf_cells(view());
   zero_in_parallel(m_records.data(), m_records.size() * sizeof(PsfRecord));
-  for (PsfPathEnd& e : m_ends) e.traced = false;
+  parallel_for(m_ends.size(), 1 << 16, [&](size_t begin, size_t end) {
+    for (size_t p = begin; p < end; ++p) m_ends[p].traced = false;
+  });
 }
 
 void psf_end_paths(const PsfConstants& f, const PsfTableView& t, const FilmView& film,
