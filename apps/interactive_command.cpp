@@ -178,6 +178,7 @@ void run(InteractiveOptions o) {
       rs.spp = f + 1;  // the film holds samples 0 to f - 1: this frame takes sample f
     }
     rs.follows_frame = f > 0;  // (the filter's temporal reuse blends the last frame's cells)
+    rs.precedes_frame = f + 1 < o.frames;
     WavefrontTimes times;
     // One pass of 1 spp: the sampler's end_pass after it carries the frame's learning on.
     const RenderProgress p =

@@ -178,6 +178,7 @@ void run(const RenderOptions& o) {
     session.set_frame(f, sampler.get());
     rs.frame = f;
     rs.follows_frame = f > 0;  // (the filter's temporal reuse blends the last frame's cells)
+    rs.precedes_frame = f + 1 < frames;
     std::string label =
         frames > 1 ? fmt::format("frame {}/{}", f + 1, frames) : std::string("render");
     set_activity(fmt::format("rendering {}x{} ({}{})", scene.width, scene.height, label,

@@ -89,6 +89,12 @@ TEST(PsfCli, TemporalReuseBlendsFramesAndSaysSo) {
   EXPECT_GT(
       nlohmann::json::parse(read_text(render_stats)).at("filter").at("cells_reused").get<double>(),
       0);
+  // A still render blends nothing and allocates no second table.
+  const fs::path still_stats = dir / "still.json";
+  const CommandResult still = run_rll(render_args(
+      out, {"--filter", "psf", "--set", "psf.temporal=0.9", "--stats", still_stats.string()}));
+  ASSERT_EQ(still.exit_code, 0) << still.output;
+  EXPECT_EQ(nlohmann::json::parse(read_text(still_stats)).at("filter").at("temporal_bytes"), 0);
   expect_clean_failure({"render", "builtin:cornell-box", "--filter", "psf", "--set",
                         "psf.temporal=1", "-o", (dir / "x.png").string()},
                        {"psf.temporal", "[0, 1)"});
@@ -134,8 +140,8 @@ TEST(PsfCli, FiltersCommandListsTheFilterAndItsKeys) {
   EXPECT_EQ(names.output, "none\npsf\n");
   const CommandResult keys = run_rll({"filters", "--params", "psf"});
   ASSERT_EQ(keys.exit_code, 0) << keys.output;
-  for (const char* k :
-       {"psf.depth=-1", "psf.width=3", "psf.max_prob=32", "psf.min_dist=0", "psf.clamp=100"})
+  for (const char* k : {"psf.depth=-1", "psf.width=3", "psf.max_prob=32", "psf.min_dist=0",
+                        "psf.clamp=100", "psf.temporal=0", "psf.demodulate=1"})
     EXPECT_NE(keys.output.find(k), std::string::npos) << k << " in " << keys.output;
   expect_clean_failure({"filters", "--params", "bilateral"}, {"bilateral", "psf"});
 }

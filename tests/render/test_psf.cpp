@@ -16,6 +16,7 @@
 #include "rll/core/params.h"
 #include "rll/render/integrator.h"
 #include "rll/render/render.h"
+#include "rll/scene/builder.h"
 #include "rll/scene/builtin.h"
 #include "rll/wavefront/wavefront.h"
 #include "support/small_scene.h"
@@ -92,7 +93,8 @@ double furnace_value(int max_depth) {
 // image is the analytic one, over the image and region by region, at the default width and a wide
 // one, cut at the camera vertex and at deeper vertices, path and direct. 16 renders of one sample
 // per pixel give each mean and its standard error (15 degrees of freedom: 5.5 of them bound a
-// false failure at about 1e-4 for each of the 17 means).
+// false failure at about 1e-4 for each of the 17 means). Demodulated (the default: the cells
+// average radiance over the albedo, 0.5) and not.
 TEST(PsfFurnace, FilteredImageIsTheAnalyticRadiance) {
   const Fixture f("furnace", 32, 32);
   struct Case {
@@ -101,6 +103,7 @@ TEST(PsfFurnace, FilteredImageIsTheAnalyticRadiance) {
     std::vector<std::string> set;
   };
   for (const Case& c : std::vector<Case>{{"path", 3, {}},
+                                         {"path", 3, {"psf.demodulate=0"}},
                                          {"path", 3, {"psf.depth=0", "psf.width=12"}},
                                          {"path", 5, {"psf.depth=2"}},
                                          {"direct", 1, {}}}) {
@@ -171,16 +174,76 @@ TEST(PsfWidth, TinyWidthConvergesToTheUnfilteredImage) {
   EXPECT_FALSE(same_bits(wide.image, tiny.image));
 }
 
+// A floor of two colours, red (0.8, 0, 0) and green (0, 0.8, 0) halves, under a large lamp, seen
+// from below the lamp; cut at the camera vertex (psf.depth=0) with wide cells that span both
+// halves. Demodulated (psf.demodulate=1), a cell holds irradiance and each path multiplies its own
+// albedo back in: a pixel of the red half stays red (green exactly 0, as unfiltered); filtering
+// the whole radiance (0) blurs green into it.
+struct TwoColours {
+  Scene scene;
+  LightTree tree;
+  std::unique_ptr<Accel> accel;
+  TwoColours() {
+    SceneBuilder b(scene);
+    const uint32_t red = b.diffuse(Rgb(0.8f, 0, 0)), green = b.diffuse(Rgb(0, 0.8f, 0));
+    b.quad(Vec3(0, 0, 0), Vec3(0, 0, 2), Vec3(1, 0, 0), red);  // z cross x = +y
+    b.quad(Vec3(1, 0, 0), Vec3(0, 0, 2), Vec3(1, 0, 0), green);
+    b.quad(Vec3(-1, 1.2f, -1), Vec3(4, 0, 0), Vec3(0, 0, 4), b.emitter(Rgb(1)));  // faces -y
+    scene.camera.position = Vec3(1, 1, 1);
+    scene.camera.target = Vec3(1, 0, 1);
+    scene.camera.up = Vec3(0, 0, -1);
+    scene.camera.fov = 80;
+    scene.has_camera = true;
+    scene.width = 32;
+    scene.height = 24;
+    scene.finalize();
+    tree = build_light_tree(scene);
+    accel = std::make_unique<Accel>(scene.mesh);
+  }
+  Image render(bool filter, const std::string& demodulate) const {
+    PsfRender r;
+    r.filter = filter;
+    if (filter) r.set = {"psf.depth=0", "psf.width=40", "psf.demodulate=" + demodulate};
+    r.spp = 8;
+    return render_psf(scene, tree, *accel, r).image;
+  }
+};
+
+TEST(PsfDemodulation, KeepsTheColoursThatTheWholeRadianceBlurs) {
+  const TwoColours f;
+  const Image plain = f.render(false, ""), demodulated = f.render(true, "1"),
+              whole = f.render(true, "0");
+  size_t red = 0, green = 0, bled_whole = 0, bled_demodulated = 0;
+  for (size_t i = 0; i < plain.pixel_count(); ++i) {
+    const Rgb p = plain[i];
+    if (p[2] != 0) ADD_FAILURE() << "no blue anywhere";
+    for (const bool on_red : {true, false}) {
+      const int own = on_red ? 0 : 1, other = on_red ? 1 : 0;
+      if (!(p[own] > 0 && p[other] == 0)) continue;  // (a pixel wholly on one half)
+      ++(on_red ? red : green);
+      EXPECT_GT(demodulated[i][own], 0.0f) << i;
+      bled_demodulated += demodulated[i][other] != 0;
+      bled_whole += whole[i][other] > 0.01f * whole[i][own];
+    }
+  }
+  ASSERT_GT(red, plain.pixel_count() / 4);
+  ASSERT_GT(green, plain.pixel_count() / 4);
+  EXPECT_EQ(bled_demodulated, 0u) << "demodulated: a half's pixels keep their colour";
+  EXPECT_GT(bled_whole, (red + green) / 4) << "the whole radiance filtered mixes the halves";
+}
+
 // A seed gives the same filtered image to the bit with 1 and 2 threads, on the megakernel and the
 // wavefront (Embree's tracer and rll's BVH, any budget of path slots), for a sampler that learns
-// nothing within a pass (power, tree) and for rll (learning between passes).
+// nothing within a pass (power, tree) and for rll (learning between passes); demodulated (the
+// default: the room's plastic sphere splits its lobes, its metal box is not cut) and not.
 TEST(PsfDeterminism, SameImageForAnyThreadCountAndRenderer) {
   const Fixture f("cornell-boxes-room", 40, 30);
-  for (const std::string sampler : {"power", "tree", "rll"}) {
+  for (const std::string sampler : {"power", "tree", "rll", "power:whole"}) {
     SCOPED_TRACE(sampler);
     PsfRender r;
-    r.sampler = sampler;
+    r.sampler = sampler.substr(0, sampler.find(':'));
     if (sampler == "rll") r.set = {"rll.capacity=4096"};
+    if (sampler == "power:whole") r.set = {"psf.demodulate=0"};
     r.spp = 5;  // passes of 1, 1, 2, 1 spp
     r.seed = 21;
     r.threads = 1;
@@ -193,7 +256,7 @@ TEST(PsfDeterminism, SameImageForAnyThreadCountAndRenderer) {
     EXPECT_EQ(one.progress.filter.cells, two.progress.filter.cells);
     r.wavefront = true;
     const PsfResult wave = f.render(r);
-    if (sampler != "rll") {  // (rll learns within a pass from records in another order)
+    if (r.sampler != "rll") {  // (rll learns within a pass from records in another order)
       EXPECT_TRUE(same_bits(one.image, wave.image)) << "wavefront";
       EXPECT_EQ(one.progress.filter.cells, wave.progress.filter.cells);
       EXPECT_EQ(one.progress.filter.paths, wave.progress.filter.paths);

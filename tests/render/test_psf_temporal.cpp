@@ -15,6 +15,7 @@
 #include "rll/render/integrator.h"
 #include "rll/render/render.h"
 #include "rll/scene/builtin.h"
+#include "rll/session/session.h"
 #include "rll/wavefront/wavefront.h"
 #include "support/small_scene.h"
 #include "support/test_support.h"
@@ -257,6 +258,33 @@ TEST(PsfTemporal, HistoryThatWouldNotFitIsRefused) {
   EXPECT_NO_THROW(check_psf_memory(pixels));
   expect_mentions(error_of([&] { PsfHistory h(pixels); }),
                   {"path-space filter", "psf.temporal", "4096 pixels", "more than"});
+}
+
+// A still render with psf.temporal (no frame before it, none after) blends nothing and keeps no
+// cells for a next frame: the session allocates no second table for it (temporal_bytes 0), and
+// the memory it checks is what it allocates: a budget that holds the film and the filter but not
+// the second table renders the still image, and refuses the frames that would need it.
+TEST(PsfTemporal, StillRenderAllocatesNoSecondTable) {
+  SessionSettings ss;
+  ss.scene = "builtin:cornell-box";
+  ss.resolution = "32x24";
+  ss.filter = "psf";
+  ss.set = {"psf.temporal=0.5"};
+  const double pixels = 32 * 24;
+  const BudgetScope budget(
+      size_t(pixels * (kRenderBytesPerPixel + kPsfBytesPerPixel + kPsfTemporalBytesPerPixel / 2)));
+  const RenderSession session(ss);
+  auto sampler = session.make_sampler("power");
+  RenderSettings rs;
+  rs.spp = 2;
+  Film film(32, 24);
+  const RenderProgress p = session.render(*sampler, film, rs, "still", false);
+  EXPECT_EQ(p.filter.batches, 2u);
+  EXPECT_EQ(session.psf_history_bytes(), 0u) << "no second table for a still render";
+  rs.precedes_frame = true;  // the first frame of an animation: its cells are kept
+  expect_mentions(error_of([&] { session.render(*sampler, film, rs, "frame", false); }),
+                  {"psf.temporal", "more than"});
+  EXPECT_EQ(session.psf_history_bytes(), 0u);
 }
 
 }  // namespace

@@ -36,6 +36,8 @@ TEST(PsfSettings, DefaultsAreFermats) {
   EXPECT_EQ(s.max_prob, 32.0f);
   EXPECT_EQ(s.min_dist, 0.0f);
   EXPECT_EQ(s.clamp, 100.0f);  // psfpt's firefly_filter
+  EXPECT_TRUE(s.demodulate);   // psfpt's diffuse cache, demodulated by its albedo
+  EXPECT_FALSE(psf_from({"psf.demodulate=0"}).demodulate);
   EXPECT_EQ(psf_from({}, "direct", 1).depth, 0) << "direct has the camera vertex only";
   EXPECT_EQ(psf_from({"psf.depth=2", "psf.width=0.5", "psf.clamp=0"}).depth, 2);
   // Without --filter psf the filter is off.
@@ -46,7 +48,8 @@ TEST(PsfSettings, BadValuesAreRefusedNamingTheKey) {
   for (const std::string kv :
        {"psf.width=0", "psf.width=-1", "psf.width=nan", "psf.width=abc", "psf.max_prob=0",
         "psf.min_dist=-0.1", "psf.clamp=-5", "psf.depth=-2", "psf.depth=1.5", "psf.temporal=1",
-        "psf.temporal=-0.1", "psf.temporal=nan", "psf.temporal=2"}) {
+        "psf.temporal=-0.1", "psf.temporal=nan", "psf.temporal=2", "psf.demodulate=2",
+        "psf.demodulate=0.5", "psf.demodulate=-1"}) {
     SCOPED_TRACE(kv);
     const std::string key = kv.substr(0, kv.find('='));
     expect_mentions(error_of([&] { psf_from({kv}); }), {key});
@@ -68,9 +71,9 @@ TEST(PsfSettings, BadValuesAreRefusedNamingTheKey) {
 // Every parameter of the table is listed with its default (`rll filters --params psf`).
 TEST(PsfSettings, TableListsEveryKey) {
   const std::vector<std::string> lines = describe_params(psf_params(), "psf", PsfSettings{});
-  ASSERT_EQ(lines.size(), 6u);
+  ASSERT_EQ(lines.size(), 7u);
   for (const std::string key : {"psf.depth=-1", "psf.width=3", "psf.max_prob=32", "psf.min_dist=0",
-                                "psf.clamp=100", "psf.temporal=0"})
+                                "psf.clamp=100", "psf.temporal=0", "psf.demodulate=1"})
     EXPECT_TRUE(std::any_of(lines.begin(), lines.end(), [&](const std::string& l) {
       return l.rfind(key, 0) == 0;
     })) << key;
@@ -232,6 +235,73 @@ TEST(PsfTemporal, BlendAddsTheLastSamplesSumsTimesTheWeight) {
     EXPECT_EQ(now.sums[6 * found + i].value(), 0.5 + 0.75 * (i + 1)) << "sum " << i;
     EXPECT_EQ(now.sums[6 * missing + i].value(), 0.0);
   }
+}
+
+// Demodulation's split (psf.demodulate): a plastic's diffuse share of f(wo, wi) is its Lambertian
+// lobe (the same plastic without a specular lobe) over f, in [0, 1]; a Lambertian's is 1; a
+// conductor has no diffuse part, a coated diffuse a layered one.
+TEST(PsfDemodulation, DiffuseShareIsTheLambertianLobe) {
+  MaterialData plastic;
+  plastic.type = MaterialType::Plastic;
+  plastic.albedo = Rgb(0.6f, 0.3f, 0.0f);
+  plastic.roughness = 0.2f;
+  MaterialData matte = plastic;
+  matte.specular = Rgb(0);
+  const Vec3 n(0, 0, 1), wo = normalize(Vec3(0.3f, -0.2f, 1.0f));
+  const Bsdf b(plastic, plastic.albedo, n, n, wo), d(matte, matte.albedo, n, n, wo);
+  EXPECT_EQ(b.diffuse_part(), Bsdf::DiffusePart::Separable);
+  int glossy = 0;
+  for (const Vec3& w : {Vec3(-0.3f, 0.2f, 1.0f), Vec3(0.5f, 0.5f, 0.3f), Vec3(-0.9f, 0.1f, 0.2f)}) {
+    const Vec3 wi = normalize(w);
+    const Rgb share = b.diffuse_share(wo, wi), f = b.eval(wo, wi), fd = d.eval(wo, wi);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_GE(share[c], 0.0f);
+      EXPECT_LE(share[c], 1.0f);
+      EXPECT_NEAR(share[c] * f[c], fd[c], 1e-5f * f[c]) << c;
+    }
+    glossy += share[0] < 0.99f;
+    EXPECT_EQ(share[2], 0.0f) << "no diffuse lobe in a channel of albedo 0";
+  }
+  EXPECT_GT(glossy, 0) << "the mirror direction is mostly glossy";
+  MaterialData lambert;
+  lambert.albedo = Rgb(0.5f);
+  EXPECT_EQ(Bsdf(lambert, lambert.albedo, n, n, wo).diffuse_share(wo, normalize(Vec3(1, 0, 1))),
+            Rgb(1));
+  MaterialData metal;
+  metal.type = MaterialType::Conductor;
+  EXPECT_EQ(Bsdf(metal, metal.albedo, n, n, wo).diffuse_part(), Bsdf::DiffusePart::None);
+  MaterialData coated;
+  coated.type = MaterialType::CoatedDiffuse;
+  EXPECT_EQ(Bsdf(coated, coated.albedo, n, n, wo).diffuse_part(), Bsdf::DiffusePart::Layered);
+}
+
+// A split cut: its light samples' glossy share (times the throughput) goes to the film with what
+// came before the cut, and at the end the glossy share of what came back through its bounce;
+// the cell takes the diffuse shares, its mean weighed by the throughput times the albedo.
+TEST(PsfDemodulation, SplitSendsTheGlossyShareToTheFilm) {
+  MaterialData plastic;
+  plastic.type = MaterialType::Plastic;
+  plastic.albedo = Rgb(0.5f);
+  plastic.roughness = 0.2f;
+  const Vec3 n(0, 0, 1), wo = normalize(Vec3(0.3f, -0.2f, 1.0f));
+  const Bsdf bsdf(plastic, plastic.albedo, n, n, wo);
+  const Vec3 wi = normalize(Vec3(-0.3f, 0.2f, 1.0f));  // the mirror direction: glossy
+  const Rgb share = bsdf.diffuse_share(wo, wi);
+  ASSERT_LT(share[0], 0.9f) << "a glossy share to split";
+  PsfCut cut{7, Rgb(2) * plastic.albedo, Rgb(0.1f)};
+  const Rgb kept = psf_split_nee(bsdf, wo, wi, Rgb(2), Rgb(1), cut);
+  EXPECT_EQ(kept, share);
+  EXPECT_NEAR(cut.before[0], 0.1f + 2 * (1 - share[0]), 1e-6f);
+  Rgb L = Rgb(2) * kept;  // the path's radiance after the cut: its kept light sample
+  psf_split_bounce(bsdf, wo, wi, L, cut);
+  EXPECT_EQ(L, Rgb(0));
+  EXPECT_EQ(cut.kept, Rgb(2) * share);
+  Batch b(1, 0);
+  b.f.demodulate = true;
+  EXPECT_EQ(b.end(0, cut, Rgb(4)), PsfEnd::Filtered);  // 4 came back through the bounce
+  EXPECT_NEAR(b.sum[0], cut.before[0] + 4 * (1 - share[0]), 1e-5);
+  b.resolve();  // alone in its cell: its own diffuse share back
+  EXPECT_NEAR(b.sum[0], cut.before[0] + 4 * (1 - share[0]) + 2 * share[0] + 4 * share[0], 1e-5);
 }
 
 }  // namespace

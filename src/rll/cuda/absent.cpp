@@ -57,6 +57,9 @@ void GpuRenderer::update(const Scene&) {
 size_t GpuRenderer::device_bytes() const {
   return 0;
 }
+size_t GpuRenderer::psf_temporal_bytes() const {
+  return 0;
+}
 const std::string& GpuRenderer::device_name() const {
   static const std::string none;
   return none;

@@ -211,13 +211,15 @@ struct GpuRenderer::Impl {
   DeviceArray<uint32_t> film_count;
   PinnedBuffer film_pinned;
   // The path-space filter's temporal reuse (render/psf.h): its two tables of cells, kept here from
-  // frame to frame, made at the first render with psf.temporal.
+  // frame to frame, made at the first render with psf.temporal that has frames around it (a
+  // still render takes none: RenderSettings::precedes_frame).
   DeviceArray<uint64_t> psf_keys[2];
   DeviceArray<ExactSum> psf_sums[2];
   DeviceArray<uint32_t> psf_used;
   PsfFrameCells psf_frames;
-  PsfFrameCells* psf_cells(const IntegratorSettings& is, size_t pixels) {
-    if (!is.psf.on || !(is.psf.temporal > 0)) return nullptr;
+  PsfFrameCells* psf_cells(const IntegratorSettings& is, const RenderSettings& rs, size_t pixels) {
+    if (!is.psf.on || !(is.psf.temporal > 0) || !(rs.follows_frame || rs.precedes_frame))
+      return nullptr;
     if (psf_frames.pixels != pixels) {
       check_psf_memory(pixels, true);
       psf_frames = PsfFrameCells{};
@@ -357,6 +359,11 @@ size_t GpuRenderer::device_bytes() const {
          (m_impl->scene ? m_impl->scene->bytes() : 0) + m_impl->render_bytes;
 }
 
+size_t GpuRenderer::psf_temporal_bytes() const {
+  // (Either table: the other replaces the one a render without temporal reuse takes.)
+  return m_impl->psf_keys[1].bytes() + m_impl->psf_sums[1].bytes();
+}
+
 const std::string& GpuRenderer::device_name() const {
   return m_impl->name;
 }
@@ -421,7 +428,7 @@ RenderProgress GpuRenderer::render(
   const size_t slots = render_path_slots(wavefront, film, settings, budget, kMaxPathSlots, draws,
                                          integrator.restir.on, draws_several(sampler_view()));
   WavefrontDriver<CudaWavefrontBackend, BvhTracer> driver(
-      backend, k, slots, m.psf_cells(integrator, pixels), settings.follows_frame,
+      backend, k, slots, m.psf_cells(integrator, settings, pixels), settings.follows_frame,
       m.restir_history(integrator, pixels, wavefront.restir_spec));
   m.render_bytes = 0;
   auto note_bytes = [&] {

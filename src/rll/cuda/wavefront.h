@@ -48,6 +48,9 @@ class GpuRenderer {
   // Device memory in bytes: what is held between renders (scene, BVH, tables) and the most the
   // last render took besides (path slots, film, the sampler's tables).
   size_t device_bytes() const;
+  // The device memory of the path-space filter's second table of cells (psf.temporal), what
+  // temporal reuse adds (--stats' temporal_bytes); 0 before a render made it.
+  size_t psf_temporal_bytes() const;
   // The GPU's name, as CUDA gives it.
   const std::string& device_name() const;
 

@@ -66,6 +66,7 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
     RenderSettings rf = rs;
     rf.frame = f;
     rf.follows_frame = f > 0;  // (the filter's temporal reuse blends the last frame's cells)
+    rf.precedes_frame = true;
     const RenderProgress pf =
         session.render(*sampler, earlier, rf, fmt::format("{} frame {}", label, f + 1),
                        show_progress, cancel, after_pass, nullptr, &integrator);
@@ -83,6 +84,7 @@ MeasuredRun measure_run(RenderSession& session, const std::string& name, int rep
   session.set_frame(frames - 1, sampler.get());
   rs.frame = frames - 1;
   rs.follows_frame = frames > 1;
+  rs.precedes_frame = false;
   ConvergenceRecorder recorder(reference, reference_variance);
   Film film(scene.width, scene.height);
   if (!aovs.empty()) film.track_camera_vertex();

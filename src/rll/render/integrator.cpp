@@ -213,7 +213,7 @@ Rgb Integrator::ideal_bsdf_side(const LightContext& ctx, const Bsdf& bsdf, const
 
 Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
                              const Rgb& beta, SampleStream& stream, RayCounters& counters,
-                             CameraVertexSample* camera) const {
+                             CameraVertexSample* camera, PsfCut* split) const {
   Rgb sum(0);
   float pmf_sum = 0;
   int count = 0;
@@ -233,7 +233,7 @@ Rgb Integrator::sample_light(const LightContext& ctx, const Bsdf& bsdf, const Ve
       r = finish_nee_draw(m_constants, d, occluded, bsdf, wo, beta);
     }
     if (m_view.learns) record_nee(m_view, ctx, d.light, r.record);
-    sum += r.value;
+    sum += split ? psf_split_nee(bsdf, wo, d.setup.wi, beta, r.value, *split) : r.value;
     pmf_sum += d.light.pmf;
     ++count;
   });
@@ -267,8 +267,10 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     const Bsdf bsdf = make_vertex_bsdf(c, sh, wo, u, depth);
     if (bsdf.is_black()) break;
     LightContext ctx = make_vertex_context(c, s, sh, hit, wo, bsdf);
+    PsfCut* split = nullptr;  // the cut at this vertex, where it splits its lobes (psf_splits)
     if (cut && cut->key == 0 && psf_cuts_here(c, s, bsdf, hit.t, depth)) {
-      psf_cut(s, *cut);
+      psf_cut(c, s, bsdf, *cut);
+      if (psf_splits(c.psf, bsdf)) split = cut;
       cut->key = psf_cut_key(c, ctx, bsdf, wo,
                              psf_cut_footprint(ctx.footprint, hit.t, s.prev_dir_pdf, wo, sh.ng),
                              depth, stream);
@@ -278,7 +280,8 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
       prepare_point(m_view, ctx, vertex_number(stream, depth, kPrepare));
     CameraVertexSample* vertex = depth == 0 ? camera : nullptr;
     if (vertex) vertex->cell = ctx.cell;
-    if (light) s.L += s.beta * sample_light(ctx, bsdf, wo, depth, s.beta, stream, counters, vertex);
+    if (light)
+      s.L += s.beta * sample_light(ctx, bsdf, wo, depth, s.beta, stream, counters, vertex, split);
     if (light && m_settings.ideal_bsdf > 0 && c.strategy == LightStrategy::Mis)
       s.L += s.beta * ideal_bsdf_side(ctx, bsdf, sh, wo, u, counters);
     if (!continues_after_light(c, bsdf, depth)) break;
@@ -286,6 +289,7 @@ Rgb Integrator::li(const Ray& camera_ray, SampleStream& stream, RayCounters& cou
     bool roulette = false;
     if (!sample_bounce(c, s, bsdf, ctx, sh, wo, u, depth, ray, roulette)) break;
     if (roulette && !survive(s, vertex_number(stream, depth, kRoulette))) break;
+    if (split) psf_split_bounce(bsdf, wo, ray.d, s.L, *split);
     ++counters.bounce;
   }
   return s.L;

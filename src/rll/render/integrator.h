@@ -94,10 +94,11 @@ class Integrator {
   // The next-event estimate at a vertex: its contribution (MIS-weighted for `path`), already
   // divided by the light pmf, before the path throughput: the samples of draw_nee
   // (render/nee_draw.h), one (resampled from nee.candidates) or a multi-sample sampler's several
-  // (rht), each with a shadow ray.
+  // (rht), each with a shadow ray. With `split` (a path-space filter's cut that splits,
+  // psf_splits), the diffuse share of each sample only, its glossy share added to split->before.
   Rgb sample_light(const LightContext& ctx, const Bsdf& bsdf, const Vec3& wo, int depth,
                    const Rgb& beta, SampleStream& stream, RayCounters& counters,
-                   CameraVertexSample* camera) const;
+                   CameraVertexSample* camera, PsfCut* split = nullptr) const;
   // rll.ideal_point: the next-event sample `d` with its light's contribution averaged over
   // ideal_point points on it, each with its shadow ray (the MIS weights as for one point).
   NeeResult ideal_point_nee(const NeeDraw& d, const LightContext& ctx, const Bsdf& bsdf,

@@ -408,21 +408,25 @@ RLL_HD inline bool sample_bounce(const PathConstants& c, PathState& s, const Bsd
 // by a segment of length t. As Fermat's psfpt: from vertex psf.depth on, where the bounce before
 // was rough (sampled with a pdf below psf.max_prob: no Dirac lobe, no sharp glossy lobe; the
 // camera's "bounce" to vertex 0 always counts as rough) and the segment at least psf.min_dist
-// long; and (rll's) not at a vertex of Dirac lobes only, whose radiance is the one direction's.
+// long; and (rll's) not at a vertex of Dirac lobes only, whose radiance is the one direction's,
+// nor with psf.demodulate at one without a diffuse lobe (a conductor, rough glass: all glossy,
+// which Fermat sends to the film; the path may be cut further along).
 RLL_HD inline bool psf_cuts_here(const PathConstants& c, const PathState& s, const Bsdf& bsdf,
                                  float t, int depth) {
   const PsfConstants& f = c.psf;
   if (!f.on || depth < f.depth || bsdf.is_delta() || !(t >= f.min_dist)) return false;
+  if (f.demodulate && bsdf.diffuse_part() == Bsdf::DiffusePart::None) return false;
   return depth == 0 || (!s.prev_delta && s.prev_bsdf_pdf < f.max_prob);
 }
 
 // Cuts the path at this vertex: its throughput and what it gathered so far, which the film takes
 // unfiltered; what it gathers from here on is the radiance its cell averages (s.L starts again
 // from 0). Its cell's key is psf_cut_key's, `pending` until then (the wavefront computes it in a
-// later stage, where registers are to spare).
-RLL_HD inline void psf_cut(PathState& s, PsfCut& cut) {
+// later stage, where registers are to spare). Where the cut splits (psf_splits), its weight is the
+// throughput times the diffuse albedo: the cell averages radiance divided by the albedo.
+RLL_HD inline void psf_cut(const PathConstants& c, PathState& s, const Bsdf& bsdf, PsfCut& cut) {
   cut.key = kPsfKeyPending;
-  cut.weight = s.beta;
+  cut.weight = psf_splits(c.psf, bsdf) ? s.beta * bsdf.diffuse_albedo() : s.beta;
   cut.before = s.L;
   s.L = Rgb(0);
 }

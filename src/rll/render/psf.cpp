@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 #include <nlohmann/json.hpp>
 
@@ -26,6 +27,9 @@ const std::vector<ParamSpec<PsfSettings>>& psf_params() {
       float_param("clamp", ParamRange::at_least(0), field<S, &S::clamp>(), "0 clamps nothing"),
       float_param("temporal", ParamRange{0, 1, false, true}, field<S, &S::temporal>(),
                   "the weight of the sample before in frames that follow frames; 0 is off"),
+      int_param("demodulate", ParamRange::closed(0, 1), field<S, &S::demodulate>(),
+                "1 filters the diffuse lobe divided by its albedo and sends the glossy lobe to the "
+                "film; 0 filters the whole radiance"),
   };
   return table;
 }
@@ -69,6 +73,7 @@ PsfConstants make_psf_constants(const PsfSettings& s, const Bounds3& scene_bound
   c.min_dist = s.min_dist;
   c.clamp = s.clamp;
   c.temporal = s.temporal;
+  c.demodulate = s.demodulate;
   // Fermat's hash: a cell of `width` footprints in radius, at most the scene's extent across,
   // the level of detail rounded at random, 4 bins per axis of the normal's square map; the
   // jitter is each path's own (psf_key), never the pass's.
@@ -119,6 +124,7 @@ PsfTable::PsfTable(size_t pixels, bool cells) {
     m_sums.resize(6 * m_keys.size());
   }
   m_records.resize(pixels);
+  m_ends.resize(pixels);
 }
 
 PsfHistory::PsfHistory(size_t pixels) {
@@ -153,6 +159,40 @@ void clear_psf_cells(const PsfTableView& t) {
 void PsfTable::clear() {
   clear_psf_cells(view());
   zero_in_parallel(m_records.data(), m_records.size() * sizeof(PsfRecord));
+  parallel_for(m_ends.size(), 1 << 16, [&](size_t begin, size_t end) {
+    for (size_t p = begin; p < end; ++p) m_ends[p].traced = false;
+  });
+}
+
+void psf_end_paths(const PsfConstants& f, const PsfTableView& t, const FilmView& film,
+                   View<PsfRecord> records, View<const PsfPathEnd> ends, uint64_t& paths,
+                   uint64_t& nonfinite) {
+  // Far enough ahead for a miss to come back (a few hundred cycles), near enough to stay cached.
+  constexpr size_t kAhead = 8;
+  std::atomic<uint64_t> filtered{0}, dropped{0};
+  parallel_for(ends.size, 4096, [&](size_t begin, size_t end) {
+    uint64_t n = 0, bad = 0;
+    for (size_t p = begin; p < end; ++p) {
+      if (p + kAhead < end) {
+        const uint64_t key = ends[p + kAhead].cut.key;
+        if (key != 0) {
+          const size_t slot = psf_home_slot(t, key);
+          __builtin_prefetch(&t.keys[slot], 1);
+          __builtin_prefetch(&t.sums[6 * slot], 1);
+          __builtin_prefetch(&t.sums[6 * slot + 5], 1);
+        }
+      }
+      const PsfPathEnd& e = ends[p];
+      if (!e.traced) continue;
+      const PsfEnd r = psf_end_path(f, t, film, records, p, e.cut, e.L);
+      n += r == PsfEnd::Filtered;
+      bad += r == PsfEnd::NonFinite;
+    }
+    filtered.fetch_add(n, std::memory_order_relaxed);
+    dropped.fetch_add(bad, std::memory_order_relaxed);
+  });
+  paths += filtered.load();
+  nonfinite += dropped.load();
 }
 
 }  // namespace rll

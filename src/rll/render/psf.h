@@ -20,6 +20,7 @@
 #include "rll/learn/cell_grid.h"
 #include "rll/learn/moments.h"
 #include "rll/render/film.h"
+#include "rll/scene/bsdf.h"
 
 namespace rll {
 
@@ -39,6 +40,10 @@ struct PsfSettings {
   // of the cells of the sample before in a render that follows a frame (RenderSettings::
   // follows_frame); 0: off.
   float temporal = 0;
+  // Fermat's demodulation (docs/psf.md): at a cut vertex with a separable diffuse lobe, the cell
+  // averages only that lobe's radiance divided by its albedo (irradiance-like), each path
+  // multiplies its own albedo back in, and the glossy lobe's share goes to the film unfiltered.
+  bool demodulate = true;
 };
 
 // The psf.* keys as one table (core/param_table.h): read, checked, listed by `rll filters`.
@@ -57,7 +62,8 @@ struct PsfConstants {
   bool on = false;
   int depth = 1;
   float max_prob = 32, min_dist = 0, clamp = 0;
-  float temporal = 0;  // PsfSettings::temporal
+  float temporal = 0;       // PsfSettings::temporal
+  bool demodulate = false;  // PsfSettings::demodulate
   CellKeyer keyer;
 };
 PsfConstants make_psf_constants(const PsfSettings& s, const Bounds3& scene_bounds);
@@ -74,9 +80,14 @@ inline constexpr uint32_t kPsfJitterDimension = 1u << 25;
 // 32, about 10 degrees; render/path_vertex.h, psf_cut_footprint).
 inline constexpr float kPsfMinConePdf = 32.0f;
 
+// With psf.demodulate, the weight is the throughput times the cut vertex's diffuse albedo, and
+// the cut splits what the path gathers at and after it (psf_split_nee, psf_split_bounce): `before`
+// also takes the glossy share of the cut vertex's light samples and, at the end, of what came
+// back through its bounce (1 - `share`); `kept` holds the diffuse share of its light samples.
 struct PsfCut {
   uint64_t key = 0;
   Rgb weight{0}, before{0};
+  Rgb kept{0}, share{1};
 };
 // A cut whose key is still to be computed (keys are odd: CellKeyer::key).
 inline constexpr uint64_t kPsfKeyPending = 2;
@@ -94,6 +105,34 @@ RLL_HD inline uint64_t psf_key(const PsfConstants& f, const Vec3& p, Vec3 ns, co
   const float disk = depth == 0 ? 1.0f : 0.5f;
   return f.keyer.key(
       f.keyer.locate_jittered(p, ns, footprint, u[4], {d.x * disk, d.y * disk}, {u[2], u[3]}));
+}
+
+// Whether psf.demodulate splits the cut vertex of BSDF `bsdf` into its diffuse lobe (filtered,
+// demodulated by its albedo) and its glossy one (to the film): a Separable diffuse part
+// (Bsdf::diffuse_part). A Layered one (CoatedDiffuse, whose walk mixes the lobes) is filtered
+// whole, as without the key; a vertex without a diffuse lobe is not cut (psf_cuts_here).
+RLL_HD inline bool psf_splits(const PsfConstants& f, const Bsdf& bsdf) {
+  return f.demodulate && bsdf.diffuse_part() == Bsdf::DiffusePart::Separable;
+}
+
+// At a cut vertex that psf_splits: the diffuse share of one light sample's `value` (its estimate of
+// f Le cos / pdf toward wi), which the path keeps for its cell; the glossy share, times the
+// throughput `beta`, goes to the film with what the path gathered before the cut.
+RLL_HD inline Rgb psf_split_nee(const Bsdf& bsdf, const Vec3& wo, const Vec3& wi, const Rgb& beta,
+                                const Rgb& value, PsfCut& cut) {
+  const Rgb share = bsdf.diffuse_share(wo, wi);
+  cut.before += beta * (value * (Rgb(1) - share));
+  return value * share;
+}
+
+// After the bounce from a cut vertex that psf_splits, toward wi: what comes back through it
+// splits by the diffuse lobe's share of f(wo, wi) (psf_end_path); the path's radiance so far
+// (the diffuse share of the vertex's light samples) is kept apart from it.
+RLL_HD inline void psf_split_bounce(const Bsdf& bsdf, const Vec3& wo, const Vec3& wi, Rgb& L,
+                                    PsfCut& cut) {
+  cut.share = bsdf.diffuse_share(wo, wi);
+  cut.kept = L;
+  L = Rgb(0);
 }
 
 // A component-wise clamp of a contribution to the film or to a cell (0: none).
@@ -117,10 +156,15 @@ RLL_HD inline size_t psf_capacity(size_t paths) {
   return 2 * paths + 1;
 }
 
+// The slot where the probe for `key` starts.
+RLL_HD inline uint32_t psf_home_slot(const PsfTableView& t, uint64_t key) {
+  return uint32_t((key >> 1) % uint32_t(t.keys.size));
+}
+
 // The cell of `key` (!= 0), taken if free; thread-safe.
 RLL_HD inline uint32_t psf_cell(const PsfTableView& t, uint64_t key) {
   const uint32_t n = uint32_t(t.keys.size);
-  uint32_t slot = uint32_t((key >> 1) % n);
+  uint32_t slot = psf_home_slot(t, key);
   for (;;) {
     const uint64_t seen = atomic_cas(&t.keys[slot], 0, key);
     if (seen == 0) {
@@ -157,12 +201,18 @@ RLL_HD inline PsfEnd psf_end_path(const PsfConstants& f, const PsfTableView& t,
       L = Rgb(0);
     }
     film.add(pixel, psf_clamp(L, f.clamp));
-  } else if (!is_finite(L) || !is_finite(cut.before) || !is_finite(cut.weight)) {
+  } else if (!is_finite(L) || !is_finite(cut.before) || !is_finite(cut.weight) ||
+             !is_finite(cut.kept)) {
     end = PsfEnd::NonFinite;
     film.add(pixel, Rgb(0));
   } else {
     end = PsfEnd::Filtered;
-    film.add(pixel, psf_clamp(cut.before, f.clamp));
+    Rgb before = cut.before;
+    if (f.demodulate) {  // (the glossy share of what came back through the cut's bounce)
+      before += L * (Rgb(1) - cut.share);
+      L = cut.kept + L * cut.share;
+    }
+    film.add(pixel, psf_clamp(before, f.clamp));
     const uint32_t cell = psf_cell(t, cut.key);
     const Rgb after = psf_clamp(L, f.clamp);
     ExactSum* s = &t.sums[6 * size_t(cell)];
@@ -209,7 +259,7 @@ inline constexpr uint32_t kPsfNoCell = 0xffffffffu;
 // The cell of `key` (!= 0) in a table that no thread writes to, or kPsfNoCell.
 RLL_HD inline uint32_t psf_find(const PsfTableView& t, uint64_t key) {
   const uint32_t n = uint32_t(t.keys.size);
-  uint32_t slot = uint32_t((key >> 1) % n);
+  uint32_t slot = psf_home_slot(t, key);
   for (uint32_t probes = 0; probes < n; ++probes) {
     const uint64_t seen = t.keys[slot];
     if (seen == key) return slot;
@@ -257,10 +307,20 @@ struct PsfFrameCells {
   }
 };
 
+// The megakernel's path of a batch, ended in a loop of their own (psf_end_paths) rather than
+// each as it is traced: their cells' cache lines, random in a table of 16 MB at 320 x 240, are
+// then fetched ahead of their inserts instead of one miss after another within the tracing.
+struct PsfPathEnd {
+  PsfCut cut;
+  Rgb L{0};
+  bool traced = false;  // (a stopped batch leaves pixels untraced: they add nothing)
+};
+
 // The bytes the filter takes per pixel of the film: a record, psf_capacity cells of a key and six
-// sums for its batch of one path per pixel, and (the wavefront's) a path slot's cut.
+// sums for its batch of one path per pixel, and a path's end (the megakernel's per pixel, with
+// its radiance; the wavefront's cut per path slot, smaller).
 inline constexpr double kPsfBytesPerPixel =
-    sizeof(PsfRecord) + 2.0 * (sizeof(uint64_t) + 6 * sizeof(ExactSum)) + sizeof(PsfCut);
+    sizeof(PsfRecord) + 2.0 * (sizeof(uint64_t) + 6 * sizeof(ExactSum)) + sizeof(PsfPathEnd);
 inline constexpr const char* kPsfPixelText = "the path-space filter's cells and path records";
 
 // The bytes a pixel temporal reuse adds: the second table of cells.
@@ -310,12 +370,24 @@ class PsfTable {
   View<PsfRecord> records() { return view_of(m_records); }
   uint32_t used() const { return m_used; }
 
+  // The megakernel's paths of the batch (PsfPathEnd).
+  View<PsfPathEnd> ends() { return view_of(m_ends); }
+
  private:
   std::vector<uint64_t> m_keys;
   std::vector<ExactSum> m_sums;
   std::vector<PsfRecord> m_records;
+  std::vector<PsfPathEnd> m_ends;
   uint32_t m_used = 0;
 };
+
+// The ends of the megakernel's paths of a batch (PsfPathEnd) as psf_end_path's, each pixel's
+// in turn (in parallel), the cells of the paths kPsfPrefetch pixels ahead prefetched; their
+// counts added to `paths` (filtered) and `nonfinite`. The cells' sums are exact, so the image is
+// the one of ending each path as it is traced, to the bit.
+void psf_end_paths(const PsfConstants& f, const PsfTableView& t, const FilmView& film,
+                   View<PsfRecord> records, View<const PsfPathEnd> ends, uint64_t& paths,
+                   uint64_t& nonfinite);
 
 // Temporal reuse's cells in the host's memory (the megakernel's and the CPU wavefront's), kept by
 // the session from frame to frame.

@@ -209,18 +209,20 @@ RenderProgress render(const Scene& scene, Integrator& integrator, LightSampler& 
       const PsfTableView t = frames ? frames->next() : table->view();
       if (frames) clear_psf_cells(t);
       const View<PsfRecord> records = table->records();
-      std::atomic<uint64_t> paths{0}, reused{0};
-      for_each_tile(
-          w, h, ts, stop, pass_rays, pass_nonfinite,
-          [&](int x, int y, RayCounters& rays, uint64_t& nonfinite, const auto& stop_now) {
-            if (stop_now()) return false;
-            PsfCut cut;
-            const Rgb L = trace(x, y, s, frame_seed, rays, &cut);
-            const PsfEnd end = psf_end_path(psf, t, fv, records, size_t(y) * w + x, cut, L);
-            nonfinite += end == PsfEnd::NonFinite;
-            if (end == PsfEnd::Filtered) paths.fetch_add(1, std::memory_order_relaxed);
-            return true;
-          });
+      const View<PsfPathEnd> ends = table->ends();
+      std::atomic<uint64_t> reused{0};
+      uint64_t paths = 0;
+      // The paths first, then their ends (psf_end_paths: the cells fetched ahead of the inserts).
+      for_each_tile(w, h, ts, stop, pass_rays, pass_nonfinite,
+                    [&](int x, int y, RayCounters& rays, uint64_t&, const auto& stop_now) {
+                      if (stop_now()) return false;
+                      PsfPathEnd& e = ends[size_t(y) * w + x];
+                      e.cut = PsfCut{};
+                      e.L = trace(x, y, s, frame_seed, rays, &e.cut);
+                      e.traced = true;
+                      return true;
+                    });
+      psf_end_paths(psf, t, fv, records, ends, paths, pass_nonfinite);
       if (frames && frames->blends(settings.follows_frame)) {
         const PsfTableView last = frames->previous();
         parallel_for(t.keys.size, 4096, [&](size_t begin, size_t end) {
@@ -234,7 +236,7 @@ RenderProgress render(const Scene& scene, Integrator& integrator, LightSampler& 
       });
       filter.batches += 1;
       filter.cells += *t.used;
-      filter.paths += paths.load();
+      filter.paths += paths;
       filter.reused += reused.load();
       if (frames) frames->filled();
     }

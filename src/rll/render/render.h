@@ -37,6 +37,10 @@ struct RenderSettings {
   // reuse (psf.temporal) blends the cells that render left. False (a first frame, a still
   // render): the render's samples blend nothing, and leave their cells for the next frame.
   bool follows_frame = false;
+  // A frame follows this render (an animation's frames but the last, interactive's frames but
+  // the last): the session keeps temporal reuse's cells for it (RenderSession::render). Without
+  // one and without follows_frame, a render with psf.temporal allocates no second table.
+  bool precedes_frame = false;
   PointSet points = PointSet::Sobol;  // the sample points (--points)
 };
 

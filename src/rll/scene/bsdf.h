@@ -110,6 +110,19 @@ class Bsdf {
   RLL_HD bool has_transmission() const {
     return m_type == MaterialType::Dielectric || m_type == MaterialType::ThinDielectric;
   }
+  // The BSDF's diffuse part, which path-space filtering's demodulation (render/psf.h) divides by
+  // its albedo: Separable where a Lambertian lobe is summed apart from the glossy one (Diffuse,
+  // Plastic: f = f_diffuse + f_glossy), Layered where the Lambertian base is reached through a
+  // coat by a random walk that mixes the lobes (CoatedDiffuse), None where there is no diffuse
+  // lobe (conductors, glass) or its albedo is black.
+  enum class DiffusePart : uint8_t { None, Separable, Layered };
+  RLL_HD DiffusePart diffuse_part() const;
+  // The Lambertian lobe's albedo (texture included): Separable BSDFs'.
+  RLL_HD const Rgb& diffuse_albedo() const { return m_albedo; }
+  // The Lambertian lobe's share of f(wo, wi) per channel, in [0, 1] (0 where f is 0): 1 for
+  // Diffuse, f_diffuse / f for Plastic. A Separable BSDF's only; multiplying an estimate of
+  // f(wo, wi) (an NEE sample's, or a bounce's f / pdf) by it estimates the diffuse lobe's.
+  RLL_HD Rgb diffuse_share(const Vec3& wo, const Vec3& wi) const;
 
  private:
   // Probability of sampling the specular lobe of a plastic, given wo (local).
@@ -566,6 +579,28 @@ RLL_HD inline bool Bsdf::layered_sample(const Vec3& wo, float uc, Vec2 u, Pcg32&
 }
 
 // --- Bsdf: eval, pdf, sample -------------------------------------------------------------------
+
+RLL_HD inline Bsdf::DiffusePart Bsdf::diffuse_part() const {
+  if (m_type == MaterialType::CoatedDiffuse) return DiffusePart::Layered;
+  if ((m_type == MaterialType::Diffuse || m_type == MaterialType::Plastic) &&
+      !rll::is_black(m_albedo))
+    return DiffusePart::Separable;
+  return DiffusePart::None;
+}
+
+RLL_HD inline Rgb Bsdf::diffuse_share(const Vec3& wo_w, const Vec3& wi_w) const {
+  if (m_type == MaterialType::Diffuse) return Rgb(1);
+  const Rgb f = eval(wo_w, wi_w);
+  if (rll::is_black(f)) return Rgb(0);
+  // eval()'s Plastic base term, with the same conditions (same side, both above).
+  const Vec3 wo = m_frame.to_local(wo_w), wi = m_frame.to_local(wi_w);
+  const float t = (1 - fresnel_dielectric(wi.z, m_ior)) * (1 - fresnel_dielectric(wo.z, m_ior));
+  const Rgb d = m_albedo * (t * kInvPi);
+  Rgb share(0);
+  for (int c = 0; c < 3; ++c)
+    if (f[c] > 0) share[c] = std::min(1.0f, d[c] / f[c]);
+  return share;
+}
 
 RLL_HD inline Rgb Bsdf::eval(const Vec3& wo_w, const Vec3& wi_w) const {
   if (m_type == MaterialType::Dielectric) {

@@ -73,13 +73,9 @@ RenderSession::RenderSession(const SessionSettings& settings)
   m_tree = build_light_tree(m_scene);
   m_integrator =
       make_integrator_settings(settings.integrator, settings.max_depth, m_params, settings.filter);
-  // The filter's cells and records (and temporal reuse's second table) are kept beside the film:
-  // checked with it.
-  if (m_integrator.psf.on && m_integrator.psf.temporal > 0)
-    check_film_memory(
-        kRenderBytesPerPixel + kPsfBytesPerPixel + kPsfTemporalBytesPerPixel,
-        fmt::format("{}, {} and {}", kRenderPixelText, kPsfPixelText, kPsfTemporalPixelText));
-  else if (m_integrator.psf.on)
+  // The filter's cells and records are kept beside the film: checked with it (temporal reuse's
+  // second table where a render that has frames around it makes it: render()).
+  if (m_integrator.psf.on)
     check_film_memory(kRenderBytesPerPixel + kPsfBytesPerPixel,
                       fmt::format("{}, and {}", kRenderPixelText, kPsfPixelText));
   m_accel = std::make_unique<Accel>(m_scene.mesh);
@@ -286,9 +282,15 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   std::unique_lock psf_lock(m_psf_mutex, std::defer_lock);
   PsfHistory* history = nullptr;
   const size_t pixels = size_t(film.width()) * film.height();
-  if (is.psf.on && is.psf.temporal > 0 && !m_gpu && psf_lock.try_lock()) {
+  // Only where a frame came before or comes after: a still render blends nothing and keeps no
+  // cells for a next frame, so it takes no second table.
+  if (is.psf.on && is.psf.temporal > 0 && !m_gpu &&
+      (settings.follows_frame || settings.precedes_frame) && psf_lock.try_lock()) {
     if (!m_psf_history || m_psf_history->cells().pixels != pixels) {
       m_psf_history.reset();
+      check_film_memory(
+          kRenderBytesPerPixel + kPsfBytesPerPixel + kPsfTemporalBytesPerPixel,
+          fmt::format("{}, {} and {}", kRenderPixelText, kPsfPixelText, kPsfTemporalPixelText));
       m_psf_history = std::make_unique<PsfHistory>(pixels);
     }
     history = m_psf_history.get();
@@ -344,6 +346,7 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
 }
 
 size_t RenderSession::psf_history_bytes() const {
+  if (m_gpu) return m_gpu->psf_temporal_bytes();
   std::lock_guard lock(m_psf_mutex);
   return m_psf_history ? m_psf_history->bytes() : 0;
 }

@@ -241,7 +241,7 @@ struct WavefrontKernels {
     LightContext ctx = make_vertex_context(c, s, sh, p.hit[i], wo, *bsdf);
     // (The cut's key is the BSDF sampling stage's: this stage is the one short of registers.)
     if (c.psf.on && p.cut[i].key == 0 && psf_cuts_here(c, s, *bsdf, p.hit[i].t, depth))
-      psf_cut(s, p.cut[i]);
+      psf_cut(c, s, *bsdf, p.cut[i]);
     if (sampler.prepares && !bsdf->is_delta())
       prepare_point(sampler, ctx, vertex_number(stream, depth, kPrepare));
     p.store(i, s);
@@ -303,6 +303,8 @@ struct WavefrontKernels {
 
   // The next-event samples' contributions after their shadow rays' verdicts.
   RLL_HD void nee_finish_stage(uint32_t i) const {
+    // (A cut at this vertex still has its key to come: psf_cut_key is the BSDF sampling stage's.)
+    const bool split = c.psf.on && p.cut[i].key == kPsfKeyPending && psf_splits(c.psf, p.bsdf[i]);
     Rgb value(0);
     for (uint32_t j = i * draws, end = j + p.draws[i]; j < end; ++j) {
       NeeDraw d;
@@ -313,7 +315,9 @@ struct WavefrontKernels {
       if (reaches_light(d.setup, occluded)) atomic_add(&tally->shadow_visible, uint64_t(1));
       const NeeResult r = finish_nee_draw(c, d, occluded, p.bsdf[i], -p.ray[i].d, p.beta[i]);
       p.record[j] = r.record;
-      value += r.value;
+      value += split
+                   ? psf_split_nee(p.bsdf[i], -p.ray[i].d, d.setup.wi, p.beta[i], r.value, p.cut[i])
+                   : r.value;
     }
     p.L[i] += p.beta[i] * value;
   }
@@ -328,6 +332,7 @@ struct WavefrontKernels {
   RLL_HD void bsdf_sample_stage(uint32_t i) const {
     const int depth = p.depth[i];
     const Bsdf& bsdf = p.bsdf[i];
+    const bool split = c.psf.on && p.cut[i].key == kPsfKeyPending && psf_splits(c.psf, bsdf);
     if (c.psf.on && p.cut[i].key == kPsfKeyPending)  // (the key of a cut at this vertex)
       p.cut[i].key = psf_cut_key(c, p.ctx[i], bsdf, -p.ray[i].d,
                                  psf_cut_footprint(p.ctx[i].footprint, p.hit[i].t,
@@ -341,6 +346,7 @@ struct WavefrontKernels {
                        roulette))
       return;
     if (roulette && !survive(s, vertex_number(p.stream[i], depth, kRoulette))) return;
+    if (split) psf_split_bounce(bsdf, -p.ray[i].d, next.d, s.L, p.cut[i]);
     p.store(i, s);
     p.ray[i] = next;
     p.depth[i] = depth + 1;
