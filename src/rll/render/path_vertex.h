@@ -317,7 +317,7 @@ struct NeeChoice {
 // c.nee_learnt_target each weight is multiplied by `target(candidate)`, the sampler's learnt
 // factor of the candidate (nee_target, lights/light_dispatch.h: the target p_hat times that
 // factor; finish_nee_draw's ratio uses the same weights). With c.nee_cluster, candidates
-// 1..M-1 are drawn by `in_cluster(first, u)` from candidate 0's cluster (sample_in_cluster):
+// 1..M-1 are drawn by `in_cluster(kept, u)` from candidate 0's cluster (sample_in_cluster):
 // given the cluster, all M are i.i.d. from the sampler's distribution over its lights, and each
 // weight's pmf is the full one (the cluster's probability times the light's within it), so the
 // ratio (sum w / M) / w_kept is that of resampling within the cluster (docs/nee.md).
@@ -333,14 +333,14 @@ RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext&
                                      const InCluster& in_cluster, const Target& target) {
   NeeChoice ch;
   const bool mis = c.strategy == LightStrategy::Mis;
-  SampledLight first;
   for (int i = 0; i < c.nee_candidates; ++i) {
     const CandidateNumbers u = candidate_numbers(stream, depth, i);
+    // From one cluster, the candidate kept so far stands for candidate 0 (the same record:
+    // cluster, its probability, target; and pmf > 0): no copy of it is held (registers).
     const SampledLight sl =
         c.nee_cluster && i > 0
-            ? in_cluster(first, stratum(i - 1, c.nee_candidates - 1, u.light.u_light))
+            ? in_cluster(ch.light, stratum(i - 1, c.nee_candidates - 1, u.light.u_light))
             : sample(u.light.u_light);
-    if (i == 0) first = sl;
     if (!(sl.pmf > 0)) {
       if (c.nee_cluster && i == 0) break;  // no cluster to draw the others from
       continue;
