@@ -37,8 +37,8 @@ LightContext floor_context(const Scene& s) {
 }
 
 // Feeds one pass of rewards: `samples` draws at ctx, reward 1 for lights in [lit_begin, lit_end).
-void feed_pass(LtcLightSampler& ltc, const LightContext& ctx, int samples, uint32_t lit_begin, uint32_t lit_end,
-               uint64_t seed) {
+void feed_pass(LtcLightSampler& ltc, const LightContext& ctx, int samples, uint32_t lit_begin,
+               uint32_t lit_end, uint64_t seed) {
   Pcg32 rng(seed);
   for (int i = 0; i < samples; ++i) {
     SampledLight s = sample_light(ltc.sampler_view(), ctx, rng.next_double());
@@ -58,7 +58,8 @@ TEST(LtcClusters, PartitionThePointsIntoTheRequestedCount) {
   std::vector<Vec3> pts;
   for (int i = 0; i < 4000; ++i) {
     // Two slabs and a line of duplicates: medians with ties must still split.
-    float x = rng.next_float(), y = i % 3 == 0 ? 0.0f : rng.next_float(), z = i < 200 ? 0.5f : rng.next_float();
+    float x = rng.next_float(), y = i % 3 == 0 ? 0.0f : rng.next_float(),
+          z = i < 200 ? 0.5f : rng.next_float();
     pts.push_back(Vec3(x, y, z));
   }
   for (int i = 0; i < 50; ++i) pts.push_back(Vec3(0.25f, 0.25f, 0.25f));
@@ -75,7 +76,8 @@ TEST(LtcClusters, PartitionThePointsIntoTheRequestedCount) {
   }
   for (uint32_t c = 0; c < sc.size(); ++c) {
     ASSERT_GT(count[c], 0) << "cluster " << c;
-    for (int a = 0; a < 3; ++a) EXPECT_NEAR(sum[3 * c + a] / count[c], sc.centre(c)[a], 1e-5) << "cluster " << c;
+    for (int a = 0; a < 3; ++a)
+      EXPECT_NEAR(sum[3 * c + a] / count[c], sc.centre(c)[a], 1e-5) << "cluster " << c;
   }
   // Largest boxes split first: no cluster holds more than a few times its share of points.
   EXPECT_LT(*std::max_element(count.begin(), count.end()), 8 * int(pts.size() / 300));
@@ -106,7 +108,8 @@ TEST(LtcSampler, DirectionBinsCoverTheSphere) {
   std::vector<int> hits(64, 0);
   Pcg32 rng(3);
   for (int i = 0; i < 20000; ++i) {
-    float z = 2 * rng.next_float() - 1, phi = 2 * kPi * rng.next_float(), r = std::sqrt(std::max(0.0f, 1 - z * z));
+    float z = 2 * rng.next_float() - 1, phi = 2 * kPi * rng.next_float(),
+          r = std::sqrt(std::max(0.0f, 1 - z * z));
     uint32_t b = ltc.direction_bin(Vec3(r * std::cos(phi), r * std::sin(phi), z));
     ASSERT_LT(b, 64u);
     ++hits[b];
@@ -174,7 +177,8 @@ TEST(LtcSampler, LearntStateIndependentOfRewardOrder) {
     for (int i = 0; i < 3000; ++i) {
       SampledLight sl = sample_light(a.sampler_view(), ctx, rng.next_double());
       NeeRecord r;
-      r.estimate = sl.light == lit ? 2.0f : (sl.light % 7 == 0 ? 0.01f * float(sl.light % 13) : 0.0f);
+      r.estimate =
+          sl.light == lit ? 2.0f : (sl.light % 7 == 0 ? 0.01f * float(sl.light % 13) : 0.0f);
       r.mis_weight = 0.9f;
       recs.push_back({sl, r});
     }
@@ -191,8 +195,49 @@ TEST(LtcSampler, LearntStateIndependentOfRewardOrder) {
 
 TEST(LtcSampler, BadParametersAreErrors) {
   Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
-  for (const char* bad : {"ltc.epsilon=0", "ltc.initial_cut=70", "ltc.bins=0", "ltc.capacity=0", "ltc.clusters=0"}) {
+  for (const char* bad :
+       {"ltc.epsilon=0", "ltc.initial_cut=70", "ltc.bins=0", "ltc.capacity=0", "ltc.clusters=0"}) {
     Params p = Params::parse({bad});
     EXPECT_THROW(ltc_settings_from(p), Error) << bad;
   }
+}
+
+// ltc's entries and rll's cells keep their cuts in the same arrays (learn/cut_arrays.h), read by
+// the same draw: a cell with a cut reads its own slice, any other (kNoCell too) the initial cut.
+TEST(CutArrays, ACellReadsItsOwnCutAndOneWithoutReadsTheInitialCut) {
+  Scene s = test::small_builtin_scene("many-lights-open", 16, 12);
+  const LightTree tree = build_light_tree(s);
+  CutArrays a(tree, 3, 8, power_cut(tree, 4));
+  ASSERT_EQ(a.initial.size(), 4u);
+  for (size_t k = 0; k < 4; ++k) EXPECT_EQ(a.initial_ends[k], tree.node(a.initial[k]).end);
+  // Cell 1 gets the root's two children, drawn with 1/4 and 3/4.
+  const uint32_t c = tree.node(LightTree::kRoot).child;
+  const CutArraysRwView w = a.rw_view();
+  const size_t b = w.base(1);
+  for (uint32_t k = 0; k < 2; ++k) {
+    w.node[b + k] = c + k;
+    w.end[b + k] = tree.node(c + k).end;
+  }
+  w.cdf[b] = 0.25f;
+  w.cdf[b + 1] = 1.0f;
+  w.size[1] = 2;
+
+  const CutArraysView v = a.view();
+  EXPECT_FALSE(v.active(0));
+  EXPECT_TRUE(v.active(1));
+  EXPECT_EQ(v.base(2), 16u);
+  for (uint32_t cell : {0u, 2u, kNoCell}) {
+    const detail::RllCut r = detail::rll_cut(v, cell);
+    EXPECT_EQ(r.size, 4u) << cell;
+    EXPECT_EQ(r.nodes, a.initial.data()) << cell;
+    EXPECT_EQ(r.ends, a.initial_ends.data()) << cell;
+    EXPECT_EQ(r.cdf, nullptr) << cell;
+  }
+  const detail::RllCut r = detail::rll_cut(v, 1);
+  EXPECT_EQ(r.size, 2u);
+  EXPECT_EQ(r.nodes, a.nodes(1));
+  EXPECT_EQ(r.ends, a.ends(1));
+  EXPECT_EQ(r.cdf, a.cdf_of(1));
+  EXPECT_FLOAT_EQ(detail::rll_cdf_width(r, 1), 0.75f);
+  EXPECT_EQ(detail::rll_cluster_of(r, tree.node(c).end), 1u);
 }

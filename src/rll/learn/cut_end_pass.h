@@ -19,17 +19,14 @@
 
 namespace rll {
 
-// Every per-cell array of a CutStore, writable: what the end of pass reads and writes.
-struct CutStoreEndView {
+// The shared cut arrays and every per-cell array of rll's CutStore, writable: what the end of
+// pass reads and writes.
+struct CutStoreEndView : CutArraysRwView {
   CutSettings s;
   LightTreeView tree;
-  uint32_t m = 0;       // clusters per cell at most: the stride of the per-cluster arrays
   double scale = 1;     // the unit of a cell's sums before it has learnt anything
   double log_keep = 0;  // log(1 - alpha), the exponential rule's
-  View<const uint32_t> initial, initial_ends;  // the shared initial cut
-  View<uint32_t> size;                         // K per cell; 0: no cut yet
-  View<uint32_t> node, end;
-  View<float> q, m2, n, weight, cdf;
+  View<float> q, m2, n, weight;
   View<float> gl, gr;  // guided descent only (empty otherwise)
   View<float> vis;     // per cluster: CutStore::target_factor
   View<uint8_t> learnt;
@@ -40,9 +37,6 @@ struct CutStoreEndView {
   View<double> inv_unit;
   View<ExactSum> sum, sq;
   View<uint32_t> count;
-
-  RLL_HD bool active(uint32_t cell) const { return size[cell] > 0; }
-  RLL_HD size_t base(uint32_t cell) const { return size_t(cell) * m; }
 };
 
 // One cell's scratch during the end of pass: per cluster of its room (cut_scratch_room), two

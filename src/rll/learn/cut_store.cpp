@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "rll/core/error.h"
 #include "rll/learn/cut_end_pass.h"
@@ -19,18 +20,13 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   // 2^36 of it).
   m_scale = std::max(reward_scale, 1e-30);
   m_log_keep = std::log1p(-double(s.alpha));
-  m_initial = initial_cut(tree, s.initial_size);
-  for (uint32_t n : m_initial) m_initial_ends.push_back(tree.node(n).end);
+  m_cuts = CutArrays(tree, cells, uint32_t(m_m), initial_cut(tree, s.initial_size));
 
   const size_t n = size_t(cells) * m_m;
-  m_size.assign(cells, 0);
-  m_node.assign(n, 0);
-  m_end.assign(n, 0);
   m_q.assign(n, 0.0f);
   m_m2.assign(n, 0.0f);
   m_n.assign(n, 0.0f);
   m_weight.assign(n, 0.0f);
-  m_cdf.assign(n, 0.0f);
   m_vis.assign(n, 1.0f);
   if (s.guided) {
     m_gl.assign(n, 1.0f);
@@ -51,19 +47,13 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
 }
 
 CutStoreView CutStore::view() {
-  const size_t n = m_size.size() * size_t(m_m);
+  const size_t n = m_cuts.node.size();
   CutStoreView v;
-  v.m = uint32_t(m_m);
-  v.size = view_of(m_size);
-  v.node = view_of(m_node);
-  v.end = view_of(m_end);
-  v.cdf = view_of(m_cdf);
+  static_cast<CutArraysView&>(v) = std::as_const(m_cuts).view();
   v.gl = view_of(m_gl);
   v.gr = view_of(m_gr);
   v.vis = view_of(m_vis);
   v.eps = view_of(m_eps);
-  v.initial = view_of(m_initial);
-  v.initial_ends = view_of(m_initial_ends);
   v.anchor = view_of(m_anchor);
   v.inv_unit = view_of(m_inv_unit);
   v.sum = {m_sum.get(), n};
@@ -84,26 +74,20 @@ size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, int pool_t
 }
 
 size_t CutStore::bytes() const {
-  return bytes_for(uint32_t(m_size.size()), m_m, m_s.guided, m_s.pool_tiers());
+  return bytes_for(m_cuts.cells(), m_m, m_s.guided, m_s.pool_tiers());
 }
 
 CutStoreEndView CutStore::end_view() {
   CutStoreEndView v;
+  static_cast<CutArraysRwView&>(v) = m_cuts.rw_view();
   v.s = m_s;
   v.tree = m_tree.view();
-  v.m = uint32_t(m_m);
   v.scale = m_scale;
   v.log_keep = m_log_keep;
-  v.initial = view_of(m_initial);
-  v.initial_ends = view_of(m_initial_ends);
-  v.size = view_of(m_size);
-  v.node = view_of(m_node);
-  v.end = view_of(m_end);
   v.q = view_of(m_q);
   v.m2 = view_of(m_m2);
   v.n = view_of(m_n);
   v.weight = view_of(m_weight);
-  v.cdf = view_of(m_cdf);
   v.gl = view_of(m_gl);
   v.gr = view_of(m_gr);
   v.vis = view_of(m_vis);
@@ -114,7 +98,7 @@ CutStoreEndView CutStore::end_view() {
   v.pool = view_of(m_pool);
   v.has_pool = view_of(m_has_pool);
   v.inv_unit = view_of(m_inv_unit);
-  const size_t n = m_size.size() * size_t(m_m);
+  const size_t n = m_cuts.node.size();
   v.sum = {m_sum.get(), n};
   v.sq = {m_sq.get(), n};
   v.count = {m_count.get(), n};
@@ -130,20 +114,20 @@ void CutStore::add_pass_rewards(uint32_t cell, double* sum, double* sq, uint64_t
 }
 
 void CutStore::cell_prior(uint32_t cell, std::vector<double>& out) const {
-  out.resize(active(cell) ? m_size[cell] : m_initial.size());
+  out.resize(active(cell) ? size(cell) : initial_size());
   cut_cell_prior(end_view(), cell, out.data(), HostCutScratch(initial_size()));
 }
 
 void CutStore::set_pool(uint32_t cell, const float* shares) {
   if (m_has_pool.empty()) return;
   m_has_pool[cell] = shares != nullptr;
-  if (shares) std::copy_n(shares, m_initial.size(), &m_pool[size_t(cell) * m_m]);
+  if (shares) std::copy_n(shares, initial_size(), &m_pool[size_t(cell) * m_m]);
 }
 
 std::vector<double> CutStore::learnt_shares(uint32_t cell) const {
   if (!active(cell) || !learnt(cell)) return {};
   const CutStoreEndView v = end_view();
-  const size_t K = m_size[cell];
+  const size_t K = size(cell);
   std::vector<double> pri(K);
   std::vector<float> val(K);
   cut_cell_prior(v, cell, pri.data(), HostCutScratch(0));  // (active: no scratch)
@@ -164,7 +148,7 @@ void CutStore::assign(uint32_t cell, const std::vector<uint32_t>& nodes,
   const CutStoreEndView v = end_view();
   const size_t base = size_t(cell) * m_m;
   for (size_t k = 0; k < nodes.size(); ++k) {
-    m_node[base + k] = nodes[k];
+    m_cuts.node[base + k] = nodes[k];
     m_q[base + k] = q[k];
     m_m2[base + k] = q[k] * q[k];  // known exactly: the mean is the target whatever rll.target says
     m_n[base + k] = 1.0f / m_s.alpha;
@@ -175,7 +159,7 @@ void CutStore::assign(uint32_t cell, const std::vector<uint32_t>& nodes,
 }
 
 void CutStore::refresh(uint32_t cell) {
-  cut_refresh(end_view(), cell, HostCutScratch(m_size[cell]));
+  cut_refresh(end_view(), cell, HostCutScratch(size(cell)));
 }
 
 CutStore::PassStats CutStore::end_pass(uint32_t cell) {
@@ -185,14 +169,14 @@ CutStore::PassStats CutStore::end_pass(uint32_t cell) {
 
 void CutStore::save_cell(uint32_t cell, BinaryWriter& w) const {
   const size_t base = size_t(cell) * m_m;
-  const uint32_t K = m_size[cell];
+  const uint32_t K = size(cell);
   w.put(K);
-  w.put_array(&m_node[base], K);
+  w.put_array(&m_cuts.node[base], K);
   w.put_array(&m_q[base], K);
   w.put_array(&m_m2[base], K);
   w.put_array(&m_n[base], K);
   w.put_array(&m_weight[base], K);
-  w.put_array(&m_cdf[base], K);
+  w.put_array(&m_cuts.cdf[base], K);
   w.put(m_learnt[cell]);
   w.put(m_seen[cell]);
   w.put(m_eps[cell]);
@@ -208,30 +192,32 @@ void CutStore::load_cell(uint32_t cell, BinaryReader& r) {
   const uint32_t K = r.get<uint32_t>();
   if (K > uint32_t(m_m)) damaged("a cut larger than rll.cut_size");
   clear(cell);
-  r.get_array(&m_node[base], K);
+  r.get_array(&m_cuts.node[base], K);
   r.get_array(&m_q[base], K);
   r.get_array(&m_m2[base], K);
   r.get_array(&m_n[base], K);
   r.get_array(&m_weight[base], K);
-  r.get_array(&m_cdf[base], K);
+  r.get_array(&m_cuts.cdf[base], K);
   m_learnt[cell] = r.get<uint8_t>();
   m_seen[cell] = r.get<float>();
   m_eps[cell] = r.get<float>();
   m_anchor[cell] = r.get<CellAnchor>();
   m_inv_unit[cell] = r.get<double>();
   if (K > 0) {
-    const std::vector<uint32_t> nodes(m_node.begin() + long(base), m_node.begin() + long(base + K));
+    const std::vector<uint32_t> nodes(m_cuts.node.begin() + long(base),
+                                      m_cuts.node.begin() + long(base + K));
     if (!is_valid_cut(m_tree, nodes)) damaged("its cut is not a cut of this scene's light tree");
     float last = 0;
     for (size_t k = 0; k < K; ++k) {
-      m_end[base + k] = m_tree.node(nodes[k]).end;
+      m_cuts.end[base + k] = m_tree.node(nodes[k]).end;
       const size_t i = base + k;
       // q < 0 marks a cluster never visited; every other value is finite and non-negative.
       if (!std::isfinite(m_q[i]) || !(m_m2[i] >= 0) || !std::isfinite(m_m2[i]) || !(m_n[i] >= 0) ||
           !std::isfinite(m_n[i]) || !(m_weight[i] >= 0) || !std::isfinite(m_weight[i]))
         damaged("a learnt value is negative or not finite");
-      if (!(m_cdf[i] >= last && m_cdf[i] <= 1)) damaged("its CDF is not increasing in [0, 1]");
-      last = m_cdf[i];
+      const float c = m_cuts.cdf[i];
+      if (!(c >= last && c <= 1)) damaged("its CDF is not increasing in [0, 1]");
+      last = c;
     }
     if (last != 1.0f) damaged("its CDF does not end at 1");
   }
@@ -240,7 +226,7 @@ void CutStore::load_cell(uint32_t cell, BinaryReader& r) {
       !std::isfinite(m_seen[cell]) || !(m_inv_unit[cell] > 0) || !std::isfinite(m_inv_unit[cell]) ||
       m_learnt[cell] > 1 || !std::isfinite(a.p.x + a.p.y + a.p.z + a.n.x + a.n.y + a.n.z))
     damaged("a cell value is out of range");
-  m_size[cell] = K;
+  m_cuts.size[cell] = K;
   if (K > 0) {  // the factors baked with the table, which the file does not hold
     const CutStoreEndView v = end_view();
     std::vector<double> pri(K);

@@ -1,9 +1,8 @@
-// RLL's per-cell state: a cut of K <= M nodes of the light tree (clusters whose light ranges
-// partition all lights, stored sorted as node ids and range ends), the learnt mean Q and second
-// moment M2 of each cluster's reward, a prior weight per cluster, the sampling CDF baked at the
-// end of each pass with the defensive prior folded in, and the reward accumulators of the pass.
-// All of it is flat arrays indexed by cell * M + k (structure of arrays, nothing allocated per
-// sample).
+// RLL's learner of cuts, on the shared cut arrays (learn/cut_arrays.h: per cell, a cut of K <= M
+// nodes of the light tree and its sampling CDF, which ltc uses too): per cluster, the learnt mean
+// Q and second moment M2 of its reward and a prior weight, the CDF baked at the end of each pass
+// with the defensive prior folded in, and the reward accumulators of the pass. All of it is flat
+// arrays indexed by cell * M + k (structure of arrays, nothing allocated per sample).
 #pragma once
 
 #include <cstdint>
@@ -14,30 +13,25 @@
 #include "rll/core/binary_io.h"
 #include "rll/learn/cell_grid.h"
 #include "rll/learn/cut.h"
+#include "rll/learn/cut_arrays.h"
 #include "rll/learn/cut_settings.h"
 #include "rll/learn/moments.h"
 #include "rll/lighttree/light_tree.h"
 
 namespace rll {
 
-// What sampling from a CutStore and recording rewards read and write (DESIGN 6): per cell, the
-// cut (clusters' nodes and light ranges, m of them at most) and its baked CDF, the shared
-// initial cut, the anchor, the unit of the sums, and the exact sums and counts of this pass.
-struct CutStoreView {
-  uint32_t m = 0;             // clusters per cell at most: the stride of the per-cluster arrays
-  View<const uint32_t> size;  // K per cell; 0: no cut yet
-  View<const uint32_t> node, end;
-  View<const float> cdf;
+// What sampling from a CutStore and recording rewards read and write (DESIGN 6): the shared cut
+// arrays (per cell, the cut and its baked CDF; the initial cut), and rll's own: the guided and
+// target factors, the defensive weight, the anchor, the unit of the sums, and the exact sums and
+// counts of this pass.
+struct CutStoreView : CutArraysView {
   View<const float> gl, gr;  // guided descent only (empty otherwise): CutStore::guide_left/right
   View<const float> vis;     // per cluster: CutStore::target_factor (nee.target=learnt)
   View<const float> eps;     // per cell: the defensive weight during this pass
-  View<const uint32_t> initial, initial_ends;
   View<CellAnchor> anchor;
   View<const double> inv_unit;  // per cell: 1 / the unit of its sums during this pass
   View<ExactSum> sum, sq;       // per cluster: rewards and their squares
   View<uint32_t> count;         // per cluster: rewards this pass
-
-  RLL_HD bool active(uint32_t cell) const { return size[cell] > 0; }
 };
 
 // Adds one reward to cluster k of `cell` (see CutStore::record).
@@ -70,15 +64,17 @@ class CutStore {
   int max_size() const { return m_m; }
 
   // The shared initial cut: the clusters of cells that have no cut of their own yet.
-  uint32_t initial_size() const { return uint32_t(m_initial.size()); }
-  const uint32_t* initial_ends() const { return m_initial_ends.data(); }
-  const uint32_t* initial_nodes() const { return m_initial.data(); }
+  uint32_t initial_size() const { return uint32_t(m_cuts.initial.size()); }
+  const uint32_t* initial_ends() const { return m_cuts.initial_ends.data(); }
+  const uint32_t* initial_nodes() const { return m_cuts.initial.data(); }
 
-  bool active(uint32_t cell) const { return m_size[cell] > 0; }
-  uint32_t size(uint32_t cell) const { return m_size[cell]; }
-  const uint32_t* ends(uint32_t cell) const { return &m_end[size_t(cell) * m_m]; }
-  const uint32_t* nodes(uint32_t cell) const { return &m_node[size_t(cell) * m_m]; }
-  const float* cdf(uint32_t cell) const { return &m_cdf[size_t(cell) * m_m]; }
+  // The shared cut arrays (read only: the end of pass writes them).
+  const CutArrays& cuts() const { return m_cuts; }
+  bool active(uint32_t cell) const { return m_cuts.active(cell); }
+  uint32_t size(uint32_t cell) const { return m_cuts.size[cell]; }
+  const uint32_t* ends(uint32_t cell) const { return m_cuts.ends(cell); }
+  const uint32_t* nodes(uint32_t cell) const { return m_cuts.nodes(cell); }
+  const float* cdf(uint32_t cell) const { return m_cuts.cdf_of(cell); }
   const float* q(uint32_t cell) const { return &m_q[size_t(cell) * m_m]; }
   const float* m2(uint32_t cell) const { return &m_m2[size_t(cell) * m_m]; }
   // The weight, in rewards, behind each cluster's q and m2 (its memory: every reward seen, or
@@ -170,11 +166,8 @@ class CutStore {
   double m_scale;     // the unit of a cell's sums before it has learnt anything
   double m_log_keep;  // log(1 - alpha)
 
-  std::vector<uint32_t> m_initial, m_initial_ends;
-
-  std::vector<uint32_t> m_size;  // K per cell; 0: no cut yet
-  std::vector<uint32_t> m_node, m_end;
-  std::vector<float> m_q, m_m2, m_n, m_weight, m_cdf;
+  CutArrays m_cuts;  // per cell: the cut and its CDF; the initial cut
+  std::vector<float> m_q, m_m2, m_n, m_weight;
   std::vector<float> m_gl, m_gr;  // guided descent only (empty otherwise)
   std::vector<float> m_vis;       // per cluster: target_factor
   std::vector<uint8_t> m_learnt;  // per cell: sum of values > 0

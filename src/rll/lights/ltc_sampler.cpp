@@ -191,14 +191,13 @@ LtcLightSampler::LtcLightSampler(const Scene& scene, const LightTree& tree, cons
   if (m_tree.depth() >= kMaxTreeDepth)
     fail("{}: light tree too deep ({})", scene.source, m_tree.depth());
   m_clusters = SpatialClusters::build(scene, s.clusters);
-  m_initial = power_cut(m_tree, s.initial_cut);
-  for (uint32_t n : m_initial) {
-    m_initial_ends.push_back(m_tree.node(n).end);
-    m_initial_mid.push_back(m_tree.node(n).is_leaf() ? 0 : m_tree.node(m_tree.node(n).child).end);
-  }
   m_reward_scale = reward_scale(scene);
   m_keys = m_clusters.size() * s.bins * s.bins;
   check_memory(m_clusters, m_keys, s);
+  // Allocated after the check, which counts them (kNodeBytes, kEntryBytes).
+  m_cuts = CutArrays(m_tree, s.capacity, uint32_t(m_m), power_cut(m_tree, s.initial_cut));
+  for (uint32_t n : m_cuts.initial)
+    m_initial_mid.push_back(m_tree.node(n).is_leaf() ? 0 : m_tree.node(m_tree.node(n).child).end);
   m_slot = std::make_unique<std::atomic<uint32_t>[]>(m_keys);
   m_request = std::make_unique<std::atomic<uint32_t>[]>(m_keys);
   for (uint32_t k = 0; k < m_keys; ++k) {
@@ -208,16 +207,12 @@ LtcLightSampler::LtcLightSampler(const Scene& scene, const LightTree& tree, cons
   const uint32_t cap = s.capacity;
   m_key.assign(cap, kNoCell);
   m_born.assign(cap, 0);
-  m_size.assign(cap, 0);
   m_visits.assign(cap, 0.0);
   m_no_change.assign(cap, 0.0);
   m_prior_scale.assign(cap, 0.0f);
   m_prior_power.assign(cap, 0);
   m_inv_unit.assign(cap, 1 / m_reward_scale);
   const size_t n = size_t(cap) * m_m;
-  m_node.assign(n, 0);
-  m_end.assign(n, 0);
-  m_cdf.assign(n, 0.0f);
   m_w.assign(n, 0.0f);
   m_n.assign(n, 0.0f);
   m_mean.assign(n, 0.0f);
@@ -331,8 +326,7 @@ void LtcLightSampler::prepare(LightContext& ctx, float u) {
 }
 
 detail::RllCut LtcLightSampler::cut(uint32_t entry) const {
-  const size_t base = size_t(entry) * m_m;
-  return {m_size[entry], &m_end[base], &m_node[base], &m_cdf[base]};
+  return detail::rll_cut(m_cuts.view(), entry);
 }
 
 float LtcLightSampler::node_probability(uint32_t entry, uint32_t k) const {
@@ -345,15 +339,15 @@ SampledLight LtcLightSampler::sample(const LightContext& ctx, double u) const {
   if (!has_cut(e)) {
     // The entry's first pass: sample like the tree; the reward goes to the node of the global
     // cut that holds the light, whose P(l | node) is the descent's product below that node.
+    const detail::RllCut initial = cut(e);  // (no cut: the initial one)
     DescentSplit split;
-    split.ends = m_initial_ends.data();
-    split.nodes = m_initial.data();
-    split.size = uint32_t(m_initial.size());
+    split.ends = initial.ends;
+    split.nodes = initial.nodes;
+    split.size = initial.size;
     SampledLight s = sampled_light(tree_descend(m_tree, LightTree::kRoot, ctx.p, ctx.n, u, &split));
     if (!(s.pmf > 0)) return {};
     ClusterDraw d;
-    d.cluster = detail::rll_cluster_of(
-        {uint32_t(m_initial.size()), m_initial_ends.data(), m_initial.data(), nullptr}, s.light);
+    d.cluster = detail::rll_cluster_of(initial, s.light);
     const float within = split.cluster == d.cluster ? split.below : 0.0f;
     d.cluster_pmf = within > 0 ? s.pmf / within : 0.0f;
     set_cluster_draw(s, d);
@@ -416,8 +410,8 @@ void LtcLightSampler::clear_pass(size_t slot) {
 
 void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, uint32_t& splits) {
   const size_t base = size_t(e) * m_m;
-  const bool fresh = m_size[e] == 0;
-  const uint32_t K0 = fresh ? uint32_t(m_initial.size()) : m_size[e];
+  const bool fresh = m_cuts.size[e] == 0;
+  const uint32_t K0 = fresh ? uint32_t(m_cuts.initial.size()) : m_cuts.size[e];
   double N = 0;
   for (uint32_t k = 0; k < K0; ++k) N += m_count[base + k].load(std::memory_order_relaxed);
   if (N == 0)
@@ -454,11 +448,11 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, ui
     std::vector<double>& b = scratch.bound;
     b.assign(K, 0.0);
     double bsum = 0;
-    for (uint32_t k = 0; k < K; ++k) bsum += b[k] = bound(e, m_initial[k]);
+    for (uint32_t k = 0; k < K; ++k) bsum += b[k] = bound(e, m_cuts.initial[k]);
     m_prior_power[e] = !(bsum > 0);
     if (m_prior_power[e]) {
       bsum = 0;
-      for (uint32_t k = 0; k < K; ++k) bsum += b[k] = m_tree.node(m_initial[k]).bounds.power;
+      for (uint32_t k = 0; k < K; ++k) bsum += b[k] = m_tree.node(m_cuts.initial[k]).bounds.power;
     }
     VisitedTotal sums;
     for (uint32_t k = 0; k < K; ++k)
@@ -467,18 +461,18 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, ui
     m_prior_scale[e] = bsum > 0 ? float(total / bsum) : 0.0f;
     for (uint32_t k = 0; k < K; ++k) {
       const double prior = double(m_prior_scale[e]) * b[k];
-      m_node[base + k] = m_initial[k];
+      m_cuts.node[base + k] = m_cuts.initial[k];
       m_w[base + k] = float(prior * prior);
       m_n[base + k] = m_mean[base + k] = m_sq[base + k] = m_sq0[base + k] = 0;
       m_pi[base + k] = 1;
     }
-    m_size[e] = K;
+    m_cuts.size[e] = K;
   }
 
   // The per-sample rule w := (1 - a) w + a r^2 over the pass's visits, aggregated (header).
   const double T = m_visits[e];
   const double L = log_keep(T, N);
-  const uint32_t K = m_size[e];
+  const uint32_t K = m_cuts.size[e];
   for (uint32_t k = 0; k < K; ++k) {
     if (cnt[k] == 0) continue;
     const size_t i = base + k;
@@ -510,12 +504,12 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, ui
       const double p_e = 1 / (1 + double(K) / m_s.initial_cut * std::exp(-v_rel));
       for (uint32_t k = 0; k < K; ++k) {
         const size_t i = base + k;
-        if (cnt[k] == 0 || m_tree.node(m_node[i]).is_leaf()) continue;
+        if (cnt[k] == 0 || m_tree.node(m_cuts.node[i]).is_leaf()) continue;
         const double p_v = std::max(0.0, double(m_sq[i]) - double(m_mean[i]) * m_mean[i]) / var_sum;
         const double p_t = 1 - 1 / std::max(1.0, double(m_n[i]));
         const double p = std::clamp(p_t * p_v * p_e, 0.0, 1.0);
         const double p_pass = -std::expm1(cnt[k] * std::log1p(-std::min(p, 1 - 1e-16)));
-        if (unit_hash(m_key[e], m_node[i], pass) < p_pass) chosen.push_back({p_v, k});
+        if (unit_hash(m_key[e], m_cuts.node[i], pass) < p_pass) chosen.push_back({p_v, k});
       }
     }
     // More candidates than room: the largest variance shares first (ties: lower index).
@@ -531,7 +525,7 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, ui
     for (const auto& [share, k] : chosen) {  // back to front: earlier indices stay valid
       (void)share;
       const size_t i = base + k;
-      const LightTreeNode& nd = m_tree.node(m_node[i]);
+      const LightTreeNode& nd = m_tree.node(m_cuts.node[i]);
       float b0, b1;
       if (m_prior_power[e]) {
         b0 = m_tree.node(nd.child).bounds.power;
@@ -554,9 +548,9 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, ui
       const double s0 = (1 - pi) * std::sqrt(f0 * g0 * w) + pi * prior0;
       const double s1 = (1 - pi) * std::sqrt(f1 * g1 * w) + pi * prior1;
       // Shift the nodes after k by one.
-      const uint32_t Kcur = m_size[e];
+      const uint32_t Kcur = m_cuts.size[e];
       for (size_t j = base + Kcur; j > i + 1; --j) {
-        m_node[j] = m_node[j - 1];
+        m_cuts.node[j] = m_cuts.node[j - 1];
         m_w[j] = m_w[j - 1];
         m_n[j] = m_n[j - 1];
         m_mean[j] = m_mean[j - 1];
@@ -564,14 +558,14 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, ui
         m_sq0[j] = m_sq0[j - 1];
         m_pi[j] = m_pi[j - 1];
       }
-      m_node[i] = nd.child;
-      m_node[i + 1] = nd.child + 1;
+      m_cuts.node[i] = nd.child;
+      m_cuts.node[i + 1] = nd.child + 1;
       m_w[i] = float(s0 * s0);
       m_w[i + 1] = float(s1 * s1);
       m_n[i] = m_n[i + 1] = m_mean[i] = m_mean[i + 1] = m_sq[i] = m_sq[i + 1] = m_sq0[i] =
           m_sq0[i + 1] = 0;
       m_pi[i + 1] = m_pi[i] = float(pi);
-      m_size[e] = Kcur + 1;
+      m_cuts.size[e] = Kcur + 1;
       ++splits;
     }
     m_no_change[e] = chosen.empty() ? m_no_change[e] + N : 0.0;
@@ -579,7 +573,7 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, ui
 
   // The next pass's unit: the entry's largest learnt sqrt(M2).
   double largest = 0;
-  for (uint32_t k = 0; k < m_size[e]; ++k)
+  for (uint32_t k = 0; k < m_cuts.size[e]; ++k)
     largest = std::max(largest, std::sqrt(double(m_w[base + k])));
   next_unit(m_inv_unit[e], largest);
   bake(e, scratch);
@@ -587,7 +581,7 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, ui
 
 void LtcLightSampler::bake(uint32_t e, LearnScratch& scratch) {
   const size_t base = size_t(e) * m_m;
-  const uint32_t K = m_size[e];
+  const uint32_t K = m_cuts.size[e];
   if (K == 0) return;
   // Defensive distribution: half the prior share (bound at the cluster's centre, or power),
   // half uniform over the nodes with power, so every node that can contribute keeps P > 0.
@@ -597,7 +591,7 @@ void LtcLightSampler::bake(uint32_t e, LearnScratch& scratch) {
   double bsum = 0, vsum = 0;
   uint32_t powered = 0;
   for (uint32_t k = 0; k < K; ++k) {
-    const uint32_t node = m_node[base + k];
+    const uint32_t node = m_cuts.node[base + k];
     const float power = m_tree.node(node).bounds.power;
     d[k] = m_prior_power[e] ? power : bound(e, node);
     bsum += d[k];
@@ -607,7 +601,7 @@ void LtcLightSampler::bake(uint32_t e, LearnScratch& scratch) {
     vsum += v[k];
   }
   for (uint32_t k = 0; k < K; ++k) {
-    const bool has_power = m_tree.node(m_node[base + k]).bounds.power > 0;
+    const bool has_power = m_tree.node(m_cuts.node[base + k]).bounds.power > 0;
     const double uniform = powered > 0 ? (has_power ? 1.0 / powered : 0.0) : 1.0 / K;
     d[k] = bsum > 0 ? 0.5 * d[k] / bsum + 0.5 * uniform : uniform;
   }
@@ -615,20 +609,20 @@ void LtcLightSampler::bake(uint32_t e, LearnScratch& scratch) {
   double acc = 0;
   for (uint32_t k = 0; k < K; ++k) {
     acc += (vsum > 0 ? (1 - eps) * v[k] / vsum : 0.0) + eps * d[k];
-    m_cdf[base + k] = float(acc);
-    const LightTreeNode& nd = m_tree.node(m_node[base + k]);
-    m_end[base + k] = nd.end;
+    m_cuts.cdf[base + k] = float(acc);
+    const LightTreeNode& nd = m_tree.node(m_cuts.node[base + k]);
+    m_cuts.end[base + k] = nd.end;
     m_mid[base + k] = nd.is_leaf() ? 0 : m_tree.node(nd.child).end;
   }
   for (uint32_t k = 0; k < K; ++k)
-    m_cdf[base + k] = float(std::min(1.0, double(m_cdf[base + k]) / acc));
-  m_cdf[base + K - 1] = 1.0f;
+    m_cuts.cdf[base + k] = float(std::min(1.0, double(m_cuts.cdf[base + k]) / acc));
+  m_cuts.cdf[base + K - 1] = 1.0f;
 }
 
 void LtcLightSampler::admit_by_visits() {
   // Drop the entries this pass created: which new keys got one depended on thread timing.
   const uint32_t K0 =
-      uint32_t(m_initial.size());  // a new entry records into the global cut's nodes
+      uint32_t(m_cuts.initial.size());  // a new entry records into the global cut's nodes
   uint32_t used = 0;
   for (uint32_t e = 0; e < m_s.capacity; ++e) {
     if (m_key[e] == kNoCell) continue;
@@ -711,9 +705,9 @@ nlohmann::json LtcLightSampler::describe() const {
   for (uint32_t e = 0; e < m_s.capacity; ++e) {
     if (m_key[e] == kNoCell) continue;
     ++used;
-    if (m_size[e] > 0) {
+    if (m_cuts.size[e] > 0) {
       ++with_cut;
-      cut_sum += m_size[e];
+      cut_sum += m_cuts.size[e];
     }
   }
   for (uint32_t s : m_splits_per_pass) total_splits += s;

@@ -63,6 +63,7 @@
 
 #include "rll/core/param_table.h"
 #include "rll/learn/cut.h"
+#include "rll/learn/cut_arrays.h"
 #include "rll/learn/moments.h"
 #include "rll/lights/light_sampler.h"
 #include "rll/lights/rll_view.h"
@@ -133,14 +134,15 @@ class LtcLightSampler final : public LightSampler {
   const SpatialClusters& clusters() const { return m_clusters; }
   uint32_t direction_bin(const Vec3& wo) const;
   uint32_t entry_key(const LightContext& ctx) const;  // cluster * bins^2 + bin
-  bool has_cut(uint32_t entry) const { return entry != kNoCell && m_size[entry] > 0; }
-  uint32_t cut_size(uint32_t entry) const { return m_size[entry]; }
-  const uint32_t* cut_nodes(uint32_t entry) const { return &m_node[size_t(entry) * m_m]; }
+  bool has_cut(uint32_t entry) const { return entry != kNoCell && m_cuts.active(entry); }
+  uint32_t cut_size(uint32_t entry) const { return m_cuts.size[entry]; }
+  const uint32_t* cut_nodes(uint32_t entry) const { return m_cuts.nodes(entry); }
   // Probability of node k of an entry's cut (the width of its CDF interval).
   float node_probability(uint32_t entry, uint32_t k) const;
-  // An entry's cut as rll's table draw and lookups read one (rll_view.h).
+  // An entry's cut (the global one while it has none) as rll's table draw and lookups read one
+  // (rll_view.h).
   detail::RllCut cut(uint32_t entry) const;
-  const std::vector<uint32_t>& initial_cut() const { return m_initial; }
+  const std::vector<uint32_t>& initial_cut() const { return m_cuts.initial; }
   size_t bytes() const;
 
  private:
@@ -172,7 +174,7 @@ class LtcLightSampler final : public LightSampler {
   LtcSettings m_s;
   int m_m;  // node slots per entry (max_cut)
   SpatialClusters m_clusters;
-  std::vector<uint32_t> m_initial, m_initial_ends, m_initial_mid;
+  std::vector<uint32_t> m_initial_mid;  // per node of the global cut: its first child's end
   double m_reward_scale = 1;
 
   // key -> entry + 1 (0: none; kClaimed: being created; kFull: no free entry this pass), keys =
@@ -193,15 +195,16 @@ class LtcLightSampler final : public LightSampler {
   // Per entry.
   std::vector<uint32_t> m_key;       // kNoCell: free
   std::vector<uint64_t> m_born;      // the pass it was created in
-  std::vector<uint32_t> m_size;      // cut size; 0 until the end of its first pass with rewards
   std::vector<double> m_visits;      // t: NEE samples the entry learnt from
   std::vector<double> m_no_change;   // visits since the last split
   std::vector<float> m_prior_scale;  // prior(node) = scale x bound(node) (power where no bound)
   std::vector<uint8_t> m_prior_power;
   std::vector<double> m_inv_unit;  // 1 / unit of the entry's accumulators during the pass
+  // Per entry, its cut and sampling CDF (size 0 until the end of its first pass with rewards),
+  // and the global cut (initial): the cut arrays rll's CutStore keeps its cells' cuts in.
+  CutArrays m_cuts;
   // Per node slot (entry * max_cut + k).
-  std::vector<uint32_t> m_node, m_end;
-  std::vector<float> m_cdf, m_w;  // sampling CDF; learnt second moment w ~ M2
+  std::vector<float> m_w;  // learnt second moment w ~ M2
   std::vector<float> m_n, m_mean,
       m_sq;                  // node statistics since it entered the cut: count, E[r], E[r^2]
   std::vector<float> m_sq0;  // ... and E[r^2 1{light under the first child}]: how a split shares M2

@@ -74,12 +74,18 @@ RLL_HD inline bool rll_has_cut(const RllView& v, uint32_t cell) {
   return cell != kNoCell && v.cuts.active(cell);
 }
 
-RLL_HD inline RllCut rll_cut(const RllView& v, uint32_t cell) {
-  if (rll_has_cut(v, cell)) {
-    const size_t base = size_t(cell) * v.cuts.m;
-    return {v.cuts.size[cell], &v.cuts.end[base], &v.cuts.node[base], &v.cuts.cdf[base]};
+// The cut of a cell of the shared cut arrays (rll's cells, ltc's entries), or the initial cut
+// for a cell without one (kNoCell included).
+RLL_HD inline RllCut rll_cut(const CutArraysView& c, uint32_t cell) {
+  if (cell != kNoCell && c.active(cell)) {
+    const size_t base = c.base(cell);
+    return {c.size[cell], &c.end[base], &c.node[base], &c.cdf[base]};
   }
-  return {uint32_t(v.cuts.initial.size), v.cuts.initial_ends.data, v.cuts.initial.data, nullptr};
+  return {uint32_t(c.initial.size), c.initial_ends.data, c.initial.data, nullptr};
+}
+
+RLL_HD inline RllCut rll_cut(const RllView& v, uint32_t cell) {
+  return rll_cut(v.cuts, cell);
 }
 
 RLL_HD inline uint32_t rll_begin(const RllCut& c, uint32_t k) {
