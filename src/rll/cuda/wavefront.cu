@@ -218,8 +218,7 @@ struct GpuRenderer::Impl {
   DeviceArray<uint32_t> psf_used;
   PsfFrameCells psf_frames;
   PsfFrameCells* psf_cells(const IntegratorSettings& is, const RenderSettings& rs, size_t pixels) {
-    if (!is.psf.on || !(is.psf.temporal > 0) || !(rs.follows_frame || rs.precedes_frame))
-      return nullptr;
+    if (!psf_temporal_frames(is.psf, rs)) return nullptr;
     if (psf_frames.pixels != pixels) {
       check_psf_memory(pixels, true);
       psf_frames = PsfFrameCells{};

@@ -418,8 +418,10 @@ void LtcLightSampler::learn(uint32_t e, uint64_t pass, LearnScratch& scratch, ui
     return;  // nothing new: the cut and CDF stand (a new entry keeps sampling like the tree)
 
   // This pass's mean reward and mean squared reward per node, in scene units.
-  std::vector<double>&mean_r = scratch.mean_r, &mean_r2 = scratch.mean_r2,
-  &mean_r2_0 = scratch.mean_r2_0, &cnt = scratch.count;
+  std::vector<double>& mean_r = scratch.mean_r;
+  std::vector<double>& mean_r2 = scratch.mean_r2;
+  std::vector<double>& mean_r2_0 = scratch.mean_r2_0;
+  std::vector<double>& cnt = scratch.count;
   mean_r.assign(K0, 0.0);
   mean_r2.assign(K0, 0.0);
   mean_r2_0.assign(K0, 0.0);
@@ -585,7 +587,8 @@ void LtcLightSampler::bake(uint32_t e, LearnScratch& scratch) {
   if (K == 0) return;
   // Defensive distribution: half the prior share (bound at the cluster's centre, or power),
   // half uniform over the nodes with power, so every node that can contribute keeps P > 0.
-  std::vector<double>&d = scratch.defensive, &v = scratch.value;
+  std::vector<double>& d = scratch.defensive;
+  std::vector<double>& v = scratch.value;
   d.assign(K, 0.0);
   v.assign(K, 0.0);
   double bsum = 0, vsum = 0;

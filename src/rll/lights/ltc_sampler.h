@@ -205,13 +205,13 @@ class LtcLightSampler final : public LightSampler {
   CutArrays m_cuts;
   // Per node slot (entry * max_cut + k).
   std::vector<float> m_w;  // learnt second moment w ~ M2
-  std::vector<float> m_n, m_mean,
-      m_sq;                  // node statistics since it entered the cut: count, E[r], E[r^2]
+  // Node statistics since it entered the cut: count, E[r], E[r^2].
+  std::vector<float> m_n, m_mean, m_sq;
   std::vector<float> m_sq0;  // ... and E[r^2 1{light under the first child}]: how a split shares M2
   std::vector<float> m_pi;   // the share of w still made of the prior: prod (1 - a) over its visits
   std::vector<uint32_t> m_mid;  // end of the node's first child's range (0 for a leaf)
-  std::unique_ptr<ExactSum[]> m_sum, m_sum2,
-      m_sum2_0;  // this pass: sums of r, r^2, r^2 under child 0
+  // This pass: sums of r, r^2, r^2 under child 0.
+  std::unique_ptr<ExactSum[]> m_sum, m_sum2, m_sum2_0;
   std::unique_ptr<std::atomic<uint32_t>[]> m_count;
 
   uint64_t m_pass = 0;

@@ -111,8 +111,7 @@ void check_candidates(const IntegratorSettings& settings, const SamplerView& vie
   if (!draws_clusters(view))
     fail(
         "--set nee.draw=cluster: sampler '{}' does not draw a cluster first (rll, fermat and "
-        "oracle do); "
-        "use nee.draw=full",
+        "oracle do); use nee.draw=full",
         name);
 }
 

@@ -311,6 +311,11 @@ struct NeeChoice {
   float weight_sum = 0;  // over all M candidates
 };
 
+// The number u in [0, 1) moved into stratum i of n: [i / n, (i + 1) / n).
+RLL_HD inline double stratum(int i, int n, double u) {
+  return std::min((double(i) + u) / double(n), 0x1.fffffffffffffp-1);
+}
+
 // Draws the M = c.nee_candidates candidates with `sample(u)` (the light sampler's
 // sample(ctx, u)) and keeps one by streaming weighted reservoir sampling. With M = 1 the weight
 // is not evaluated (it cancels): one light sample, as before resampling. With
@@ -321,11 +326,6 @@ struct NeeChoice {
 // given the cluster, all M are i.i.d. from the sampler's distribution over its lights, and each
 // weight's pmf is the full one (the cluster's probability times the light's within it), so the
 // ratio (sum w / M) / w_kept is that of resampling within the cluster (docs/nee.md).
-// The number u in [0, 1) moved into stratum i of n: [i / n, (i + 1) / n).
-RLL_HD inline double stratum(int i, int n, double u) {
-  return std::min((double(i) + u) / double(n), 0x1.fffffffffffffp-1);
-}
-
 template <class SampleLight, class InCluster, class Target>
 RLL_HD inline NeeChoice resample_nee(const PathConstants& c, const LightContext& ctx,
                                      const Bsdf& bsdf, const Vec3& wo, SampleStream& stream,

@@ -44,6 +44,13 @@ struct RenderSettings {
   PointSet points = PointSet::Sobol;  // the sample points (--points)
 };
 
+// Whether a render takes the filter's temporal reuse's second table of cells (psf.temporal): only
+// where a frame came before it or comes after it; a still render blends nothing and keeps no
+// cells for a next frame. The session's (CPU) and the GPU renderer's one rule.
+inline bool psf_temporal_frames(const PsfSettings& psf, const RenderSettings& rs) {
+  return psf.on && psf.temporal > 0 && (rs.follows_frame || rs.precedes_frame);
+}
+
 struct RenderProgress {
   int passes = 0;
   int spp_done = 0;  // complete samples per pixel (every pixel has at least this many)

@@ -127,6 +127,9 @@ class Bsdf {
  private:
   // Probability of sampling the specular lobe of a plastic, given wo (local).
   RLL_HD float specular_probability(const Vec3& wo_local) const;
+  // A plastic's base seen through its coating twice, at local wo, wi (both above): its f's
+  // diffuse term (eval), which diffuse_share takes the share of.
+  RLL_HD Rgb plastic_base(const Vec3& wo_local, const Vec3& wi_local) const;
   RLL_HD bool same_side(const Vec3& wo, const Vec3& wi) const;
   // wi lies on the geometric side a sample of local side `local_above` must have.
   RLL_HD bool geometric_side_ok(const Vec3& wi_world, bool local_above) const;
@@ -592,10 +595,8 @@ RLL_HD inline Rgb Bsdf::diffuse_share(const Vec3& wo_w, const Vec3& wi_w) const 
   if (m_type == MaterialType::Diffuse) return Rgb(1);
   const Rgb f = eval(wo_w, wi_w);
   if (rll::is_black(f)) return Rgb(0);
-  // eval()'s Plastic base term, with the same conditions (same side, both above).
-  const Vec3 wo = m_frame.to_local(wo_w), wi = m_frame.to_local(wi_w);
-  const float t = (1 - fresnel_dielectric(wi.z, m_ior)) * (1 - fresnel_dielectric(wo.z, m_ior));
-  const Rgb d = m_albedo * (t * kInvPi);
+  // eval()'s Plastic base term, under the same conditions (f is 0 where they fail).
+  const Rgb d = plastic_base(m_frame.to_local(wo_w), m_frame.to_local(wi_w));
   Rgb share(0);
   for (int c = 0; c < 3; ++c)
     if (f[c] > 0) share[c] = std::min(1.0f, d[c] / f[c]);
@@ -624,8 +625,12 @@ RLL_HD inline Rgb Bsdf::eval(const Vec3& wo_w, const Vec3& wi_w) const {
     return m_specular * fresnel_conductor(dot(wo, wm), m_eta, m_k) * spec;
   // Plastic: coating reflection plus the base seen through the coating twice.
   float fr = fresnel_dielectric(dot(wo, wm), m_ior);
-  float t = (1 - fresnel_dielectric(wi.z, m_ior)) * (1 - fresnel_dielectric(wo.z, m_ior));
-  return m_specular * (fr * spec) + m_albedo * (t * kInvPi);
+  return m_specular * (fr * spec) + plastic_base(wo, wi);
+}
+
+RLL_HD inline Rgb Bsdf::plastic_base(const Vec3& wo, const Vec3& wi) const {
+  const float t = (1 - fresnel_dielectric(wi.z, m_ior)) * (1 - fresnel_dielectric(wo.z, m_ior));
+  return m_albedo * (t * kInvPi);
 }
 
 RLL_HD inline float Bsdf::pdf(const Vec3& wo_w, const Vec3& wi_w) const {

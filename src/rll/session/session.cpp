@@ -282,10 +282,7 @@ RenderProgress RenderSession::render(LightSampler& sampler, Film& film,
   std::unique_lock psf_lock(m_psf_mutex, std::defer_lock);
   PsfHistory* history = nullptr;
   const size_t pixels = size_t(film.width()) * film.height();
-  // Only where a frame came before or comes after: a still render blends nothing and keeps no
-  // cells for a next frame, so it takes no second table.
-  if (is.psf.on && is.psf.temporal > 0 && !m_gpu &&
-      (settings.follows_frame || settings.precedes_frame) && psf_lock.try_lock()) {
+  if (psf_temporal_frames(is.psf, settings) && !m_gpu && psf_lock.try_lock()) {
     if (!m_psf_history || m_psf_history->cells().pixels != pixels) {
       m_psf_history.reset();
       check_film_memory(
