@@ -26,10 +26,27 @@ struct ExactSum {
   // Signed 64-bit words in two's complement, added with core/device.h's atomic_add (DESIGN 6).
   uint64_t hi = 0, lo = 0;
   RLL_HD void add(double x) {  // x: the value in units of scale, >= 0
+    Words w = words(x);
+    add(w);
+  }
+  // The two words one value adds: integers, so that the words of several values may be summed
+  // first and added once (the same sum to the bit as adding each; psf_end_paths does so).
+  struct Words {
+    uint64_t hi = 0, lo = 0;
+    RLL_HD Words& operator+=(const Words& o) {
+      hi += o.hi;
+      lo += o.lo;
+      return *this;
+    }
+  };
+  RLL_HD static Words words(double x) {
     x = std::min(x, double(kMax));
-    double h = std::floor(x * 0x1p8);
-    atomic_add(&hi, uint64_t(int64_t(h)));
-    atomic_add(&lo, uint64_t(int64_t((x * 0x1p8 - h) * 0x1p32 + 0.5)));
+    const double h = std::floor(x * 0x1p8);
+    return {uint64_t(int64_t(h)), uint64_t(int64_t((x * 0x1p8 - h) * 0x1p32 + 0.5))};
+  }
+  RLL_HD void add(const Words& w) {
+    atomic_add(&hi, w.hi);
+    atomic_add(&lo, w.lo);
   }
   RLL_HD double value() const {
     return double(int64_t(atomic_load(&hi))) * 0x1p-8 + double(int64_t(atomic_load(&lo))) * 0x1p-40;

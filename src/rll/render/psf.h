@@ -186,40 +186,66 @@ struct PsfRecord {
 // How a path ended, for the caller's counts.
 enum class PsfEnd { Unfiltered, Filtered, NonFinite };
 
-// The end of a pixel's path of the batch: what goes to the film now (clamped; a non-finite path
-// adds 0, as every renderer drops them) and, for a cut path, its radiance after the cut (`L`, then
-// the path's radiance gathered after the cut) and its throughput added to its cell and recorded
-// for the resolve. `L` is the whole path's radiance where it was not cut.
-RLL_HD inline PsfEnd psf_end_path(const PsfConstants& f, const PsfTableView& t,
-                                  const FilmView& film, View<PsfRecord> records, size_t pixel,
-                                  const PsfCut& cut, Rgb L) {
-  PsfRecord r;
-  PsfEnd end = PsfEnd::Unfiltered;
+// What a cut path adds to its cell: the exact words of its radiance after the cut (r, g, b) and of
+// its throughput at the cut (r, g, b), the six sums of PsfTableView, in that order.
+struct PsfCellAdd {
+  ExactSum::Words w[6];
+  RLL_HD PsfCellAdd& operator+=(const PsfCellAdd& o) {
+    for (int i = 0; i < 6; ++i) w[i] += o.w[i];
+    return *this;
+  }
+};
+
+// Adds `a` to the sums of `cell`; thread-safe.
+RLL_HD inline void psf_add_to_cell(const PsfTableView& t, uint32_t cell, const PsfCellAdd& a) {
+  ExactSum* s = &t.sums[6 * size_t(cell)];
+  for (int i = 0; i < 6; ++i) s[i].add(a.w[i]);
+}
+
+// The end of a pixel's path of the batch but for its cell: what goes to the film now (clamped; a
+// non-finite path adds 0, as every renderer drops them) and, for a cut path (Filtered), what it
+// adds to its cell (`add`: its radiance after the cut, `L` then the path's radiance gathered after
+// the cut, and its throughput). `L` is the whole path's radiance where it was not cut.
+RLL_HD inline PsfEnd psf_end_path_values(const PsfConstants& f, const FilmView& film, size_t pixel,
+                                         const PsfCut& cut, Rgb L, PsfCellAdd& add) {
   if (cut.key == 0) {
+    PsfEnd end = PsfEnd::Unfiltered;
     if (!is_finite(L)) {
       end = PsfEnd::NonFinite;
       L = Rgb(0);
     }
     film.add(pixel, psf_clamp(L, f.clamp));
-  } else if (!is_finite(L) || !is_finite(cut.before) || !is_finite(cut.weight) ||
-             !is_finite(cut.kept)) {
-    end = PsfEnd::NonFinite;
+    return end;
+  }
+  if (!is_finite(L) || !is_finite(cut.before) || !is_finite(cut.weight) || !is_finite(cut.kept)) {
     film.add(pixel, Rgb(0));
-  } else {
-    end = PsfEnd::Filtered;
-    Rgb before = cut.before;
-    if (f.demodulate) {  // (the glossy share of what came back through the cut's bounce)
-      before += L * (Rgb(1) - cut.share);
-      L = cut.kept + L * cut.share;
-    }
-    film.add(pixel, psf_clamp(before, f.clamp));
+    return PsfEnd::NonFinite;
+  }
+  Rgb before = cut.before;
+  if (f.demodulate) {  // (the glossy share of what came back through the cut's bounce)
+    before += L * (Rgb(1) - cut.share);
+    L = cut.kept + L * cut.share;
+  }
+  film.add(pixel, psf_clamp(before, f.clamp));
+  const Rgb after = psf_clamp(L, f.clamp);
+  for (int ch = 0; ch < 3; ++ch) {
+    add.w[ch] = ExactSum::words(double(after[ch]));
+    add.w[3 + ch] = ExactSum::words(double(cut.weight[ch]));
+  }
+  return PsfEnd::Filtered;
+}
+
+// The end of a pixel's path of the batch (psf_end_path_values), a cut path's values added to its
+// cell and recorded for the resolve.
+RLL_HD inline PsfEnd psf_end_path(const PsfConstants& f, const PsfTableView& t,
+                                  const FilmView& film, View<PsfRecord> records, size_t pixel,
+                                  const PsfCut& cut, Rgb L) {
+  PsfRecord r;
+  PsfCellAdd add;
+  const PsfEnd end = psf_end_path_values(f, film, pixel, cut, L, add);
+  if (end == PsfEnd::Filtered) {
     const uint32_t cell = psf_cell(t, cut.key);
-    const Rgb after = psf_clamp(L, f.clamp);
-    ExactSum* s = &t.sums[6 * size_t(cell)];
-    for (int ch = 0; ch < 3; ++ch) {
-      s[ch].add(double(after[ch]));
-      s[3 + ch].add(double(cut.weight[ch]));
-    }
+    psf_add_to_cell(t, cell, add);
     r.cell = cell + 1;
     r.weight = cut.weight;
   }
@@ -382,9 +408,10 @@ class PsfTable {
 };
 
 // The ends of the megakernel's paths of a batch (PsfPathEnd) as psf_end_path's, each pixel's
-// in turn (in parallel), the cells of the paths kPsfPrefetch pixels ahead prefetched; their
-// counts added to `paths` (filtered) and `nonfinite`. The cells' sums are exact, so the image is
-// the one of ending each path as it is traced, to the bit.
+// in turn (in parallel), the keys of the paths a few pixels ahead prefetched and each thread's
+// adds to a cell gathered before they reach it; their counts added to `paths` (filtered) and
+// `nonfinite`. The cells' sums are exact, so the image is the one of ending each path as it is
+// traced, to the bit.
 void psf_end_paths(const PsfConstants& f, const PsfTableView& t, const FilmView& film,
                    View<PsfRecord> records, View<const PsfPathEnd> ends, uint64_t& paths,
                    uint64_t& nonfinite);
