@@ -85,6 +85,15 @@ struct CutSettings {
   // every inner node above its cut, the factors by which a descent from the root scales its
   // children's importances (guide_left/right) instead of a table over the clusters.
   bool guided = false;
+  // Finer cells where the light changes (rll.refine=L, 0: off; docs/rll.md): every pass a cell
+  // notes, per cluster, the rewards of the points in the upper half of its box along one axis
+  // (x, y, z in turn); at the end of the pass, where giving each half its own distribution would
+  // lower the cost of the one-sample estimator by more than `refine_gain` (a fraction), with at
+  // least `refine_min` rewards, the cell is marked refined, and its points look up the cell one
+  // level finer instead, down to L levels below their own.
+  int refine = 0;
+  float refine_gain = 0.25f;
+  int refine_min = 256;
 };
 
 }  // namespace rll

@@ -68,21 +68,26 @@ RllPassCounts rll_end_pass(const B& b, const RllLearnView& v, RllPoolState<B>& p
     // Each cell's scratch: its slice of an arena, at an exclusive scan of the cells' rooms.
     auto room = b.template buffer<uint32_t>(n);
     auto offset = b.template buffer<uint64_t>(n);
-    auto stats = b.template buffer<uint32_t>(4 * n);  // splits, collapses, touched, changes
+    // splits, collapses, touched, changes, refined (rll.refine: the disagreement test, on the
+    // pass's rewards before the fold resets them)
+    constexpr size_t kFields = 5;
+    auto stats = b.template buffer<uint32_t>(kFields * n);
     const View<uint32_t> r = room.view(), st = stats.view();
     b.parallel_for(n, [=] RLL_HD(size_t i) { r[i] = cut_scratch_room(ev, cells[i]); });
     const uint64_t clusters = b.exclusive_scan(r, offset.view());
     const CutScratchArena arena = scratch.arena(b, clusters);
     const View<const uint64_t> at = offset.view();
     b.parallel_for(n, [=] RLL_HD(size_t i) {
+      st[4 * n + i] = cut_refine_test(ev, cells[i]);
       const CutPassStats s = cut_end_pass(ev, cells[i], arena.slice(at[i], r[i]));
       st[i] = s.splits;
       st[n + i] = s.collapses;
       st[2 * n + i] = s.touched;
       st[3 * n + i] = s.changes;
     });
-    uint32_t* fields[4] = {&out.splits, &out.collapses, &out.touched, &out.changes};
-    for (size_t f = 0; f < 4; ++f)
+    uint32_t* fields[kFields] = {&out.splits, &out.collapses, &out.touched, &out.changes,
+                                 &out.refined};
+    for (size_t f = 0; f < kFields; ++f)
       *fields[f] = uint32_t(b.sum(View<const uint32_t>{st.data + f * n, n}));
   }
   out.failed = b.read(v.table.failed);

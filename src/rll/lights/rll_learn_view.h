@@ -48,6 +48,7 @@ struct RllPassCounts {
   uint64_t failed = 0;        // points that found no cell during the pass
   uint32_t evicted = 0;
   uint32_t used = 0;  // cells in use after the rebuild
+  uint32_t refined = 0;  // cells the disagreement test marked refined (rll.refine)
 };
 
 }  // namespace rll
