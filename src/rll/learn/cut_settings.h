@@ -92,7 +92,7 @@ struct CutSettings {
   // least `refine_min` rewards, the cell is marked refined, and its points look up the cell one
   // level finer instead, down to L levels below their own.
   int refine = 0;
-  float refine_gain = 0.25f;
+  float refine_gain = 0.5f;
   int refine_min = 256;
 };
 
