@@ -18,8 +18,7 @@ struct Store {
   Scene scene = test::small_builtin_scene("many-lights-open", 16, 12);
   LightTree tree = build_light_tree(scene);
   CutStore store;
-  explicit Store(int refine_min = 64)
-      : store(tree, 2, settings(refine_min), 1.0) {
+  explicit Store(int refine_min = 64) : store(tree, 2, settings(refine_min), 1.0) {
     for (uint32_t c = 0; c < 2; ++c) store.set_anchor(c, {Vec3(0), Vec3(0, 1, 0), -4});
   }
   static CutSettings settings(int refine_min) {

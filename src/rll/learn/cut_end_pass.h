@@ -37,9 +37,9 @@ struct CutStoreEndView : CutArraysRwView {
   View<double> inv_unit;
   View<ExactSum> sum, sq;
   View<uint32_t> count;
-  View<ExactSum> up;         // rll.refine only: CutStoreView::up
-  View<uint32_t> up_count;   // rll.refine only: CutStoreView::up_count
-  View<uint8_t> refined;     // rll.refine only: per cell
+  View<ExactSum> up;        // rll.refine only: CutStoreView::up
+  View<uint32_t> up_count;  // rll.refine only: CutStoreView::up_count
+  View<uint8_t> refined;    // rll.refine only: per cell
 };
 
 // One cell's scratch during the end of pass: per cluster of its room (cut_scratch_room), two

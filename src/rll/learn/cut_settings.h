@@ -42,7 +42,7 @@ struct CutSettings {
   // differs from the running mean by more than change_z standard errors is a change; 0: no test
   // (only a change of the lights forgets).
   float change_z = 5;
-  float threshold = 2;     // T: split l_max and collapse p_min if score(l_max) > T value(p_min)
+  float threshold = 2;   // T: split l_max and collapse p_min if score(l_max) > T value(p_min)
   int splits = 0;        // split-collapse steps per cell and pass (0: the cut stays as it started)
   float epsilon = 0.1f;  // weight of the defensive prior once a cell is trusted
   LearnTarget target = LearnTarget::Moment;

@@ -70,8 +70,7 @@ CutStoreView CutStore::view() {
   return v;
 }
 
-size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, int pool_tiers,
-                           bool refine) {
+size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, int pool_tiers, bool refine) {
   // q, m2, n, weight, cdf and the target factor; guided: its two factors; pooling: its shares
   // and each tier's coarse Q, M2 and weight.
   const size_t per_cluster_floats = guided ? 8 : pool_tiers > 0 ? 7 + 3 * size_t(pool_tiers) : 6;

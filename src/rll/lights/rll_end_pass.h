@@ -17,7 +17,6 @@
 
 namespace rll {
 
-
 // A new cell's anchor: the mean of its first pass's points (sums in `w`, kRllPointWords of them,
 // relative to the scene box at `origin` of size `extent`); the sums are reset for the next pass.
 // A cell that already has a cut keeps its anchor.
@@ -141,9 +140,8 @@ void rll_refresh_all(const B& b, const RllLearnView& v, RllScratch<B>& scratch) 
   b.parallel_for(cap, [=] RLL_HD(size_t c) { r[c] = ev.active(uint32_t(c)) ? ev.size[c] : 0; });
   const CutScratchArena arena = scratch.arena(b, b.exclusive_scan(r, offset.view()));
   const View<const uint64_t> at = offset.view();
-  b.parallel_for(cap, [=] RLL_HD(size_t c) {
-    cut_refresh(ev, uint32_t(c), arena.slice(at[c], r[c]));
-  });
+  b.parallel_for(cap,
+                 [=] RLL_HD(size_t c) { cut_refresh(ev, uint32_t(c), arena.slice(at[c], r[c])); });
 }
 
 // The lights changed: under forget=changes every cluster's memory, a cell's and a coarse cell's,

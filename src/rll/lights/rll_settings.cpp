@@ -21,7 +21,7 @@ const std::vector<ParamSpec<RllSettings>>& rll_params() {
       int_param("reset_every", R::closed(0, 1 << 30), field<S, &S::reset_every>()),
       int_param("refine", R::closed(0, 8), field<S, &S::cut, &CutSettings::refine>(),
                 "0: off; levels below a point's own"),
-      float_param("refine_gain", R::at_least(0), field<S, &S::cut, &CutSettings::refine_gain>()),
+      float_param("refine_gain", R::closed(0, 1), field<S, &S::cut, &CutSettings::refine_gain>()),
       int_param("refine_min", R::closed(1, 1 << 30), field<S, &S::cut, &CutSettings::refine_min>()),
   };
   return table;

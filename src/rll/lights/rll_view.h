@@ -299,7 +299,8 @@ RLL_HD inline void rll_sample_jitter(const RllView& v, float u, Vec2* d, Vec2* n
 RLL_HD inline uint32_t rll_find_cell(const RllView& v, const CellCoord& coord) {
   bool created = false;
   const uint32_t cell = cell_find_or_insert(v.table, v.keyer.key(coord), &created);
-  if (cell == CellTableView::kNone) return kNoCell;  // table full: no cell until eviction makes room
+  // Table full: no cell until eviction makes room.
+  if (cell == CellTableView::kNone) return kNoCell;
   if (created) v.cuts.anchor[cell] = v.keyer.anchor(coord);
   // Stamp the pass of last use; a write only when it changes (no cache-line traffic per sample).
   if (atomic_load(&v.last_used[cell]) != v.pass) atomic_store(&v.last_used[cell], v.pass);
@@ -349,8 +350,8 @@ RLL_HD inline void rll_prepare(const RllView& v, LightContext& ctx, float u) {
   CellCoord coord = rll_cell_coord(v, ctx, u);
   uint32_t cell = detail::rll_find_cell(v, coord);
   if (cell == kNoCell) return;
-  for (int finer = 1; finer <= v.refine && v.cuts.refined[cell] &&
-                      coord.level > CellKeyer::kFinestLevel;
+  for (int finer = 1;
+       finer <= v.refine && v.cuts.refined[cell] && coord.level > CellKeyer::kFinestLevel;
        ++finer) {
     const CellCoord child_coord = rll_cell_coord(v, ctx, u, true, finer);
     const uint32_t child = detail::rll_find_cell(v, child_coord);
