@@ -661,8 +661,8 @@ TEST(RllLearning, RefinedCellsRenderTheSameWhateverTheThreadCount) {
   r.sampler = "rll";
   r.integrator.type = IntegratorType::Path;
   r.integrator.max_depth = 3;
-  r.spp = 12;
-  r.set = {"rll.refine=2", "rll.refine_gain=0.1", "rll.refine_min=32"};
+  r.spp = 32;  // (children sample with their parent's table through their first pass)
+  r.set = {"rll.refine=2", "rll.refine_gain=0.1", "rll.refine_min=16"};
   r.threads = 1;
   const Image one = render_scene(scene, r);
   r.threads = 2;

@@ -100,3 +100,32 @@ TEST(Refine, TheGainDoesNotDependOnTheOrderOfTheRewards) {
     cut_record(b.store.view(), 0, std::get<0>(*it), std::get<1>(*it), std::get<2>(*it));
   EXPECT_EQ(cut_refine_gain(a.store.end_view(), 0), cut_refine_gain(b.store.end_view(), 0));
 }
+
+TEST(Refine, ANewChildStartsFromItsRefinedParentsValues) {
+  // cut_seed_child: a child in its first pass (no cut) of a refined parent with the shared
+  // initial cut takes the parent's values, each weighing at most pool_weight rewards, and its
+  // table is baked by the end of pass even without a reward of its own; of a parent not
+  // refined, nothing.
+  Store s;
+  s.record(0, 400, true, 3);
+  const CutStoreEndView v = s.store.end_view();
+  ASSERT_TRUE(cut_refine_test(v, 0));
+  s.store.end_pass(0);
+  ASSERT_TRUE(s.store.active(0) && s.store.learnt(0));
+  cut_seed_child(v, 1, 0);
+  ASSERT_TRUE(s.store.active(1));
+  s.store.end_pass(1);  // no reward: the bake alone
+  const uint32_t K = s.store.size(1);
+  for (uint32_t k = 0; k < K; ++k) {
+    EXPECT_EQ(s.store.q(1)[k], s.store.q(0)[k]);
+    EXPECT_LE(s.store.memory(1)[k], s.store.settings().pool_weight);
+  }
+  EXPECT_EQ(s.store.cdf(1)[K - 1], 1.0f);
+  EXPECT_EQ(s.store.learnt_shares(1), s.store.learnt_shares(0));
+  Store t;
+  t.record(0, 400, false, 3);
+  ASSERT_FALSE(cut_refine_test(t.store.end_view(), 0));
+  t.store.end_pass(0);
+  cut_seed_child(t.store.end_view(), 1, 0);
+  EXPECT_FALSE(t.store.active(1));
+}

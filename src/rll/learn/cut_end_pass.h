@@ -413,6 +413,32 @@ RLL_HD inline double cut_refine_gain(const CutStoreEndView& v, uint32_t cell) {
   return children > 0 ? std::max(0.0, parent * parent / children - 1) : 0.0;
 }
 
+// rll.refine: a new cell (its first pass ending, no cut yet) whose parent, the cell one level
+// coarser around its anchor, is refined and has the shared initial cut starts from the parent's
+// values, each cluster's weight capped at pool_weight rewards so that its own rewards soon speak;
+// the table is baked by this end of pass (its last CDF entry 0 says so). Reads the parent (a cell
+// with a cut, which this does not write): run over all cells before their cut_end_pass.
+RLL_HD inline void cut_seed_child(const CutStoreEndView& v, uint32_t cell, uint32_t parent) {
+  if (v.refined.empty() || v.active(cell) || parent == ~0u || !v.active(parent) ||
+      !v.refined[parent])
+    return;
+  const uint32_t K = uint32_t(v.initial.size);
+  const size_t b = v.base(cell), pb = v.base(parent);
+  if (v.size[parent] != K) return;
+  for (uint32_t k = 0; k < K; ++k)
+    if (v.node[pb + k] != v.initial[k]) return;
+  for (uint32_t k = 0; k < K; ++k) {
+    v.node[b + k] = v.initial[k];
+    v.q[b + k] = v.q[pb + k];
+    v.m2[b + k] = v.m2[pb + k];
+    v.n[b + k] = std::min(v.n[pb + k], v.s.pool_weight);
+    v.weight[b + k] = cut_weight_of(v, cell, v.initial[k]);
+  }
+  v.inv_unit[cell] = v.inv_unit[parent];
+  v.size[cell] = K;
+  v.cdf[b + K - 1] = 0.0f;
+}
+
 // rll.refine: the disagreement test of the end of pass (before cut_end_pass folds the rewards):
 // marks the cell refined where the gain of its halves' own distributions (cut_refine_gain) is
 // above refine_gain, with at least refine_min rewards this pass, and its level above the finest;
@@ -466,7 +492,9 @@ RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell,
   uint32_t K = active ? v.size[cell] : uint32_t(v.initial.size);
   uint64_t n_total = 0;
   for (size_t k = 0; k < K; ++k) n_total += v.count[b + k];
-  if (active && n_total == 0) return st;  // nothing new: the cut and CDF stand
+  // Nothing new: the cut and CDF stand (but for a cell seeded from its parent, rll_seed_child,
+  // whose table is yet to be baked: its last CDF entry, 1 in every baked table, is 0).
+  if (active && n_total == 0 && v.cdf[b + K - 1] == 1.0f) return st;
   float* q = &v.q[b];
   float* m2 = &v.m2[b];
   float* n = &v.n[b];

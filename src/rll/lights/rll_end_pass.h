@@ -63,6 +63,18 @@ RllPassCounts rll_end_pass(const B& b, const RllLearnView& v, RllPoolState<B>& p
     });
   }
   if (ev.s.pool_levels > 0) out.pool_changes = rll_pool_pass(b, v, pool, cells, scratch);
+  if (ev.s.refine > 0) {
+    // New children of refined cells start from their parents' values (cut_seed_child).
+    const CellKeyer keyer = v.keyer;
+    const CellTableView table = v.table;
+    b.parallel_for(n, [=] RLL_HD(size_t i) {
+      const CellAnchor& a = ev.anchor[cells[i]];
+      if (ev.active(cells[i])) return;
+      const uint32_t parent =
+          cell_find(table, keyer.key(keyer.locate_at_level(a.p, a.n, a.level + 1)));
+      cut_seed_child(ev, cells[i], parent);
+    });
+  }
   {
     // Each cell's scratch: its slice of an arena, at an exclusive scan of the cells' rooms.
     auto room = b.template buffer<uint32_t>(n);

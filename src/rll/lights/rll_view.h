@@ -350,12 +350,16 @@ RLL_HD inline void rll_prepare(const RllView& v, LightContext& ctx, float u) {
   CellCoord coord = rll_cell_coord(v, ctx, u);
   uint32_t cell = detail::rll_find_cell(v, coord);
   if (cell == kNoCell) return;
+  uint32_t parent = kNoCell;
+  uint8_t parent_half = 0;
   for (int finer = 1;
        finer <= v.refine && v.cuts.refined[cell] && coord.level > CellKeyer::kFinestLevel;
        ++finer) {
     const CellCoord child_coord = rll_cell_coord(v, ctx, u, true, finer);
     const uint32_t child = detail::rll_find_cell(v, child_coord);
     if (child == kNoCell) break;  // table full: the refined cell itself
+    parent = cell;
+    parent_half = coord.half;
     coord = child_coord;
     cell = child;
   }
@@ -367,6 +371,12 @@ RLL_HD inline void rll_prepare(const RllView& v, LightContext& ctx, float u) {
     const float f[6] = {q.x, q.y, q.z, ctx.n.x * 0x1p24f, ctx.n.y * 0x1p24f, ctx.n.z * 0x1p24f};
     for (int i = 0; i < 6; ++i) atomic_add(&w[i], uint64_t(detail::round_to_int64(f[i])));
     atomic_add(&w[6], uint64_t(1));
+    // A refined cell's new child samples (and learns) with its parent's table through its first
+    // pass, at whose end it starts from the parent's values (rll_seed_child): no cold pass.
+    if (parent != kNoCell && v.cuts.active(parent)) {
+      ctx.cell = parent;
+      ctx.half = parent_half;
+    }
   }
 }
 
