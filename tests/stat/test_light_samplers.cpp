@@ -42,6 +42,9 @@ const std::vector<SamplerCase>& sampler_cases() {
       // with a full table, and with lights drawn by power inside a smaller cut's clusters.
       {"rll_guided", "rll", {"rll.sampling=guided", "rll.capacity=48"}},
       {"rll_guided_power", "rll", {"rll.sampling=guided", "rll.within=power", "rll.cut_size=24", "rll.epsilon=0.02"}},
+      // Finer cells where the light changes (rll.refine): two levels, a low gain, so that many
+      // of the contexts' cells are refined cells' children.
+      {"rll_refine", "rll", {"rll.refine=2", "rll.refine_gain=0.1", "rll.refine_min=32"}},
       // The error budget's ideal light within a cluster (rll.ideal_light, docs/rll.md): the host
       // kind around rll, its tables at the cells' anchors.
       {"rll_ideal_light", "rll", {"rll.ideal_light=2"}},

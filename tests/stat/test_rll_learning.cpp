@@ -608,3 +608,71 @@ TEST(RllLearning, LearntDistributionKeepsSharpeningOverALongRender) {
   EXPECT_LT(ratio[0], 0.5) << "the learnt shares do not sharpen with spp";
   EXPECT_GT(ratio[1], 0.5) << "the fixed floor passes too: the test has no power";
 }
+
+// rll.refine (docs/rll.md, "Finer cells where the light changes"): on spot-hall-small, whose
+// spots' cones cross the cells, training marks cells refined; a point whose own cell is refined
+// is sent to the cell one level finer (the cell a point of half the footprint takes), never more
+// than rll.refine levels down; and at those points the sampler keeps its contract (sampled pmf ==
+// pmf, pmfs sum to one, chi-square of draws, every light that can contribute has pmf > 0).
+TEST(RllLearning, RefinedCellsSendTheirPointsOneLevelFinerAndKeepTheContract) {
+  Scene scene = small_builtin_scene("spot-hall-small", 48, 36);
+  const LightTree tree = build_light_tree(scene);
+  Accel accel(scene.mesh);
+  Params params = Params::parse({"rll.refine=1", "rll.refine_gain=0.1", "rll.refine_min=32"});
+  RllLightSampler rll(scene, tree, rll_settings_from(params));
+  train_sampler(scene, accel, rll, 16);
+  const nlohmann::json d = rll.describe();
+  ASSERT_GT(d["cells_refined"].get<uint32_t>(), 0u);
+  const SamplerView view = rll.sampler_view();
+  const RllView& v = *view.rll;
+  std::vector<LightContext> refined;
+  int own = 0;
+  for (const LightContext& c0 : make_contexts(scene, accel, 2000, 77)) {
+    LightContext c = c0;
+    const float u = 0.37f;
+    prepare_point(view, c, u);
+    if (c.cell == kNoCell) continue;
+    const CellCoord coord = rll_cell_coord(v, c, u);
+    const uint32_t parent = cell_find(v.table, v.keyer.key(coord));
+    ASSERT_NE(parent, CellTableView::kNone);
+    const int level = rll.cuts().anchor(c.cell).level;
+    if (!rll.cuts().refined(parent)) {
+      EXPECT_EQ(c.cell, parent);
+      ++own;
+      continue;
+    }
+    // One level finer, the key of the point at that level, and no further (rll.refine=1).
+    EXPECT_EQ(level, coord.level - 1);
+    EXPECT_EQ(rll.table().key_of(c.cell), v.keyer.key(rll_cell_coord(v, c, u, true, 1)));
+    refined.push_back(c);
+  }
+  std::printf("[ refine   ] %zu of %d points in refined cells' children (%u cells refined)\n",
+              refined.size(), int(refined.size()) + own, d["cells_refined"].get<uint32_t>());
+  ASSERT_GE(refined.size(), 20u);
+  refined.resize(std::min<size_t>(refined.size(), 60));
+  expect_sampler_contract(rll, refined, uint32_t(scene.lights.size()));
+}
+
+TEST(RllLearning, RefinedCellsRenderTheSameWhateverTheThreadCount) {
+  // The disagreement sums are exact too: with refinement the learnt state, which cells are
+  // refined included, and so the image do not depend on the thread count.
+  Scene scene = small_builtin_scene("spot-hall-small", 40, 30);
+  RenderRequest r;
+  r.sampler = "rll";
+  r.integrator.type = IntegratorType::Path;
+  r.integrator.max_depth = 3;
+  r.spp = 32;  // (children sample with their parent's table through their first pass)
+  r.set = {"rll.refine=2", "rll.refine_gain=0.1", "rll.refine_min=16"};
+  r.threads = 1;
+  const Image one = render_scene(scene, r);
+  r.threads = 2;
+  const Image two = render_scene(scene, r);
+  size_t differ = 0;
+  for (size_t i = 0; i < one.pixel_count(); ++i) differ += !(one[i] == two[i]);
+  EXPECT_EQ(differ, 0u);
+  r.set = {};
+  const Image off = render_scene(scene, r);
+  differ = 0;
+  for (size_t i = 0; i < one.pixel_count(); ++i) differ += !(one[i] == off[i]);
+  EXPECT_GT(differ, 0u) << "refinement changed nothing: the test would see nothing";
+}

@@ -60,6 +60,9 @@ class DeviceRll final : public DeviceCopy {
     e.sum = once(e.sum);
     e.sq = once(e.sq);
     e.count = once(e.count);
+    e.up = once(e.up);
+    e.up_count = once(e.up_count);
+    e.refined = once(e.refined);
     m_learn.table.slots = once(m_learn.table.slots);
     m_learn.table.key_of = once(m_learn.table.key_of);
     m_learn.free_room = once(m_learn.free_room);
@@ -89,6 +92,9 @@ class DeviceRll final : public DeviceCopy {
     c.sum = e.sum;
     c.sq = e.sq;
     c.count = e.count;
+    c.up = e.up;
+    c.up_count = e.up_count;
+    c.refined = e.refined;
     r.last_used = m_learn.last_used;
     r.points = m_learn.points;
     r.power_prefix = once(h.power_prefix);

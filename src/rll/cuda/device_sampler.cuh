@@ -60,6 +60,9 @@ class DeviceSampler {
         c.sum = m_memory.mirror(c.sum);
         c.sq = m_memory.mirror(c.sq);
         c.count = m_memory.mirror(c.count);
+        c.up = m_memory.mirror(c.up);
+        c.up_count = m_memory.mirror(c.up_count);
+        c.refined = m_memory.mirror(c.refined);
         r.last_used = m_memory.mirror(r.last_used);
         r.points = m_memory.mirror(r.points);
         r.power_prefix = m_memory.mirror(r.power_prefix);

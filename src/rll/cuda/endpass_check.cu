@@ -44,6 +44,9 @@ CutStoreEndView mirror_end_view(cuda::DeviceMirror& d, const CutStoreEndView& v)
   e.sum = d.mirror(v.sum);
   e.sq = d.mirror(v.sq);
   e.count = d.mirror(v.count);
+  e.up = d.mirror(v.up);
+  e.up_count = d.mirror(v.up_count);
+  e.refined = d.mirror(v.refined);
   return e;
 }
 

@@ -44,6 +44,9 @@ struct CellCoord {
   int level = 0;       // edge = scene diameter * 2^level
   int nu = 0, nv = 0;  // octahedral normal bin
   uint32_t dir = 0;    // 1 + the view direction's bin on a glossy surface; 0: not binned
+  // Not part of the key: bit a (x, y, z) set where the point lies in the upper half of the cell's
+  // box along that axis (rll.refine's disagreement test).
+  uint8_t half = 0;
 };
 
 // A representative point of a cell: the centre of its box and of its normal bin.
@@ -100,6 +103,15 @@ class CellKeyer {
                                    Vec2 disk, Vec2 normal) const {
     return locate_with(p, n, level_of(footprint, u), disk, normal);
   }
+  // The same at a given level of detail (a refined cell's child: rll.refine).
+  RLL_HD CellCoord locate_jittered_at_level(const Vec3& p, const Vec3& n, int level, Vec2 disk,
+                                            Vec2 normal) const {
+    return locate_with(p, n, level, disk, normal);
+  }
+  // The level of detail of a footprint (u: the stochastic rounding's), as locate takes it.
+  RLL_HD int level(float footprint, float u) const { return level_of(footprint, u); }
+  // The finest level of detail a footprint can have (cell_size's floor of 2^-24 diameters).
+  static constexpr int kFinestLevel = -24;
   RLL_HD uint64_t key(const CellCoord& c) const {
     uint64_t h = mix64(uint64_t(c.x) * 0x9e3779b97f4a7c15ull ^ uint64_t(c.level + 64));
     h = mix64(h ^ (uint64_t(c.y) * 0xc2b2ae3d27d4eb4full));
@@ -167,9 +179,12 @@ class CellKeyer {
           octahedral_decode({(c.nu + 0.5f - normal.x) / bins, (c.nv + 0.5f - normal.y) / bins}));
       q = q + (f.s * disk.x + f.t * disk.y) * size;
     }
-    c.x = int64_t(std::floor(q.x / size));
-    c.y = int64_t(std::floor(q.y / size));
-    c.z = int64_t(std::floor(q.z / size));
+    const Vec3 t(q.x / size, q.y / size, q.z / size);  // (divisions, as the keys always were)
+    const Vec3 f(std::floor(t.x), std::floor(t.y), std::floor(t.z));
+    c.x = int64_t(f.x);
+    c.y = int64_t(f.y);
+    c.z = int64_t(f.z);
+    c.half = uint8_t((t.x - f.x >= 0.5f) | (t.y - f.y >= 0.5f) << 1 | (t.z - f.z >= 0.5f) << 2);
     return c;
   }
   CellGridSettings m_s;

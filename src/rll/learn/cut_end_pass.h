@@ -37,6 +37,9 @@ struct CutStoreEndView : CutArraysRwView {
   View<double> inv_unit;
   View<ExactSum> sum, sq;
   View<uint32_t> count;
+  View<ExactSum> up;        // rll.refine only: CutStoreView::up
+  View<uint32_t> up_count;  // rll.refine only: CutStoreView::up_count
+  View<uint8_t> refined;    // rll.refine only: per cell
 };
 
 // One cell's scratch during the end of pass: per cluster of its room (cut_scratch_room), two
@@ -361,6 +364,101 @@ RLL_HD inline void cut_clear(const CutStoreEndView& v, uint32_t cell) {
     v.sq[b + k].reset();
     v.count[b + k] = 0;
   }
+  if (!v.refined.empty()) {
+    v.refined[cell] = 0;
+    for (uint32_t k = 0; k < v.m; ++k) {
+      v.up[b + k].reset();
+      v.up_count[b + k] = 0;
+    }
+  }
+}
+
+// rll.refine: how much giving each half of the cell's box (along the pass's axis, as the rewards'
+// `up` sums were noted) its own distribution over the clusters would lower the cost of the
+// one-sample estimator, from this pass's rewards (before the fold resets them). I_kh, cluster k's
+// mean reward in half h (its mean contribution there), with w_h the half's share of the rewards:
+// one distribution for both halves costs at best (sum_k sqrt(sum_h w_h I_kh^2))^2, one per half
+// sum_h w_h (sum_k I_kh)^2; the gain is their ratio less 1 (>= 0 by Minkowski's inequality, 0
+// where both halves want the same shares). Each I_kh^2 is corrected for the noise of its mean
+// (the half's share of the squares, clamped at 0), so that noise alone makes little
+// disagreement; a cluster not drawn in one half takes its mean over the cell in both. Only sums of
+// integers: the same whatever the order of the rewards.
+RLL_HD inline double cut_refine_gain(const CutStoreEndView& v, uint32_t cell) {
+  const size_t b = v.base(cell);
+  const uint32_t K = v.active(cell) ? v.size[cell] : uint32_t(v.initial.size);
+  uint64_t n = 0, n_up = 0;
+  for (uint32_t k = 0; k < K; ++k) {
+    n += v.count[b + k];
+    n_up += v.up_count[b + k];
+  }
+  if (n_up == 0 || n_up >= n) return 0;
+  const double w_up = double(n_up) / double(n), w_lo = 1 - w_up;
+  double parent = 0, up = 0, lo = 0;
+  for (uint32_t k = 0; k < K; ++k) {
+    const uint32_t c = v.count[b + k], c_up = v.up_count[b + k], c_lo = c - c_up;
+    if (c == 0) continue;
+    const double s = v.sum[b + k].value(), s_up = v.up[b + k].value(), q = v.sq[b + k].value();
+    // A mean's square less its noise: (S_h^2 - sq_h) / c_h^2, sq_h the half's share of the squares.
+    auto square = [&](double sum, uint32_t count) {
+      return std::max(0.0, sum * sum - q * double(count) / double(c)) / (double(count) * count);
+    };
+    const double whole = square(s, c);
+    const double i_up = c_up > 0 && c_lo > 0 ? square(s_up, c_up) : whole;
+    const double i_lo = c_up > 0 && c_lo > 0 ? square(s - s_up, c_lo) : whole;
+    parent += std::sqrt(w_up * i_up + w_lo * i_lo);
+    up += std::sqrt(i_up);
+    lo += std::sqrt(i_lo);
+  }
+  const double children = w_up * up * up + w_lo * lo * lo;
+  return children > 0 ? std::max(0.0, parent * parent / children - 1) : 0.0;
+}
+
+// rll.refine: a new cell (its first pass ending, no cut yet) whose parent, the cell one level
+// coarser around its anchor, is refined and has the shared initial cut starts from the parent's
+// values, each cluster's weight capped at pool_weight rewards so that its own rewards soon speak;
+// the table is baked by this end of pass (its last CDF entry 0 says so). Reads the parent (a cell
+// with a cut, which this does not write): run over all cells before their cut_end_pass.
+RLL_HD inline void cut_seed_child(const CutStoreEndView& v, uint32_t cell, uint32_t parent) {
+  if (v.refined.empty() || v.active(cell) || parent == ~0u || !v.active(parent) ||
+      !v.refined[parent])
+    return;
+  const uint32_t K = uint32_t(v.initial.size);
+  const size_t b = v.base(cell), pb = v.base(parent);
+  if (v.size[parent] != K) return;
+  for (uint32_t k = 0; k < K; ++k)
+    if (v.node[pb + k] != v.initial[k]) return;
+  for (uint32_t k = 0; k < K; ++k) {
+    v.node[b + k] = v.initial[k];
+    v.q[b + k] = v.q[pb + k];
+    v.m2[b + k] = v.m2[pb + k];
+    v.n[b + k] = std::min(v.n[pb + k], v.s.pool_weight);
+    v.weight[b + k] = cut_weight_of(v, cell, v.initial[k]);
+  }
+  v.inv_unit[cell] = v.inv_unit[parent];
+  v.size[cell] = K;
+  v.cdf[b + K - 1] = 0.0f;
+}
+
+// rll.refine: the disagreement test of the end of pass (before cut_end_pass folds the rewards):
+// marks the cell refined where the gain of its halves' own distributions (cut_refine_gain) is
+// above refine_gain, with at least refine_min rewards this pass, and its level above the finest;
+// the upper halves' sums start again. True where it marked the cell. A refined cell stays so
+// until it is evicted.
+RLL_HD inline bool cut_refine_test(const CutStoreEndView& v, uint32_t cell) {
+  if (v.refined.empty()) return false;
+  const size_t b = v.base(cell);
+  const uint32_t K = v.active(cell) ? v.size[cell] : uint32_t(v.initial.size);
+  uint64_t n = 0;
+  for (uint32_t k = 0; k < K; ++k) n += v.count[b + k];
+  const bool marked = !v.refined[cell] && n >= uint64_t(v.s.refine_min) &&
+                      v.anchor[cell].level > CellKeyer::kFinestLevel &&
+                      cut_refine_gain(v, cell) > v.s.refine_gain;
+  if (marked) v.refined[cell] = 1;
+  for (uint32_t k = 0; k < K; ++k) {
+    v.up[b + k].reset();
+    v.up_count[b + k] = 0;
+  }
+  return marked;
 }
 
 // Pooling: adds the pass's rewards of `cell` (under the shared cut's indices) in absolute units
@@ -394,7 +492,9 @@ RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell,
   uint32_t K = active ? v.size[cell] : uint32_t(v.initial.size);
   uint64_t n_total = 0;
   for (size_t k = 0; k < K; ++k) n_total += v.count[b + k];
-  if (active && n_total == 0) return st;  // nothing new: the cut and CDF stand
+  // Nothing new: the cut and CDF stand (but for a cell seeded from its parent, rll_seed_child,
+  // whose table is yet to be baked: its last CDF entry, 1 in every baked table, is 0).
+  if (active && n_total == 0 && v.cdf[b + K - 1] == 1.0f) return st;
   float* q = &v.q[b];
   float* m2 = &v.m2[b];
   float* n = &v.n[b];

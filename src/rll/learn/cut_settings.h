@@ -42,7 +42,7 @@ struct CutSettings {
   // differs from the running mean by more than change_z standard errors is a change; 0: no test
   // (only a change of the lights forgets).
   float change_z = 5;
-  float threshold = 2;     // T: split l_max and collapse p_min if score(l_max) > T value(p_min)
+  float threshold = 2;   // T: split l_max and collapse p_min if score(l_max) > T value(p_min)
   int splits = 0;        // split-collapse steps per cell and pass (0: the cut stays as it started)
   float epsilon = 0.1f;  // weight of the defensive prior once a cell is trusted
   LearnTarget target = LearnTarget::Moment;
@@ -85,6 +85,15 @@ struct CutSettings {
   // every inner node above its cut, the factors by which a descent from the root scales its
   // children's importances (guide_left/right) instead of a table over the clusters.
   bool guided = false;
+  // Finer cells where the light changes (rll.refine=L, 0: off; docs/rll.md): every pass a cell
+  // notes, per cluster, the rewards of the points in the upper half of its box along one axis
+  // (x, y, z in turn); at the end of the pass, where giving each half its own distribution would
+  // lower the cost of the one-sample estimator by more than `refine_gain` (a fraction), with at
+  // least `refine_min` rewards, the cell is marked refined, and its points look up the cell one
+  // level finer instead, down to L levels below their own.
+  int refine = 0;
+  float refine_gain = 0.5f;
+  int refine_min = 256;
 };
 
 }  // namespace rll

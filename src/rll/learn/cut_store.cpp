@@ -44,6 +44,11 @@ CutStore::CutStore(const LightTree& tree, uint32_t cells, const CutSettings& s, 
   m_sum = std::make_unique<ExactSum[]>(n);
   m_sq = std::make_unique<ExactSum[]>(n);
   m_count = std::make_unique<uint32_t[]>(n);
+  if (s.refine > 0) {
+    m_up = std::make_unique<ExactSum[]>(n);
+    m_up_count.assign(n, 0);
+    m_refined.assign(cells, 0);
+  }
 }
 
 CutStoreView CutStore::view() {
@@ -59,10 +64,13 @@ CutStoreView CutStore::view() {
   v.sum = {m_sum.get(), n};
   v.sq = {m_sq.get(), n};
   v.count = {m_count.get(), n};
+  v.up = {m_up.get(), m_up ? n : 0};
+  v.up_count = view_of(m_up_count);
+  v.refined = view_of(std::as_const(m_refined));
   return v;
 }
 
-size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, int pool_tiers) {
+size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, int pool_tiers, bool refine) {
   // q, m2, n, weight, cdf and the target factor; guided: its two factors; pooling: its shares
   // and each tier's coarse Q, M2 and weight.
   const size_t per_cluster_floats = guided ? 8 : pool_tiers > 0 ? 7 + 3 * size_t(pool_tiers) : 6;
@@ -70,11 +78,13 @@ size_t CutStore::bytes_for(uint32_t cells, int cut_size, bool guided, int pool_t
       size_t(cut_size) * (2 * sizeof(uint32_t) + per_cluster_floats * sizeof(float) +
                           2 * sizeof(ExactSum) + sizeof(uint32_t)) +
       sizeof(uint32_t) + 2 * sizeof(float) + sizeof(uint8_t) + sizeof(double) + sizeof(CellAnchor);
-  return size_t(cells) * per_cell;
+  const size_t per_cell_refine =
+      refine ? size_t(cut_size) * (sizeof(ExactSum) + sizeof(uint32_t)) + sizeof(uint8_t) : 0;
+  return size_t(cells) * (per_cell + per_cell_refine);
 }
 
 size_t CutStore::bytes() const {
-  return bytes_for(m_cuts.cells(), m_m, m_s.guided, m_s.pool_tiers());
+  return bytes_for(m_cuts.cells(), m_m, m_s.guided, m_s.pool_tiers(), m_s.refine > 0);
 }
 
 CutStoreEndView CutStore::end_view() {
@@ -102,6 +112,9 @@ CutStoreEndView CutStore::end_view() {
   v.sum = {m_sum.get(), n};
   v.sq = {m_sq.get(), n};
   v.count = {m_count.get(), n};
+  v.up = {m_up.get(), m_up ? n : 0};
+  v.up_count = view_of(m_up_count);
+  v.refined = view_of(m_refined);
   return v;
 }
 
@@ -182,6 +195,9 @@ void CutStore::save_cell(uint32_t cell, BinaryWriter& w) const {
   w.put(m_eps[cell]);
   w.put(m_anchor[cell]);
   w.put(m_inv_unit[cell]);
+  // rll.refine: the refined flag (a state is only read with the parameters it was saved with, so
+  // one saved without refinement has the layout it always had).
+  if (!m_refined.empty()) w.put(m_refined[cell]);
 }
 
 void CutStore::load_cell(uint32_t cell, BinaryReader& r) {
@@ -203,6 +219,10 @@ void CutStore::load_cell(uint32_t cell, BinaryReader& r) {
   m_eps[cell] = r.get<float>();
   m_anchor[cell] = r.get<CellAnchor>();
   m_inv_unit[cell] = r.get<double>();
+  if (!m_refined.empty()) {
+    m_refined[cell] = r.get<uint8_t>();
+    if (m_refined[cell] > 1) damaged("its refined flag is neither 0 nor 1");
+  }
   if (K > 0) {
     const std::vector<uint32_t> nodes(m_cuts.node.begin() + long(base),
                                       m_cuts.node.begin() + long(base + K));

@@ -32,13 +32,25 @@ struct CutStoreView : CutArraysView {
   View<const double> inv_unit;  // per cell: 1 / the unit of its sums during this pass
   View<ExactSum> sum, sq;       // per cluster: rewards and their squares
   View<uint32_t> count;         // per cluster: rewards this pass
+  // rll.refine only (empty otherwise): per cluster, the sum and count of this pass's rewards from
+  // points in the upper half of the cell's box along the pass's axis; per cell, refined.
+  View<ExactSum> up;
+  View<uint32_t> up_count;
+  View<const uint8_t> refined;
 };
 
-// Adds one reward to cluster k of `cell` (see CutStore::record).
-RLL_HD inline void cut_record(const CutStoreView& v, uint32_t cell, uint32_t k, float reward) {
+// Adds one reward to cluster k of `cell` (see CutStore::record); `upper`: the point lies in the
+// upper half of the cell along this pass's axis (noted only with rll.refine).
+RLL_HD inline void cut_record(const CutStoreView& v, uint32_t cell, uint32_t k, float reward,
+                              bool upper = false) {
   const size_t i = size_t(cell) * v.m + k;
-  add_reward(v.sum[i], v.sq[i], double(reward) * v.inv_unit[cell]);
+  const double x = double(reward) * v.inv_unit[cell];
+  add_reward(v.sum[i], v.sq[i], x);
   atomic_add(&v.count[i], 1u);
+  if (upper && !v.up.empty()) {
+    if (x > 0) v.up[i].add(x);  // (the same fixed point as the sum: exact in any order)
+    atomic_add(&v.up_count[i], 1u);
+  }
 }
 
 // What the end of pass did to one cell (CutStore::end_pass, cut_end_pass).
@@ -58,7 +70,10 @@ class CutStore {
   // The memory a store of `cells` cells of cuts of `cut_size` clusters takes (bytes()).
   // Pooling in `pool_tiers` tiers (0: off) adds, per cell, its coarse shares and at most one
   // coarse cell's Q, M2 and weights per tier.
-  static size_t bytes_for(uint32_t cells, int cut_size, bool guided = false, int pool_tiers = 0);
+  // Refinement (rll.refine > 0) adds, per cluster, the upper half's sum and count, and a flag per
+  // cell.
+  static size_t bytes_for(uint32_t cells, int cut_size, bool guided = false, int pool_tiers = 0,
+                          bool refine = false);
 
   const CutSettings& settings() const { return m_s; }
   int max_size() const { return m_m; }
@@ -145,6 +160,8 @@ class CutStore {
   }
   // Forgets a cell (eviction).
   void clear(uint32_t cell);
+  // rll.refine: the cell's points look up the cell one level finer (cut_refine_test marked it).
+  bool refined(uint32_t cell) const { return !m_refined.empty() && m_refined[cell] != 0; }
   // Gives a cell a cut with known values (the oracle; value = mean): prior weights from the
   // cell's anchor, and only the configured defensive weight.
   void assign(uint32_t cell, const std::vector<uint32_t>& nodes, const std::vector<float>& q);
@@ -179,6 +196,10 @@ class CutStore {
   std::vector<double> m_inv_unit;           // per cell: 1 / the unit of its sums during this pass
   std::unique_ptr<ExactSum[]> m_sum, m_sq;  // per cluster: rewards and their squares
   std::unique_ptr<uint32_t[]> m_count;      // per cluster: rewards this pass
+  // rll.refine only: per cluster, the upper half's rewards this pass; per cell, refined.
+  std::unique_ptr<ExactSum[]> m_up;
+  std::vector<uint32_t> m_up_count;
+  std::vector<uint8_t> m_refined;
 };
 
 }  // namespace rll

@@ -18,6 +18,7 @@ struct LightContext {
   Vec3 ns;                  // shading normal, same side as n
   Vec3 wo;                  // direction towards where the path came from (zero: unknown)
   bool glossy = false;      // the surface's BSDF is not Lambertian: its response depends on wo
+  uint8_t half = 0;         // rll.refine: CellCoord::half of the point in its cell
   float footprint = 0;      // ray footprint radius at this vertex, world units
   uint32_t cell = kNoCell;  // per-point sampler state (an RLL cell), set by prepare_point
 };

@@ -17,7 +17,6 @@
 
 namespace rll {
 
-
 // A new cell's anchor: the mean of its first pass's points (sums in `w`, kRllPointWords of them,
 // relative to the scene box at `origin` of size `extent`); the sums are reset for the next pass.
 // A cell that already has a cut keeps its anchor.
@@ -64,25 +63,42 @@ RllPassCounts rll_end_pass(const B& b, const RllLearnView& v, RllPoolState<B>& p
     });
   }
   if (ev.s.pool_levels > 0) out.pool_changes = rll_pool_pass(b, v, pool, cells, scratch);
+  if (ev.s.refine > 0) {
+    // New children of refined cells start from their parents' values (cut_seed_child).
+    const CellKeyer keyer = v.keyer;
+    const CellTableView table = v.table;
+    b.parallel_for(n, [=] RLL_HD(size_t i) {
+      const CellAnchor& a = ev.anchor[cells[i]];
+      if (ev.active(cells[i])) return;
+      const uint32_t parent =
+          cell_find(table, keyer.key(keyer.locate_at_level(a.p, a.n, a.level + 1)));
+      cut_seed_child(ev, cells[i], parent);
+    });
+  }
   {
     // Each cell's scratch: its slice of an arena, at an exclusive scan of the cells' rooms.
     auto room = b.template buffer<uint32_t>(n);
     auto offset = b.template buffer<uint64_t>(n);
-    auto stats = b.template buffer<uint32_t>(4 * n);  // splits, collapses, touched, changes
+    // splits, collapses, touched, changes, refined (rll.refine: the disagreement test, on the
+    // pass's rewards before the fold resets them)
+    constexpr size_t kFields = 5;
+    auto stats = b.template buffer<uint32_t>(kFields * n);
     const View<uint32_t> r = room.view(), st = stats.view();
     b.parallel_for(n, [=] RLL_HD(size_t i) { r[i] = cut_scratch_room(ev, cells[i]); });
     const uint64_t clusters = b.exclusive_scan(r, offset.view());
     const CutScratchArena arena = scratch.arena(b, clusters);
     const View<const uint64_t> at = offset.view();
     b.parallel_for(n, [=] RLL_HD(size_t i) {
+      st[4 * n + i] = cut_refine_test(ev, cells[i]);
       const CutPassStats s = cut_end_pass(ev, cells[i], arena.slice(at[i], r[i]));
       st[i] = s.splits;
       st[n + i] = s.collapses;
       st[2 * n + i] = s.touched;
       st[3 * n + i] = s.changes;
     });
-    uint32_t* fields[4] = {&out.splits, &out.collapses, &out.touched, &out.changes};
-    for (size_t f = 0; f < 4; ++f)
+    uint32_t* fields[kFields] = {&out.splits, &out.collapses, &out.touched, &out.changes,
+                                 &out.refined};
+    for (size_t f = 0; f < kFields; ++f)
       *fields[f] = uint32_t(b.sum(View<const uint32_t>{st.data + f * n, n}));
   }
   out.failed = b.read(v.table.failed);
@@ -136,9 +152,8 @@ void rll_refresh_all(const B& b, const RllLearnView& v, RllScratch<B>& scratch) 
   b.parallel_for(cap, [=] RLL_HD(size_t c) { r[c] = ev.active(uint32_t(c)) ? ev.size[c] : 0; });
   const CutScratchArena arena = scratch.arena(b, b.exclusive_scan(r, offset.view()));
   const View<const uint64_t> at = offset.view();
-  b.parallel_for(cap, [=] RLL_HD(size_t c) {
-    cut_refresh(ev, uint32_t(c), arena.slice(at[c], r[c]));
-  });
+  b.parallel_for(cap,
+                 [=] RLL_HD(size_t c) { cut_refresh(ev, uint32_t(c), arena.slice(at[c], r[c])); });
 }
 
 // The lights changed: under forget=changes every cluster's memory, a cell's and a coarse cell's,

@@ -22,7 +22,7 @@ struct RllLearnView {
   CellKeyer keyer;           // this pass's
   Vec3 origin;               // of the point sums
   float extent = 1;
-  uint32_t capacity = 0;     // cells
+  uint32_t capacity = 0;  // cells
 };
 
 // The end of pass's scratch (CutScratch per cell), kept from pass to pass and grown as needed.
@@ -47,7 +47,8 @@ struct RllPassCounts {
   uint32_t pool_changes = 0;  // pooling's coarse cells' changes (forget=changes)
   uint64_t failed = 0;        // points that found no cell during the pass
   uint32_t evicted = 0;
-  uint32_t used = 0;  // cells in use after the rebuild
+  uint32_t used = 0;     // cells in use after the rebuild
+  uint32_t refined = 0;  // cells the disagreement test marked refined (rll.refine)
 };
 
 }  // namespace rll

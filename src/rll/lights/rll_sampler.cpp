@@ -30,7 +30,8 @@ void check_memory(const RllSettings& s) {
   const double scratch_per_cluster =
       CutScratchArena::kDoubles * sizeof(double) + CutScratchArena::kFloats * sizeof(float);
   const double needed =
-      double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_tiers())) +
+      double(CutStore::bytes_for(s.capacity, s.cut.cut_size, s.cut.guided, s.cut.pool_tiers(),
+                                 s.cut.refine > 0)) +
       double(s.capacity) * (2 * 2 * sizeof(uint64_t) + sizeof(uint32_t) + 7 * sizeof(int64_t)) +
       double(s.capacity) * s.cut.cut_size * scratch_per_cluster * std::max(1, s.cut.pool_tiers());
   if (needed > double(memory_budget_bytes()))
@@ -88,6 +89,7 @@ void RllLightSampler::refresh_view() {
   v.defensive = m_s.defensive;
   v.cold_uniform = m_s.cold_uniform;
   v.guided = m_s.cut.guided;
+  v.refine = m_s.cut.refine;
   if (m_remote) m_remote->view_changed(v);
 }
 
@@ -157,6 +159,7 @@ void RllLightSampler::end_pass_with(const EndPassRun& run) {
   m_splits_per_pass.push_back(c.splits);
   m_collapses_per_pass.push_back(c.collapses);
   m_touched_per_pass.push_back(c.touched);
+  if (m_s.cut.refine > 0) m_refined_per_pass.push_back(c.refined);
   m_failed_inserts += c.failed;
   m_evictions += c.evicted;
   if (c.failed > 0 && !m_warned_full) {
@@ -272,12 +275,14 @@ void RllLightSampler::load_state(BinaryReader& r) {
 nlohmann::json RllLightSampler::describe() const {
   sync();
   double mean_cut = 0;
-  uint32_t active = 0;
-  for (uint32_t c = 0; c < m_s.capacity; ++c)
+  uint32_t active = 0, refined = 0;
+  for (uint32_t c = 0; c < m_s.capacity; ++c) {
     if (m_cuts->active(c)) {
       mean_cut += m_cuts->size(c);
       ++active;
     }
+    refined += m_table->in_use(c) && m_cuts->refined(c);
+  }
   nlohmann::json j = {
       {"name", name()},
       {"parameters", rll_parameters_json(m_s)},
@@ -297,6 +302,10 @@ nlohmann::json RllLightSampler::describe() const {
       {"pool_changes_per_pass", m_pool_changes_per_pass},
       {"bytes", bytes()},
   };
+  if (m_s.cut.refine > 0) {
+    j["cells_refined"] = refined;
+    j["refined_per_pass"] = m_refined_per_pass;
+  }
   return j;
 }
 

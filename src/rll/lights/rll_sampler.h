@@ -123,6 +123,7 @@ class RllLightSampler final : public LightSampler, public ResidentLearner {
   std::vector<uint32_t> m_splits_per_pass, m_collapses_per_pass, m_touched_per_pass;
   // Clusters whose rewards failed the change test (forget=changes), of cells and of coarse cells.
   std::vector<uint32_t> m_changes_per_pass, m_pool_changes_per_pass;
+  std::vector<uint32_t> m_refined_per_pass;  // rll.refine: cells the test marked, per pass
   RllView m_view;  // what rll_prepare, rll_sample, rll_pmf and rll_record read (rll_view.h)
 };
 

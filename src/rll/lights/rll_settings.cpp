@@ -19,6 +19,10 @@ const std::vector<ParamSpec<RllSettings>>& rll_params() {
       choice_param("cold", {"tree", "uniform"}, field<S, &S::cold_uniform>()),
       float_param("sample_jitter", R::closed(0, 4), field<S, &S::sample_jitter>()),
       int_param("reset_every", R::closed(0, 1 << 30), field<S, &S::reset_every>()),
+      int_param("refine", R::closed(0, 8), field<S, &S::cut, &CutSettings::refine>(),
+                "0: off; levels below a point's own"),
+      float_param("refine_gain", R::closed(0, 1), field<S, &S::cut, &CutSettings::refine_gain>()),
+      int_param("refine_min", R::closed(1, 1 << 30), field<S, &S::cut, &CutSettings::refine_min>()),
   };
   return table;
 }

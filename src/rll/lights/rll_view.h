@@ -58,6 +58,7 @@ struct RllView {
   Defensive defensive = Defensive::Cell;
   bool cold_uniform = false;
   bool guided = false;  // rll.sampling=guided
+  int refine = 0;       // rll.refine: levels a point may go below its own into refined cells
 };
 
 namespace detail {
@@ -283,6 +284,29 @@ RLL_HD inline uint32_t float_bits(float x) {
 #endif
 }
 
+// This sample's own jitter (rll.sample_jitter), from hashes of u (the level's rounding uses u
+// itself): a disk of sample_jitter cell radii (half edges) and a quarter normal bin.
+RLL_HD inline void rll_sample_jitter(const RllView& v, float u, Vec2* d, Vec2* nj) {
+  const uint64_t h = mix64(uint64_t(float_bits(u)) ^ 0x6a09e667f3bcc909ull);
+  auto unit = [&](int i) { return float((h >> (16 * i)) & 0xffff) * 0x1p-16f; };
+  const Vec2 disk = sample_uniform_disk_concentric({unit(0), unit(1)});
+  *d = {disk.x * 0.5f * v.sample_jitter, disk.y * 0.5f * v.sample_jitter};
+  *nj = {(unit(2) - 0.5f) * 0.5f, (unit(3) - 0.5f) * 0.5f};
+}
+
+// The cell of a coordinate, made if it is new (with its anchor), its last use stamped; kNoCell
+// where the table is full.
+RLL_HD inline uint32_t rll_find_cell(const RllView& v, const CellCoord& coord) {
+  bool created = false;
+  const uint32_t cell = cell_find_or_insert(v.table, v.keyer.key(coord), &created);
+  // Table full: no cell until eviction makes room.
+  if (cell == CellTableView::kNone) return kNoCell;
+  if (created) v.cuts.anchor[cell] = v.keyer.anchor(coord);
+  // Stamp the pass of last use; a write only when it changes (no cache-line traffic per sample).
+  if (atomic_load(&v.last_used[cell]) != v.pass) atomic_store(&v.last_used[cell], v.pass);
+  return cell;
+}
+
 }  // namespace detail
 
 // The cell coordinate of a shading point with a surface (ctx.n not zero): its position, normal
@@ -290,17 +314,22 @@ RLL_HD inline uint32_t float_bits(float x) {
 // hashes of u) where `per_sample_jitter` and the view has one, and the direction bin of a glossy
 // point. rll_prepare finds its cell by this key; the report's cell chart (eval/cell_chart.cpp)
 // looks the same key up, so that both follow one rule.
+// `finer`: levels below the point's own (a refined cell's child, rll.refine), with the same jitter.
 RLL_HD inline CellCoord rll_cell_coord(const RllView& v, const LightContext& ctx, float u,
-                                       bool per_sample_jitter = true) {
+                                       bool per_sample_jitter = true, int finer = 0) {
   CellCoord coord;
-  if (per_sample_jitter && v.sample_jitter > 0) {
-    // This sample's own jitter, from hashes of u (the level's rounding uses u itself): a disk of
-    // sample_jitter cell radii (half edges) and a quarter normal bin.
-    const uint64_t h = mix64(uint64_t(detail::float_bits(u)) ^ 0x6a09e667f3bcc909ull);
-    auto unit = [&](int i) { return float((h >> (16 * i)) & 0xffff) * 0x1p-16f; };
-    const Vec2 disk = sample_uniform_disk_concentric({unit(0), unit(1)});
-    const Vec2 d{disk.x * 0.5f * v.sample_jitter, disk.y * 0.5f * v.sample_jitter};
-    const Vec2 nj{(unit(2) - 0.5f) * 0.5f, (unit(3) - 0.5f) * 0.5f};
+  if (finer > 0) {
+    const int level = v.keyer.level(ctx.footprint, u) - finer;
+    if (per_sample_jitter && v.sample_jitter > 0) {
+      Vec2 d, nj;
+      detail::rll_sample_jitter(v, u, &d, &nj);
+      coord = v.keyer.locate_jittered_at_level(ctx.p, ctx.n, level, d, nj);
+    } else {
+      coord = v.keyer.locate_at_level(ctx.p, ctx.n, level);
+    }
+  } else if (per_sample_jitter && v.sample_jitter > 0) {
+    Vec2 d, nj;
+    detail::rll_sample_jitter(v, u, &d, &nj);
     coord = v.keyer.locate_jittered(ctx.p, ctx.n, ctx.footprint, u, d, nj);
   } else {
     coord = v.keyer.locate(ctx.p, ctx.n, ctx.footprint, u);
@@ -312,23 +341,42 @@ RLL_HD inline CellCoord rll_cell_coord(const RllView& v, const LightContext& ctx
 
 // Finds (or makes) the cell of the shading point: ctx.cell, kNoCell without a surface or where
 // the table is full. u drives the level of detail's rounding (and Fermat's per-sample jitter).
+// With rll.refine, a point whose cell is refined takes the cell one level finer (an ordinary cell
+// of the grid, the one a point of a smaller footprint takes), down to rll.refine levels below its
+// own; every cell on the way is stamped, so that a refined cell outlives its children.
 RLL_HD inline void rll_prepare(const RllView& v, LightContext& ctx, float u) {
   ctx.cell = kNoCell;
   if (length_sq(ctx.n) == 0) return;
-  const CellCoord coord = rll_cell_coord(v, ctx, u);
-  bool created = false;
-  const uint32_t cell = cell_find_or_insert(v.table, v.keyer.key(coord), &created);
-  if (cell == CellTableView::kNone) return;  // table full: no cell until eviction makes room
-  if (created) v.cuts.anchor[cell] = v.keyer.anchor(coord);
-  // Stamp the pass of last use; a write only when it changes (no cache-line traffic per sample).
-  if (atomic_load(&v.last_used[cell]) != v.pass) atomic_store(&v.last_used[cell], v.pass);
+  CellCoord coord = rll_cell_coord(v, ctx, u);
+  uint32_t cell = detail::rll_find_cell(v, coord);
+  if (cell == kNoCell) return;
+  uint32_t parent = kNoCell;
+  uint8_t parent_half = 0;
+  for (int finer = 1;
+       finer <= v.refine && v.cuts.refined[cell] && coord.level > CellKeyer::kFinestLevel;
+       ++finer) {
+    const CellCoord child_coord = rll_cell_coord(v, ctx, u, true, finer);
+    const uint32_t child = detail::rll_find_cell(v, child_coord);
+    if (child == kNoCell) break;  // table full: the refined cell itself
+    parent = cell;
+    parent_half = coord.half;
+    coord = child_coord;
+    cell = child;
+  }
   ctx.cell = cell;
+  ctx.half = coord.half;
   if (!v.cuts.active(cell)) {  // the cell's first pass: its points make its anchor
     uint64_t* w = &v.points[size_t(cell) * kRllPointWords];
     const Vec3 q = (ctx.p - v.origin) * (0x1p24f / v.extent);
     const float f[6] = {q.x, q.y, q.z, ctx.n.x * 0x1p24f, ctx.n.y * 0x1p24f, ctx.n.z * 0x1p24f};
     for (int i = 0; i < 6; ++i) atomic_add(&w[i], uint64_t(detail::round_to_int64(f[i])));
     atomic_add(&w[6], uint64_t(1));
+    // A refined cell's new child samples (and learns) with its parent's table through its first
+    // pass, at whose end it starts from the parent's values (rll_seed_child): no cold pass.
+    if (parent != kNoCell && v.cuts.active(parent)) {
+      ctx.cell = parent;
+      ctx.half = parent_half;
+    }
   }
 }
 
@@ -487,7 +535,9 @@ RLL_HD inline void rll_record(const RllView& v, const LightContext& ctx, const S
       break;
   }
   if (!(reward >= 0) || !std::isfinite(reward)) return;
-  cut_record(v.cuts, ctx.cell, d.cluster, reward);
+  // rll.refine: the half of the cell the point lies in along this pass's axis (x, y, z in turn).
+  const bool upper = v.refine > 0 && ((ctx.half >> (v.pass % 3)) & 1);
+  cut_record(v.cuts, ctx.cell, d.cluster, reward, upper);
 }
 
 }  // namespace rll
