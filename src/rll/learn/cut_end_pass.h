@@ -492,7 +492,7 @@ RLL_HD inline CutPassStats cut_end_pass(const CutStoreEndView& v, uint32_t cell,
   uint32_t K = active ? v.size[cell] : uint32_t(v.initial.size);
   uint64_t n_total = 0;
   for (size_t k = 0; k < K; ++k) n_total += v.count[b + k];
-  // Nothing new: the cut and CDF stand (but for a cell seeded from its parent, rll_seed_child,
+  // Nothing new: the cut and CDF stand (but for a cell seeded from its parent, cut_seed_child,
   // whose table is yet to be baked: its last CDF entry, 1 in every baked table, is 0).
   if (active && n_total == 0 && v.cdf[b + K - 1] == 1.0f) return st;
   float* q = &v.q[b];

@@ -318,21 +318,13 @@ RLL_HD inline uint32_t rll_find_cell(const RllView& v, const CellCoord& coord) {
 RLL_HD inline CellCoord rll_cell_coord(const RllView& v, const LightContext& ctx, float u,
                                        bool per_sample_jitter = true, int finer = 0) {
   CellCoord coord;
-  if (finer > 0) {
-    const int level = v.keyer.level(ctx.footprint, u) - finer;
-    if (per_sample_jitter && v.sample_jitter > 0) {
-      Vec2 d, nj;
-      detail::rll_sample_jitter(v, u, &d, &nj);
-      coord = v.keyer.locate_jittered_at_level(ctx.p, ctx.n, level, d, nj);
-    } else {
-      coord = v.keyer.locate_at_level(ctx.p, ctx.n, level);
-    }
-  } else if (per_sample_jitter && v.sample_jitter > 0) {
+  const int level = v.keyer.level(ctx.footprint, u) - finer;
+  if (per_sample_jitter && v.sample_jitter > 0) {
     Vec2 d, nj;
     detail::rll_sample_jitter(v, u, &d, &nj);
-    coord = v.keyer.locate_jittered(ctx.p, ctx.n, ctx.footprint, u, d, nj);
+    coord = v.keyer.locate_jittered_at_level(ctx.p, ctx.n, level, d, nj);
   } else {
-    coord = v.keyer.locate(ctx.p, ctx.n, ctx.footprint, u);
+    coord = v.keyer.locate_at_level(ctx.p, ctx.n, level);
   }
   if (v.keyer.settings().direction_bins > 0 && ctx.glossy && length_sq(ctx.wo) > 0)
     coord.dir = v.keyer.direction_bin(ctx.wo);
@@ -372,7 +364,7 @@ RLL_HD inline void rll_prepare(const RllView& v, LightContext& ctx, float u) {
     for (int i = 0; i < 6; ++i) atomic_add(&w[i], uint64_t(detail::round_to_int64(f[i])));
     atomic_add(&w[6], uint64_t(1));
     // A refined cell's new child samples (and learns) with its parent's table through its first
-    // pass, at whose end it starts from the parent's values (rll_seed_child): no cold pass.
+    // pass, at whose end it starts from the parent's values (cut_seed_child): no cold pass.
     if (parent != kNoCell && v.cuts.active(parent)) {
       ctx.cell = parent;
       ctx.half = parent_half;
