@@ -92,7 +92,7 @@ TEST_P(RhtDescent, YieldedPdfEqualsReplayedPmfAndWeightIsImportance) {
                     ASSERT_EQ(pdf, rht_pmf(v, ctx.p, ctx.n, light)) << "light " << light;
                     ASSERT_EQ(pdf, light_pmf(f.sampler->sampler_view(), ctx, light));
                     ASSERT_EQ(importance,
-                              light_importance(t.importance[t.leaf_of[light]], ctx.p, ctx.n));
+                              light_importance(t.bounds(t.leaf_of[light]), ctx.p, ctx.n));
                     ASSERT_GT(importance, 0);
                   });
     }

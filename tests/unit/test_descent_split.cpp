@@ -79,6 +79,7 @@ TEST(DescentSplit, ProductsEqualTheReachAndTheDescentBelowTheCluster) {
 struct Caterpillar {
   std::vector<LightTreeNode> nodes;
   std::vector<ImportanceBounds> importance;
+  std::vector<TreeStep> steps;
   std::vector<uint32_t> leaf_of;
   Caterpillar(uint32_t n, const LightTree& from) : nodes(2 * n - 1), importance(2 * n - 1) {
     for (uint32_t k = 0; k + 1 < n; ++k) {
@@ -97,12 +98,14 @@ struct Caterpillar {
     for (uint32_t i = 0; i < 2 * n - 1; ++i) {
       const uint32_t light = i % uint32_t(from.light_count());
       const bool inner = i % 2 == 0 && i != 2 * n - 2;
-      importance[i] = from.view().importance[from.leaf_of(light)];
+      importance[i] = from.view().bounds(from.leaf_of(light));
       if (inner) importance[i].power *= 1000;
       nodes[i].bounds.power = importance[i].power;
     }
+    steps.resize(n);
+    tree_steps(view_of(nodes), view_of(importance), view_of(steps));
   }
-  LightTreeView view() const { return {view_of(nodes), view_of(importance), view_of(leaf_of)}; }
+  LightTreeView view() const { return {view_of(nodes), view_of(steps), view_of(leaf_of)}; }
 };
 
 TEST(DescentSplit, PathsDeeperThan64LevelsKeepTheirProducts) {

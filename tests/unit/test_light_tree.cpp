@@ -51,6 +51,49 @@ double angle(const Vec3& a, const Vec3& b) {
   return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz);
 }
 
+// A node's importance bounds as the descents read them (the view's steps) against the node's own
+// bounds (distant lights' need the tree's private frame: their flags only).
+void expect_importance_of(const LightTreeView& v, const LightTree& tree, uint32_t i) {
+  const LightTreeNode& nd = tree.node(i);
+  const ImportanceBounds& b = v.bounds(i);
+  EXPECT_EQ((b.flags & ImportanceBounds::kGroup) != 0, nd.group) << "node " << i;
+  if (nd.bounds.distant) {
+    EXPECT_NE(b.flags & ImportanceBounds::kDistant, 0u) << "node " << i;
+    return;
+  }
+  const ImportanceBounds want = importance_bounds(nd.bounds);
+  EXPECT_EQ(b.power, want.power) << "node " << i;
+  EXPECT_EQ(b.radius2, want.radius2) << "node " << i;
+  EXPECT_EQ(b.cos_o, want.cos_o) << "node " << i;
+  EXPECT_EQ(b.cos_e, want.cos_e) << "node " << i;
+  EXPECT_EQ(b.center.x, want.center.x) << "node " << i;
+  EXPECT_EQ(b.center.z, want.center.z) << "node " << i;
+  EXPECT_EQ(b.flags & ~(ImportanceBounds::kGroup | TreeStep::kGroupStep), want.flags)
+      << "node " << i;
+}
+
+// The descents' steps say what the nodes say: each inner node's step holds its children's
+// importance bounds, first children and light ranges, and whether it is a group node.
+void expect_steps_mirror_nodes(const LightTree& tree) {
+  const LightTreeView v = tree.view();
+  ASSERT_EQ(v.steps.size, (tree.node_count() + 1) / 2);
+  expect_importance_of(v, tree, LightTree::kRoot);
+  for (uint32_t i = 0; i < tree.node_count(); ++i) {
+    const LightTreeNode& nd = tree.node(i);
+    if (nd.is_leaf()) continue;
+    const TreeStep& step = v.step(nd.child);
+    EXPECT_EQ(step.group(), nd.group) << "node " << i;
+    for (uint32_t j = 0; j < 2; ++j) {
+      const LightTreeNode& c = tree.node(nd.child + j);
+      EXPECT_EQ(step.child[j], c.child) << "node " << i;
+      EXPECT_EQ(step.begin[j], c.begin) << "node " << i;
+      EXPECT_EQ(step.end[j], c.end) << "node " << i;
+      EXPECT_EQ(&step.bounds[j], &v.bounds(nd.child + j)) << "node " << i;
+      expect_importance_of(v, tree, nd.child + j);
+    }
+  }
+}
+
 // The structural invariants, for any tree over `lights`.
 void expect_tree_invariants(const LightTree& tree, const std::vector<Light>& lights) {
   const uint32_t n = uint32_t(lights.size());
@@ -92,6 +135,7 @@ void expect_tree_invariants(const LightTree& tree, const std::vector<Light>& lig
     EXPECT_NEAR(nd.bounds.power, a.bounds.power + b.bounds.power, 1e-4f * nd.bounds.power + 1e-6f);
   }
   for (uint32_t l = 0; l < n; ++l) EXPECT_EQ(leaves_of_light[l], 1) << "light " << l;
+  expect_steps_mirror_nodes(tree);
   EXPECT_EQ(int(tree.depth()), max_depth);
   EXPECT_LT(int(tree.depth()), kMaxTreeDepth);
 }
@@ -274,6 +318,8 @@ TEST(LightTree, TinyImportanceNextToAHugeOneKeepsAPositivePmf) {
 TEST(LightTree, RefitAfterLightsMoveKeepsBoundsConservative) {
   Scene s = builtin("cornell-boxes-dynamic");
   LightTree tree = build_light_tree(s);
+  // A view taken before the refits (as the samplers hold theirs) reads the refit bounds.
+  const LightTreeView before = tree.view();
   Accel accel(s.mesh);
   for (int frame : {1, 2, 5}) {
     SCOPED_TRACE(frame);
@@ -283,6 +329,11 @@ TEST(LightTree, RefitAfterLightsMoveKeepsBoundsConservative) {
     accel.update_vertices(s.mesh);
     expect_tree_invariants(tree, s.lights);
     expect_conservative_bounds(tree, s.lights);
+    ASSERT_EQ(before.steps.data, tree.view().steps.data);
+    for (uint32_t i = 0; i < tree.node_count(); ++i)
+      if (!tree.node(i).bounds.distant)
+        ASSERT_EQ(before.bounds(i).center.x, importance_bounds(tree.node(i).bounds).center.x)
+            << "node " << i;
     // Every light that can contribute somewhere keeps a positive probability there.
     TreeLightSampler sampler(s, tree);
     for (const LightContext& c : test::make_contexts(s, accel, 40, 7 + frame))
@@ -292,6 +343,26 @@ TEST(LightTree, RefitAfterLightsMoveKeepsBoundsConservative) {
         }
       }
   }
+}
+
+// The steps' layout needs every inner node's children at an odd index (children made in pairs
+// after the root): anything else is refused, not read wrongly.
+TEST(LightTree, StepsRefuseChildrenAtAnEvenIndex) {
+  std::vector<LightTreeNode> nodes(5);
+  std::vector<ImportanceBounds> bounds(5);
+  std::vector<TreeStep> steps(3);
+  nodes[0] = {.begin = 0, .end = 3, .child = 1};
+  nodes[1] = {.begin = 0, .end = 1};
+  nodes[2] = {.begin = 1, .end = 3, .child = 3};
+  nodes[3] = {.begin = 1, .end = 2};
+  nodes[4] = {.begin = 2, .end = 3};
+  tree_steps(view_of(nodes), view_of(bounds), view_of(steps));
+  EXPECT_EQ(steps[2].begin[1], 2u);
+  nodes[0].child = 2;  // pairs (2, 3): not the layout
+  EXPECT_THROW(tree_steps(view_of(nodes), view_of(bounds), view_of(steps)), Error);
+  std::vector<TreeStep> short_steps(2);
+  nodes[0].child = 1;
+  EXPECT_THROW(tree_steps(view_of(nodes), view_of(bounds), view_of(short_steps)), Error);
 }
 
 TEST(LightBounds, DistantDomeConesHoldEveryDirectionFromTheScene) {

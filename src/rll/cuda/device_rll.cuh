@@ -35,7 +35,7 @@ class DeviceRll final : public DeviceCopy {
     const RllLearnView host_learn = m_learn;
     CutStoreEndView& e = m_learn.cuts;
     e.tree.nodes = once(e.tree.nodes);
-    e.tree.importance = once(e.tree.importance);
+    e.tree.steps = once(e.tree.steps);
     e.tree.leaf_of = once(e.tree.leaf_of);
     e.initial = once(e.initial);
     e.initial_ends = once(e.initial_ends);
@@ -134,7 +134,7 @@ class DeviceRll final : public DeviceCopy {
   // the powers copied into the device's, every prior and table made anew there.
   void lights_changed(const LightTreeView& tree, View<const double> power_prefix) override {
     refill(m_learn.cuts.tree.nodes, tree.nodes);
-    refill(m_learn.cuts.tree.importance, tree.importance);
+    refill(m_learn.cuts.tree.steps, tree.steps);
     refill(m_learn.cuts.tree.leaf_of, tree.leaf_of);
     refill(m_view.power_prefix, power_prefix);
     rll_lights_changed(CudaBackend{}, m_learn, m_pool, m_scratch);

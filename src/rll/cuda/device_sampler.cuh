@@ -12,7 +12,7 @@ namespace rll::cuda {
 inline LightTreeView mirror_tree(DeviceMirror& m, const LightTreeView& t) {
   LightTreeView d = t;
   d.nodes = m.mirror(t.nodes);
-  d.importance = m.mirror(t.importance);
+  d.steps = m.mirror(t.steps);
   d.leaf_of = m.mirror(t.leaf_of);
   return d;
 }

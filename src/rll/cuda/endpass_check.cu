@@ -19,7 +19,7 @@ namespace {
 CutStoreEndView mirror_end_view(cuda::DeviceMirror& d, const CutStoreEndView& v) {
   CutStoreEndView e = v;
   e.tree.nodes = d.mirror(v.tree.nodes);
-  e.tree.importance = d.mirror(v.tree.importance);
+  e.tree.steps = d.mirror(v.tree.steps);
   e.tree.leaf_of = d.mirror(v.tree.leaf_of);
   e.initial = d.mirror(v.initial);
   e.initial_ends = d.mirror(v.initial_ends);

@@ -97,7 +97,7 @@ RLL_HD inline RhtStep rht_step(const RhtView& v, uint32_t index, float t, float 
 // and its importance (the first stage's weight); 0 where the light cannot contribute at p.
 RLL_HD inline float rht_leaf_pdf(const RhtView& v, uint32_t index, float t, float ps_parent,
                                  const Vec3& p, const Vec3& n, float scale, float* importance) {
-  const float imp = light_importance(v.tree.importance[index], p, n);
+  const float imp = light_importance(v.tree.bounds(index), p, n);
   if (importance) *importance = imp;
   if (!(imp > 0)) return 0;
   return (ps_parent + (1 - ps_parent) * t) * scale;

@@ -485,11 +485,47 @@ void LightTree::refit(const std::vector<Light>& lights) {
 }
 
 void LightTree::prepare_importance() {
-  m_fast.resize(m_nodes.size());
+  std::vector<ImportanceBounds> bounds(m_nodes.size());
   parallel_for(m_nodes.size(), 4096, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
-      m_fast[i] = importance_bounds(m_nodes[i].bounds, &m_dome_frame);
-      if (m_nodes[i].group) m_fast[i].flags |= ImportanceBounds::kGroup;
+      bounds[i] = importance_bounds(m_nodes[i].bounds, &m_dome_frame);
+      if (m_nodes[i].group) bounds[i].flags |= ImportanceBounds::kGroup;
+    }
+  });
+  // In place: views taken before a refit stay valid.
+  m_steps.resize((m_nodes.size() + 1) / 2);
+  tree_steps(view_of(m_nodes), view_of(bounds), view_of(m_steps));
+}
+
+void tree_steps(View<const LightTreeNode> nodes, View<const ImportanceBounds> bounds,
+                View<TreeStep> steps) {
+  if (bounds.size != nodes.size || steps.size != (nodes.size + 1) / 2)
+    fail("light tree steps: {} bounds and {} steps for {} nodes", bounds.size, steps.size,
+         nodes.size);
+  if (nodes.size == 0) return;
+  for (size_t i = 0; i < nodes.size; ++i)
+    if (!nodes[i].is_leaf() && (nodes[i].child % 2 != 1 || nodes[i].child + 1 >= nodes.size))
+      fail("light tree steps: node {} has its children at {} (an odd index is needed)", i,
+           nodes[i].child);
+  TreeStep& top = steps[0];
+  top = TreeStep{};
+  top.bounds[1] = bounds[0];
+  top.child[1] = nodes[0].child;
+  top.begin[1] = nodes[0].begin;
+  top.end[1] = nodes[0].end;
+  parallel_for(nodes.size, 4096, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      const LightTreeNode& n = nodes[i];
+      if (n.is_leaf()) continue;
+      TreeStep& s = steps[(n.child + 1) >> 1];
+      for (uint32_t j = 0; j < 2; ++j) {
+        const LightTreeNode& c = nodes[n.child + j];
+        s.bounds[j] = bounds[n.child + j];
+        s.child[j] = c.child;
+        s.begin[j] = c.begin;
+        s.end[j] = c.end;
+      }
+      if (n.group) s.bounds[0].flags |= TreeStep::kGroupStep;
     }
   });
 }

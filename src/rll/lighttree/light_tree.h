@@ -51,18 +51,51 @@ enum class TreeBuild : uint8_t {
 enum class LightGroup : uint8_t { Local, Dome, Directional };
 inline constexpr int kLightGroups = 3;
 
-// What the descents read of a LightTree (DESIGN 6): its nodes, their importance bounds (the sky
-// dome's frame is folded into these) and the leaf of each light, owning nothing, so that the same
-// RLL_HD functions descend it on the CPU and, pointing into device memory, on the GPU.
+// One inner node's step of a descent, packed for it: the importance bounds of its two children
+// (nodes c and c + 1, c its first child) and, for each, its first child (0: a leaf) and its light
+// range. 128 bytes, aligned: a step reads two adjacent cache lines, where the node arrays took
+// four to five (the node for its child, then the children's 52-byte bounds, which straddle
+// lines). Every inner node's children are made together and the root is node 0, so pairs start
+// at odd indices: the step of the node whose first child is c is steps[(c + 1) / 2], and step 0
+// holds the root's own bounds (as its second child's). Node i's bounds are then
+// steps[(i + 1) / 2].bounds[(i + 1) % 2] for every i.
+struct alignas(128) TreeStep {
+  // Set on bounds[0].flags where the step's node is a group node (children chosen by their
+  // contributing groups; light_importance reads no such bit).
+  static constexpr uint32_t kGroupStep = 16;
+  ImportanceBounds bounds[2];
+  uint32_t child[2] = {0, 0};
+  uint32_t begin[2] = {0, 0};
+  uint32_t end[2] = {0, 0};
+  RLL_HD bool group() const { return (bounds[0].flags & kGroupStep) != 0; }
+};
+static_assert(sizeof(TreeStep) == 128, "a descent step is two cache lines");
+
+// What the descents read of a LightTree (DESIGN 6): its nodes, their steps (every node's
+// importance bounds, the sky dome's frame folded into them) and the leaf of each light, owning
+// nothing, so that the same RLL_HD functions descend it on the CPU and, pointing into device
+// memory, on the GPU.
 struct LightTreeView {
   View<const LightTreeNode> nodes;
-  View<const ImportanceBounds> importance;  // per node
-  View<const uint32_t> leaf_of;             // per light, tree order
+  View<const TreeStep> steps;    // one per light: step 0 the root's bounds, then the inner nodes'
+  View<const uint32_t> leaf_of;  // per light, tree order
   uint32_t group_root[kLightGroups] = {~0u, ~0u, ~0u};
 
   RLL_HD const LightTreeNode& node(uint32_t i) const { return nodes[i]; }
   RLL_HD uint32_t light_count() const { return uint32_t(leaf_of.size); }
+  // The step of the inner node whose first child is `first_child`.
+  RLL_HD const TreeStep& step(uint32_t first_child) const { return steps[(first_child + 1) >> 1]; }
+  // Node i's importance bounds.
+  RLL_HD const ImportanceBounds& bounds(uint32_t i) const {
+    return steps[(i + 1) >> 1].bounds[(i + 1) & 1];
+  }
 };
+
+// Writes the steps of a tree whose nodes are `nodes` and their importance bounds `bounds` (per
+// node) to `steps` ((nodes.size + 1) / 2 of them); fails unless every inner node's first child
+// is odd (the layout above).
+void tree_steps(View<const LightTreeNode> nodes, View<const ImportanceBounds> bounds,
+                View<TreeStep> steps);
 
 namespace detail {
 // Importance of `node`; at a group node the sum of its children's, left then right, nested as
@@ -71,7 +104,7 @@ namespace detail {
 template <int Depth>
 RLL_HD inline float tree_importance_at(const LightTreeView& t, uint32_t node, const Vec3& p,
                                        const Vec3& n) {
-  const ImportanceBounds& b = t.importance[node];
+  const ImportanceBounds& b = t.bounds(node);
   if constexpr (Depth > 0) {
     if (b.flags & ImportanceBounds::kGroup) {
       const uint32_t c = t.nodes[node].child;
@@ -91,7 +124,7 @@ RLL_HD inline int contributing_groups_at(const LightTreeView& t, uint32_t node, 
              contributing_groups_at<Depth - 1>(t, nd.child + 1, p, n);
   }
   // Not a group node (below its groups or past the deepest group node): its own bounds.
-  return light_importance(t.importance[node], p, n) > 0 ? 1 : 0;
+  return light_importance(t.bounds(node), p, n) > 0 ? 1 : 0;
 }
 // Group nodes nest at most this deep (root -> distant -> [dome, directional]): the unrolling's
 // bound. Deeper unrolling would only copy the importance into device code to no effect (each
@@ -132,7 +165,7 @@ class LightTree {
   uint32_t group_root(LightGroup g) const { return m_group_root[int(g)]; }
   // The flat view the descents read; valid while the tree lives (refit keeps its arrays).
   LightTreeView view() const {
-    LightTreeView v{view_of(m_nodes), view_of(m_fast), view_of(m_leaf_of)};
+    LightTreeView v{view_of(m_nodes), view_of(m_steps), view_of(m_leaf_of)};
     for (int g = 0; g < kLightGroups; ++g) v.group_root[g] = m_group_root[g];
     return v;
   }
@@ -146,7 +179,7 @@ class LightTree {
   uint32_t depth() const { return m_depth; }
   TreeBuild method() const { return m_method; }
   size_t bytes() const {
-    return m_nodes.size() * (sizeof(LightTreeNode) + sizeof(ImportanceBounds)) +
+    return m_nodes.size() * sizeof(LightTreeNode) + m_steps.size() * sizeof(TreeStep) +
            m_leaf_of.size() * sizeof(uint32_t);
   }
 
@@ -154,7 +187,7 @@ class LightTree {
   LightBounds leaf_bounds(const Light& light, uint32_t index) const;
   void prepare_importance();
   std::vector<LightTreeNode> m_nodes;
-  std::vector<ImportanceBounds> m_fast;  // per node, for importance()
+  std::vector<TreeStep> m_steps;  // LightTreeView::steps
   std::vector<uint32_t> m_leaf_of;
   uint32_t m_group_root[kLightGroups] = {kNone, kNone, kNone};
   uint32_t m_depth = 0;
