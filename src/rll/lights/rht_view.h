@@ -122,7 +122,7 @@ RLL_HD inline void rht_enter(const RhtView& v, uint32_t target, const Vec3& p, c
   for (uint32_t index = LightTree::kRoot; index != target;) {
     const LightTreeNode& node = v.tree.node(index);
     const RhtStep s = rht_step(v, index, t, ps, p, n);
-    const bool first = light < v.tree.node(node.child).end;
+    const bool first = light < v.tree.step(node.child).end[0];
     index = node.child + (first ? 0u : 1u);
     if (s.only >= 0) continue;
     t = s.t * (first ? s.p0 : 1 - s.p0);
@@ -235,7 +235,7 @@ RLL_HD inline float rht_pmf(const RhtView& v, const Vec3& p, const Vec3& n, uint
   while (!v.tree.node(index).is_leaf()) {  // down the light's path, by the light ranges
     const LightTreeNode& node = v.tree.node(index);
     const RhtStep s = rht_step(v, index, t, ps, p, n);
-    const bool first = light < v.tree.node(node.child).end;
+    const bool first = light < v.tree.step(node.child).end[0];
     index = node.child + (first ? 0u : 1u);
     if (s.only >= 0) continue;
     if (s.drop) return 0;
