@@ -10,6 +10,7 @@
 #include "rll/accel/accel.h"
 #include "rll/core/rng.h"
 #include "rll/lights/tree_sampler.h"
+#include "rll/lighttree/descent.h"
 #include "rll/lighttree/light_tree.h"
 #include "rll/session/session.h"
 #include "rll/scene/builder.h"
@@ -212,6 +213,28 @@ TEST(LightTree, DegenerateLayoutsStayShallow) {
     expect_tree_invariants(tree, s.lights);
     EXPECT_LE(int(tree.depth()), layout == 0 ? 200 : 11);
   }
+}
+
+// A tree of one light is one leaf: no inner node, one step (the root's bounds), and the
+// descents and pmfs give the light with probability 1.
+TEST(LightTree, OneLightIsALeafWithItsBoundsInStepZero) {
+  Scene s;
+  s.source = "test:one-light";
+  s.width = s.height = 8;
+  s.lights.push_back(make_point_light(Vec3(1, 2, 3), Rgb(4.0f)));
+  s.finalize();
+  const LightTree tree = build_light_tree(s);
+  expect_tree_invariants(tree, s.lights);
+  const LightTreeView v = tree.view();
+  ASSERT_EQ(v.steps.size, 1u);
+  EXPECT_EQ(&v.bounds(LightTree::kRoot), &v.steps[0].bounds[1]);
+  const Vec3 p(0, 0, 0), n(0, 1, 0);
+  EXPECT_GT(light_importance(v.bounds(LightTree::kRoot), p, Vec3(0, 0, 0)), 0.0f);
+  const TreeSample t = tree_descend(v, LightTree::kRoot, p, n, 0.7);
+  EXPECT_EQ(t.light, 0u);
+  EXPECT_EQ(t.pmf, 1.0f);
+  EXPECT_EQ(tree_descend_pmf(v, LightTree::kRoot, 0, p, n), 1.0f);
+  EXPECT_EQ(tree_reach_pmf(v, LightTree::kRoot, p, n), 1.0f);
 }
 
 TEST(LightTree, GroupsHaveTheirOwnSubtrees) {
