@@ -386,6 +386,11 @@ TEST(LightTree, StepsRefuseChildrenAtAnEvenIndex) {
   std::vector<TreeStep> short_steps(2);
   nodes[0].child = 1;
   EXPECT_THROW(tree_steps(view_of(nodes), view_of(bounds), view_of(short_steps)), Error);
+  // An even number of nodes is no tree of one light per leaf (its last node would have no slot).
+  const std::vector<LightTreeNode> four(nodes.begin(), nodes.begin() + 4);
+  const std::vector<ImportanceBounds> four_bounds(4);
+  std::vector<TreeStep> two(2);
+  EXPECT_THROW(tree_steps(view_of(four), view_of(four_bounds), view_of(two)), Error);
 }
 
 TEST(LightBounds, DistantDomeConesHoldEveryDirectionFromTheScene) {

@@ -484,50 +484,69 @@ void LightTree::refit(const std::vector<Light>& lights) {
   prepare_importance();
 }
 
-void LightTree::prepare_importance() {
-  std::vector<ImportanceBounds> bounds(m_nodes.size());
-  parallel_for(m_nodes.size(), 4096, [&](size_t b, size_t e) {
+namespace {
+
+// Writes the steps of a tree (LightTreeView::steps) with node i's importance bounds
+// bounds_of(i). Every node owns one slot of them, steps[(i + 1) / 2] side (i + 1) % 2 (its
+// bounds, first child and range: the root's is step 0's second side), so the nodes fill their
+// slots in parallel and check the layout as they go; then the group nodes, all above the group
+// roots, mark their steps.
+template <typename BoundsOf>
+void write_steps(View<const LightTreeNode> nodes, View<TreeStep> steps, const BoundsOf& bounds_of) {
+  if (steps.size != (nodes.size + 1) / 2)
+    fail("light tree steps: {} steps for {} nodes", steps.size, nodes.size);
+  if (nodes.size == 0) return;
+  if (nodes.size % 2 == 0)
+    fail("light tree steps: {} nodes (a tree of one light per leaf has an odd count)", nodes.size);
+  // Step 0's first side belongs to no node.
+  steps[0].bounds[0] = ImportanceBounds{};
+  steps[0].child[0] = steps[0].begin[0] = steps[0].end[0] = 0;
+  std::atomic<size_t> bad{nodes.size};  // the first node whose children break the layout
+  parallel_for(nodes.size, 4096, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
-      bounds[i] = importance_bounds(m_nodes[i].bounds, &m_dome_frame);
-      if (m_nodes[i].group) bounds[i].flags |= ImportanceBounds::kGroup;
+      const LightTreeNode& n = nodes[i];
+      if (!n.is_leaf() && (n.child % 2 != 1 || n.child + 1 >= nodes.size)) {
+        size_t first = bad.load();
+        while (i < first && !bad.compare_exchange_weak(first, i)) {
+        }
+      }
+      TreeStep& s = steps[(i + 1) >> 1];
+      const size_t side = (i + 1) & 1;
+      s.bounds[side] = bounds_of(i);
+      s.child[side] = n.child;
+      s.begin[side] = n.begin;
+      s.end[side] = n.end;
     }
   });
+  if (const size_t i = bad.load(); i < nodes.size)
+    fail("light tree steps: node {} has its children at {} (an odd index is needed)", i,
+         nodes[i].child);
+  const auto mark = [&](const auto& self, size_t i) -> void {
+    if (!nodes[i].group) return;
+    steps[(nodes[i].child + 1) >> 1].bounds[0].flags |= TreeStep::kGroupStep;
+    self(self, nodes[i].child);
+    self(self, nodes[i].child + 1);
+  };
+  mark(mark, LightTree::kRoot);
+}
+
+}  // namespace
+
+void LightTree::prepare_importance() {
   // In place: views taken before a refit stay valid.
   m_steps.resize((m_nodes.size() + 1) / 2);
-  tree_steps(view_of(m_nodes), view_of(bounds), view_of(m_steps));
+  write_steps(view_of(m_nodes), view_of(m_steps), [&](size_t i) {
+    ImportanceBounds b = importance_bounds(m_nodes[i].bounds, &m_dome_frame);
+    if (m_nodes[i].group) b.flags |= ImportanceBounds::kGroup;
+    return b;
+  });
 }
 
 void tree_steps(View<const LightTreeNode> nodes, View<const ImportanceBounds> bounds,
                 View<TreeStep> steps) {
-  if (bounds.size != nodes.size || steps.size != (nodes.size + 1) / 2)
-    fail("light tree steps: {} bounds and {} steps for {} nodes", bounds.size, steps.size,
-         nodes.size);
-  if (nodes.size == 0) return;
-  for (size_t i = 0; i < nodes.size; ++i)
-    if (!nodes[i].is_leaf() && (nodes[i].child % 2 != 1 || nodes[i].child + 1 >= nodes.size))
-      fail("light tree steps: node {} has its children at {} (an odd index is needed)", i,
-           nodes[i].child);
-  TreeStep& top = steps[0];
-  top = TreeStep{};
-  top.bounds[1] = bounds[0];
-  top.child[1] = nodes[0].child;
-  top.begin[1] = nodes[0].begin;
-  top.end[1] = nodes[0].end;
-  parallel_for(nodes.size, 4096, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-      const LightTreeNode& n = nodes[i];
-      if (n.is_leaf()) continue;
-      TreeStep& s = steps[(n.child + 1) >> 1];
-      for (uint32_t j = 0; j < 2; ++j) {
-        const LightTreeNode& c = nodes[n.child + j];
-        s.bounds[j] = bounds[n.child + j];
-        s.child[j] = c.child;
-        s.begin[j] = c.begin;
-        s.end[j] = c.end;
-      }
-      if (n.group) s.bounds[0].flags |= TreeStep::kGroupStep;
-    }
-  });
+  if (bounds.size != nodes.size)
+    fail("light tree steps: {} bounds for {} nodes", bounds.size, nodes.size);
+  write_steps(nodes, steps, [&](size_t i) { return bounds[i]; });
 }
 
 LightTree build_light_tree(Scene& scene) {
